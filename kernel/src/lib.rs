@@ -1,0 +1,1 @@
+//! vsculpt-kernel: geometry and solver, no I/O.

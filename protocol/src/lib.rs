@@ -1,0 +1,1 @@
+//! vsculpt-protocol: every message between server, device bridge and browser (to be built, issue 3).

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Runs every vsculpt test on a fresh machine: installs what the tests need
+# (Chromium for the browser tests, the web client's npm packages), then
+# formatting, lints, the Rust test suites and the browser end-to-end tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# --- what the tests need -------------------------------------------------
+if ! command -v chromium >/dev/null 2>&1; then
+  echo "== installing Chromium (Debian package) for the browser tests"
+  if [ "$(id -u)" = 0 ]; then SUDO=""; else SUDO="sudo"; fi
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
+fi
+if [ -f web-client/package-lock.json ]; then
+  echo "== installing the web client's packages (npm ci)"
+  (cd web-client && npm ci --no-audit --no-fund --loglevel=error)
+fi
+
+# --- static checks -------------------------------------------------------
+echo "== cargo fmt --check"
+cargo fmt --all -- --check
+echo "== cargo clippy -D warnings"
+cargo clippy --workspace --all-targets --locked -- -D warnings
+
+# --- Rust tests (kernel, protocol, server, bridge, end-to-end) -----------
+echo "== cargo test"
+cargo test --workspace --locked
+
+# --- browser end-to-end tests (real headless Chromium) -------------------
+if [ -f web-client/package.json ] && grep -q '"test"' web-client/package.json; then
+  echo "== browser tests"
+  cargo build --release --locked -p vsculpt-server
+  (cd web-client && npm test)
+fi

@@ -1,0 +1,1 @@
+//! vsculpt-server: the headless sculpting service (to be built, issue 3).

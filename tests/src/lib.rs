@@ -1,0 +1,1 @@
+//! End-to-end tests: real server, bridge, simulated devices and a headless browser (to be built).
