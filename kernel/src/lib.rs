@@ -1,1 +1,29 @@
-//! vsculpt-kernel: geometry and solver, no I/O.
+//! vsculpt-kernel: the geometry and solver at the heart of vsculpt. Pure Rust,
+//! no I/O, no async; used by the server, the device bridge and the benches.
+//!
+//! # Layout
+//!
+//! Data flows one way: input (icons) → constraints and loads (a [`solve::Problem`])
+//! → solve → evaluate → output (tessellation, curvature).
+//!
+//! * [`bspline`] — knot vectors, basis functions, curves and tensor-product
+//!   surfaces with derivatives, interpolation, knot insertion.
+//! * [`energy`] — the thin-plate deformation energy: Gauss quadrature, the exact
+//!   Galerkin stiffness of curves and surfaces, materials.
+//! * [`solve`] — the linear problem icons hand to the solver and the solver
+//!   itself: sparse Cholesky of the stiffness, constraints by Schur complement,
+//!   drag frames answered from precomputed columns.
+//! * [`icon`] — icon entities (point, curve, region × constraint or load) and
+//!   how each becomes constraint equations or loads.
+//! * [`spring`] — the spring model that maps a drag to a force.
+//! * [`analysis`] — curvature and tessellation for clients.
+//! * [`design`] — a design (surface, icons, material) as a value: edit, solve,
+//!   snapshot, restore.
+
+pub mod analysis;
+pub mod bspline;
+pub mod design;
+pub mod energy;
+pub mod icon;
+pub mod solve;
+pub mod spring;

@@ -1,0 +1,1 @@
+//! Shape evaluation for clients and designers: curvature and tessellation.

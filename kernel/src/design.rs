@@ -1,0 +1,1 @@
+//! A design (surface, icons, material) as a value: edit, solve, snapshot, restore.

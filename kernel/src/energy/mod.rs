@@ -1,0 +1,1 @@
+//! The thin-plate deformation energy: quadrature, stiffness matrices, materials.

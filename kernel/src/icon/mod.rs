@@ -1,0 +1,1 @@
+//! Icon entities: constraints and loads attached to a surface or curve.

@@ -1,0 +1,1 @@
+//! The spring model: a drag of Δx becomes a force f = k Δx with adaptive stiffness.
