@@ -1,1 +1,6 @@
-//! vsculpt-bridge: the device daemon for 3D mice, trackers and gloves (to be built, issue 4).
+//! vsculpt-bridge: the device daemon that turns studio hardware — 3D mice,
+//! 6-DOF trackers and data gloves — into sculpting input for the vsculpt server.
+//!
+//! * [`device`] — drivers: transports, pure decoders of each family's wire format.
+
+pub mod device;

@@ -1,0 +1,407 @@
+//! The one driver abstraction every device family plugs into.
+//!
+//! A device is split in three so that recording and replay go through exactly
+//! the same parsers as live input:
+//! * a [`Transport`] moves raw bytes (serial port, HID, AF_UNIX or TCP socket);
+//! * a [`Decoder`] is a pure state machine from bytes to validated [`Sample`]s,
+//!   resynchronising on garbage;
+//! * a [`Script`] holds the commands a device family needs on open, per poll and
+//!   on close.
+//!
+//! [`Driver`] combines the three and implements the [`Device`] trait
+//! (open / read / close). Every raw chunk it reads can be copied to a recording
+//! tap as a [`RawFrame`].
+
+use super::sample::{Sample, SourceId, Timestamp};
+use std::sync::mpsc::Sender;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// Why a device could not be opened or read.
+#[derive(Debug, Error, Clone, PartialEq, Eq)]
+pub enum DeviceError {
+    /// No device matched the configuration (not plugged in, socket missing).
+    #[error("device not found: {0}")]
+    NotFound(String),
+    /// An operating-system I/O error.
+    #[error("i/o error: {0}")]
+    Io(String),
+    /// The device or peer closed the link.
+    #[error("device disconnected")]
+    Disconnected,
+    /// The device answered a command wrongly or not at all.
+    #[error("handshake failed: {0}")]
+    Handshake(String),
+    /// The driver was used before `open`.
+    #[error("device not open")]
+    NotOpen,
+}
+
+impl From<std::io::Error> for DeviceError {
+    fn from(e: std::io::Error) -> Self {
+        match e.kind() {
+            std::io::ErrorKind::UnexpectedEof
+            | std::io::ErrorKind::BrokenPipe
+            | std::io::ErrorKind::ConnectionReset
+            | std::io::ErrorKind::ConnectionAborted => DeviceError::Disconnected,
+            std::io::ErrorKind::NotFound => DeviceError::NotFound(e.to_string()),
+            _ => DeviceError::Io(e.to_string()),
+        }
+    }
+}
+
+/// Counters a decoder keeps about the bytes it saw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DecodeStats {
+    /// Records decoded into samples.
+    pub records: u64,
+    /// Bytes thrown away while looking for the start of a record.
+    pub discarded_bytes: u64,
+    /// Complete records rejected by a validity check (bad framing, values out of range).
+    pub rejected_records: u64,
+}
+
+impl DecodeStats {
+    /// Bytes or records dropped so far.
+    pub fn faults(&self) -> u64 {
+        self.discarded_bytes + self.rejected_records
+    }
+}
+
+/// A pure parser from raw device bytes to samples.
+///
+/// `feed` may be called with any split of the byte stream (one byte at a time,
+/// many records at once); the output must not depend on the split. For packet
+/// transports (HID) each chunk is one report.
+pub trait Decoder: Send {
+    /// Parses `chunk`, which arrived at `at`, appending complete samples to `out`.
+    fn feed(&mut self, chunk: &[u8], at: Timestamp, out: &mut Vec<Sample>);
+    /// Counters since creation.
+    fn stats(&self) -> DecodeStats;
+    /// Forgets any partial record (after a reopen).
+    fn reset(&mut self);
+    /// `Some(reason)` when the stream cannot be resynchronised in place (a framed
+    /// protocol whose length field was corrupt, a failed handshake): the driver
+    /// then reports the link broken so that it is reopened.
+    fn fatal(&self) -> Option<String> {
+        None
+    }
+    /// Tells the decoder which USB model (vendor, product) the transport opened, for
+    /// per-model quirks. The default ignores it.
+    fn set_identity(&mut self, _ids: (u16, u16)) {}
+}
+
+/// A byte link to a device.
+pub trait Transport: Send {
+    /// Opens the link.
+    fn open(&mut self) -> Result<(), DeviceError>;
+    /// Reads what is available, waiting at most `timeout`; `Ok(0)` on timeout.
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, DeviceError>;
+    /// Writes all of `bytes`.
+    fn write(&mut self, bytes: &[u8]) -> Result<(), DeviceError>;
+    /// Closes the link (idempotent).
+    fn close(&mut self);
+    /// True between a successful `open` and `close`.
+    fn is_open(&self) -> bool;
+    /// A human-readable name (port path, socket, host).
+    fn describe(&self) -> String;
+    /// The USB (vendor, product) of the opened device, when the link knows it.
+    fn identity(&self) -> Option<(u16, u16)> {
+        None
+    }
+}
+
+/// One step of a command script.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// Write these bytes.
+    Send(Vec<u8>),
+    /// Read and discard everything that arrives for this long.
+    Drain(Duration),
+    /// Read exactly `len` bytes within `timeout` and check them.
+    Expect {
+        /// Bytes to read.
+        len: usize,
+        /// How long to wait for them.
+        timeout: Duration,
+        /// Check on the bytes read; failing it fails the open.
+        check: Check,
+    },
+}
+
+/// A check on a device's answer to a command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Check {
+    /// Accept anything.
+    Any,
+    /// The first `n` bytes each have bit 7 set (Flock `O 36`: unit accessible).
+    HighBitSet(usize),
+    /// The answer starts with this byte.
+    StartsWith(u8),
+}
+
+impl Check {
+    /// Verifies `answer`; `Err` says what was wrong.
+    pub fn verify(&self, answer: &[u8]) -> Result<(), String> {
+        match *self {
+            Check::Any => Ok(()),
+            Check::HighBitSet(n) => match answer.iter().take(n).position(|b| b & 0x80 == 0) {
+                Some(i) => Err(format!("unit {} is not accessible", i + 1)),
+                None if answer.len() < n => Err("answer too short".into()),
+                None => Ok(()),
+            },
+            Check::StartsWith(b) => match answer.first() {
+                Some(&f) if f == b => Ok(()),
+                _ => Err(format!("answer does not start with {b:#04x}")),
+            },
+        }
+    }
+}
+
+/// The commands a device family needs.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Script {
+    /// Run in order after the transport opens.
+    pub open: Vec<Step>,
+    /// Sent before each read cycle in polled mode (`None` when the device streams).
+    pub poll: Option<Vec<u8>>,
+    /// Sent before the transport closes.
+    pub close: Vec<u8>,
+}
+
+/// A raw chunk of bytes as read from a device, for recording.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RawFrame {
+    /// Which configured device.
+    pub source: SourceId,
+    /// When it arrived.
+    pub time: Timestamp,
+    /// The bytes exactly as read.
+    pub bytes: Vec<u8>,
+}
+
+/// What a driver reports to a recording tap.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum TapEvent {
+    /// The device was (re)opened: decoders start afresh.
+    Opened {
+        /// Which configured device.
+        source: SourceId,
+        /// When.
+        time: Timestamp,
+        /// USB identity of the opened device, if any.
+        identity: Option<(u16, u16)>,
+    },
+    /// Bytes read.
+    Frame(RawFrame),
+}
+
+/// A device: open it, read samples, close it.
+pub trait Device: Send {
+    /// Configured name of the device.
+    fn name(&self) -> &str;
+    /// Opens the link and runs the device's start-up commands.
+    fn open(&mut self) -> Result<(), DeviceError>;
+    /// Reads for at most `timeout`, appending validated samples to `out`.
+    /// Returns early once at least one sample was decoded.
+    fn read(&mut self, timeout: Duration, out: &mut Vec<Sample>) -> Result<(), DeviceError>;
+    /// Stops the device and closes the link.
+    fn close(&mut self);
+    /// The decoder's counters.
+    fn stats(&self) -> DecodeStats;
+}
+
+/// Largest chunk read from a transport at once.
+const READ_CHUNK: usize = 4096;
+
+/// The generic device: transport + decoder + script.
+pub struct Driver {
+    name: String,
+    source: SourceId,
+    transport: Box<dyn Transport>,
+    decoder: Box<dyn Decoder>,
+    script: Script,
+    tap: Option<Sender<TapEvent>>,
+    buf: Vec<u8>,
+    faults_seen: u64,
+    in_fault: bool,
+}
+
+impl Driver {
+    /// Assembles a driver.
+    pub fn new(
+        name: impl Into<String>,
+        source: SourceId,
+        transport: Box<dyn Transport>,
+        decoder: Box<dyn Decoder>,
+        script: Script,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            source,
+            transport,
+            decoder,
+            script,
+            tap: None,
+            buf: vec![0; READ_CHUNK],
+            faults_seen: 0,
+            in_fault: false,
+        }
+    }
+
+    /// Copies every raw chunk read from now on to `tap` (for `record`).
+    pub fn set_tap(&mut self, tap: Sender<TapEvent>) {
+        self.tap = Some(tap);
+    }
+
+    /// The configured device this driver serves.
+    pub fn source(&self) -> SourceId {
+        self.source
+    }
+
+    fn run_step(&mut self, step: &Step) -> Result<(), DeviceError> {
+        match step {
+            Step::Send(bytes) => self.transport.write(bytes),
+            Step::Drain(d) => {
+                let end = Instant::now() + *d;
+                loop {
+                    let now = Instant::now();
+                    if now >= end {
+                        return Ok(());
+                    }
+                    self.transport.read(&mut self.buf, end - now)?;
+                }
+            }
+            Step::Expect {
+                len,
+                timeout,
+                check,
+            } => {
+                let end = Instant::now() + *timeout;
+                let mut got = Vec::with_capacity(*len);
+                while got.len() < *len {
+                    let now = Instant::now();
+                    if now >= end {
+                        return Err(DeviceError::Handshake(format!(
+                            "expected {len} bytes, got {}",
+                            got.len()
+                        )));
+                    }
+                    let want = (*len - got.len()).min(self.buf.len());
+                    let n = self.transport.read(&mut self.buf[..want], end - now)?;
+                    got.extend_from_slice(&self.buf[..n]);
+                }
+                check.verify(&got).map_err(DeviceError::Handshake)
+            }
+        }
+    }
+
+    fn note_faults(&mut self, produced: bool) {
+        let faults = self.decoder.stats().faults();
+        if faults > self.faults_seen {
+            if !self.in_fault {
+                tracing::warn!(
+                    device = %self.name,
+                    dropped = faults - self.faults_seen,
+                    "bad bytes from device; resynchronising"
+                );
+                self.in_fault = true;
+            }
+            self.faults_seen = faults;
+        } else if produced && self.in_fault {
+            tracing::info!(device = %self.name, "device back in sync");
+            self.in_fault = false;
+        }
+    }
+}
+
+impl Device for Driver {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn open(&mut self) -> Result<(), DeviceError> {
+        self.transport.open()?;
+        self.decoder.reset();
+        let identity = self.transport.identity();
+        if let Some(ids) = identity {
+            self.decoder.set_identity(ids);
+        }
+        if let Some(tap) = &self.tap {
+            let _ = tap.send(TapEvent::Opened {
+                source: self.source,
+                time: Timestamp::now(),
+                identity,
+            });
+        }
+        let steps = self.script.open.clone();
+        for step in &steps {
+            if let Err(e) = self.run_step(step) {
+                self.transport.close();
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+
+    fn read(&mut self, timeout: Duration, out: &mut Vec<Sample>) -> Result<(), DeviceError> {
+        if !self.transport.is_open() {
+            return Err(DeviceError::NotOpen);
+        }
+        if let Some(poll) = &self.script.poll {
+            let poll = poll.clone();
+            self.transport.write(&poll)?;
+        }
+        let start_len = out.len();
+        let end = Instant::now() + timeout;
+        loop {
+            let now = Instant::now();
+            if now >= end {
+                break;
+            }
+            let n = self.transport.read(&mut self.buf, end - now)?;
+            if n == 0 {
+                continue;
+            }
+            let at = Timestamp::now();
+            if let Some(tap) = &self.tap {
+                // A closed recorder only stops the recording, never the device.
+                let _ = tap.send(TapEvent::Frame(RawFrame {
+                    source: self.source,
+                    time: at,
+                    bytes: self.buf[..n].to_vec(),
+                }));
+            }
+            self.decoder.feed(&self.buf[..n], at, out);
+            let produced = out.len() > start_len;
+            self.note_faults(produced);
+            if let Some(reason) = self.decoder.fatal() {
+                return Err(DeviceError::Handshake(reason));
+            }
+            if produced {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    fn close(&mut self) {
+        if self.transport.is_open() {
+            let bytes = self.script.close.clone();
+            if !bytes.is_empty() {
+                let _ = self.transport.write(&bytes);
+            }
+            self.transport.close();
+        }
+    }
+
+    fn stats(&self) -> DecodeStats {
+        self.decoder.stats()
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        self.close();
+    }
+}
