@@ -1,0 +1,798 @@
+//! Interaction (paper 003): hands grab, drag and release icons; the 3D mouse's
+//! buttons work the 3D menu (constraint/load, position/tangent/normal,
+//! driving/passive/sleeping) and its axes move the selected icon.
+//!
+//! This is a pure state machine: validated [`Sample`]s and the icon state the
+//! server reports go in, [`Command`]s for the server come out. It never does I/O.
+//!
+//! * A hand closing near icons grabs the nearest one within reach (sleeping icons
+//!   and icons held by another hand are skipped): it is bound to the hand's sensor
+//!   and becomes driving. Moving the hand by Δx drags it: a constraint icon gets the
+//!   displaced target `p0 + Δx` directly; a load icon gets the spring force
+//!   `f = k Δx` ([`DragSpring`]). Opening the hand releases it: unbound, passive.
+//! * Load springs adapt from the icon displacement Δy the server reports.
+
+use crate::config::{Config, DeviceKind, MenuConfig};
+use crate::device::{Reading, Sample, SourceId, Timestamp};
+use crate::hand::{Gesture, Hand};
+use crate::spring::DragSpring;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Icon ids as the server numbers them.
+pub type IconId = u64;
+
+/// Constraint or load.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IconRole {
+    /// Holds the surface (position, tangent or normal).
+    Constraint,
+    /// Pulls the surface through the spring model.
+    Load,
+}
+
+/// What a constraint icon holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IconKind {
+    /// w(u', v') = P0.
+    Position,
+    /// w_u(u', v') = T.
+    Tangent,
+    /// N · w_u = N · w_v = 0.
+    Normal,
+}
+
+/// Icon state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IconState {
+    /// Bound to a sensor; moving it drives the deformation.
+    Driving,
+    /// No sensor; a constraint still holds.
+    Passive,
+    /// No effect.
+    Sleeping,
+}
+
+/// The bridge's view of an icon, as the server reports it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IconView {
+    /// Id.
+    pub id: IconId,
+    /// Current position in scene units.
+    pub position: DVec3,
+    /// Constraint or load.
+    pub role: IconRole,
+    /// Position, tangent or normal.
+    pub kind: IconKind,
+    /// Driving, passive or sleeping.
+    pub state: IconState,
+}
+
+/// Entries of the 3D menu, in ring order.
+pub const MENU: [MenuEntry; 8] = [
+    MenuEntry::Role(IconRole::Constraint),
+    MenuEntry::Role(IconRole::Load),
+    MenuEntry::Kind(IconKind::Position),
+    MenuEntry::Kind(IconKind::Tangent),
+    MenuEntry::Kind(IconKind::Normal),
+    MenuEntry::State(IconState::Driving),
+    MenuEntry::State(IconState::Passive),
+    MenuEntry::State(IconState::Sleeping),
+];
+
+/// One entry of the 3D menu.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MenuEntry {
+    /// Make the selected icon a constraint or a load.
+    Role(IconRole),
+    /// Make the selected constraint a position, tangent or normal constraint.
+    Kind(IconKind),
+    /// Set the selected icon's state.
+    State(IconState),
+}
+
+/// What a 3D-mouse button does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MenuAction {
+    /// Highlight the next menu entry.
+    NextEntry,
+    /// Highlight the previous menu entry.
+    PreviousEntry,
+    /// Apply the highlighted entry to the selected icon.
+    ApplyEntry,
+    /// Select the next icon (by id).
+    SelectNextIcon,
+}
+
+/// An instruction for the server.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Bind `icon` to `sensor` (it becomes driving).
+    Bind {
+        /// Icon.
+        icon: IconId,
+        /// Sensor name, `device:sensor`.
+        sensor: String,
+    },
+    /// Unbind `icon` from its sensor.
+    Unbind {
+        /// Icon.
+        icon: IconId,
+    },
+    /// Move a constraint icon's target to `target`.
+    Drag {
+        /// Icon.
+        icon: IconId,
+        /// Target in scene units.
+        target: DVec3,
+    },
+    /// Apply `force` at a load icon.
+    Load {
+        /// Icon.
+        icon: IconId,
+        /// Force (spring model).
+        force: DVec3,
+    },
+    /// Set an icon's state.
+    SetState {
+        /// Icon.
+        icon: IconId,
+        /// New state.
+        state: IconState,
+    },
+    /// Set an icon's role.
+    SetRole {
+        /// Icon.
+        icon: IconId,
+        /// New role.
+        role: IconRole,
+    },
+    /// Set a constraint icon's kind.
+    SetKind {
+        /// Icon.
+        icon: IconId,
+        /// New kind.
+        kind: IconKind,
+    },
+}
+
+impl Command {
+    /// The icon the command is about.
+    pub fn icon(&self) -> IconId {
+        match self {
+            Command::Bind { icon, .. }
+            | Command::Unbind { icon }
+            | Command::Drag { icon, .. }
+            | Command::Load { icon, .. }
+            | Command::SetState { icon, .. }
+            | Command::SetRole { icon, .. }
+            | Command::SetKind { icon, .. } => *icon,
+        }
+    }
+
+    /// True for the continuous commands (drag, load), which may be coalesced to the newest.
+    pub fn is_continuous(&self) -> bool {
+        matches!(self, Command::Drag { .. } | Command::Load { .. })
+    }
+}
+
+/// A drag in progress, by a hand or the 3D mouse.
+#[derive(Clone, Debug)]
+struct Hold {
+    icon: IconId,
+    /// Where the hand (or virtual hand) was when the drag began.
+    origin: DVec3,
+    /// Where the icon was when the drag began.
+    icon_origin: DVec3,
+    /// Current displacement Δx.
+    offset: DVec3,
+    spring: Option<DragSpring>,
+}
+
+struct HandSlot {
+    tracker: SourceId,
+    sensor: u16,
+    glove: Option<SourceId>,
+    sensor_name: String,
+    reach: f64,
+    hand: Hand,
+    hold: Option<Hold>,
+}
+
+/// The interaction state machine.
+pub struct Interaction {
+    hands: Vec<HandSlot>,
+    icons: BTreeMap<IconId, IconView>,
+    menu_device: Option<SourceId>,
+    menu: MenuConfig,
+    entry: usize,
+    selected: Option<IconId>,
+    mouse_hold: Option<Hold>,
+    mouse_time: Option<Timestamp>,
+    surface_area: f64,
+}
+
+impl Interaction {
+    /// Builds the hands and menu of `config`.
+    pub fn new(config: &Config) -> Self {
+        let hands = config
+            .hands
+            .iter()
+            .filter_map(|h| {
+                let (tracker, td) = config.device(&h.tracker)?;
+                let glove = h.glove.as_ref().and_then(|g| config.device(g)).map(|g| g.0);
+                debug_assert!(matches!(
+                    td.kind,
+                    DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Vrpn
+                ));
+                Some(HandSlot {
+                    tracker,
+                    sensor: h.sensor,
+                    glove,
+                    sensor_name: format!("{}:{}", h.tracker, h.sensor),
+                    reach: h.reach,
+                    hand: Hand::new(config.calibration, h.calibration.clone()),
+                    hold: None,
+                })
+            })
+            .collect();
+        Self {
+            hands,
+            icons: BTreeMap::new(),
+            menu_device: config.menu_device(),
+            menu: config.menu.clone(),
+            entry: 0,
+            selected: None,
+            mouse_hold: None,
+            mouse_time: None,
+            surface_area: 1.0,
+        }
+    }
+
+    /// Sets the surface area S used for the spring stiffness k0 = κ S.
+    pub fn set_surface_area(&mut self, area: f64) {
+        if area.is_finite() && area > 0.0 {
+            self.surface_area = area;
+        }
+    }
+
+    /// The highlighted menu entry.
+    pub fn menu_entry(&self) -> MenuEntry {
+        MENU[self.entry]
+    }
+
+    /// The icon the 3D mouse acts on.
+    pub fn selected(&self) -> Option<IconId> {
+        self.selected
+    }
+
+    /// Icons held by hands, with the sensor each is bound to.
+    pub fn bindings(&self) -> Vec<(IconId, String)> {
+        self.hands
+            .iter()
+            .filter_map(|h| h.hold.as_ref().map(|g| (g.icon, h.sensor_name.clone())))
+            .collect()
+    }
+
+    /// Commands that re-establish every binding and held drag (after a reconnect).
+    pub fn restore(&self) -> Vec<Command> {
+        let mut out = Vec::new();
+        for h in &self.hands {
+            if let Some(g) = &h.hold {
+                out.push(Command::Bind {
+                    icon: g.icon,
+                    sensor: h.sensor_name.clone(),
+                });
+                out.push(Command::SetState {
+                    icon: g.icon,
+                    state: IconState::Driving,
+                });
+                if let Some(icon) = self.icons.get(&g.icon) {
+                    out.push(drag_command(icon, g));
+                }
+            }
+        }
+        out
+    }
+
+    /// The icons as last reported.
+    pub fn icons(&self) -> impl Iterator<Item = &IconView> {
+        self.icons.values()
+    }
+
+    /// Replaces the whole icon set (a snapshot from the server); holds on icons that
+    /// vanished are dropped.
+    pub fn set_icons(&mut self, icons: impl IntoIterator<Item = IconView>) {
+        self.icons = icons.into_iter().map(|i| (i.id, i)).collect();
+        let alive = |g: &Option<Hold>, icons: &BTreeMap<IconId, IconView>| {
+            g.as_ref().is_none_or(|g| icons.contains_key(&g.icon))
+        };
+        for h in &mut self.hands {
+            if !alive(&h.hold, &self.icons) {
+                h.hold = None;
+            }
+        }
+        if !alive(&self.mouse_hold, &self.icons) {
+            self.mouse_hold = None;
+        }
+        if self.selected.is_some_and(|s| !self.icons.contains_key(&s)) {
+            self.selected = None;
+        }
+    }
+
+    /// Updates one icon as the server reports it; adapts the spring of a held load
+    /// icon from its displacement Δy against the drag Δx.
+    pub fn update_icon(&mut self, icon: IconView) {
+        self.icons.insert(icon.id, icon);
+        let holds = self
+            .hands
+            .iter_mut()
+            .filter_map(|h| h.hold.as_mut())
+            .chain(self.mouse_hold.as_mut());
+        for g in holds.filter(|g| g.icon == icon.id) {
+            if let Some(s) = &mut g.spring {
+                s.observe(g.offset, icon.position - g.icon_origin);
+            }
+        }
+    }
+
+    /// Forgets an icon the server deleted.
+    pub fn remove_icon(&mut self, id: IconId) {
+        let rest: Vec<IconView> = self
+            .icons
+            .values()
+            .filter(|i| i.id != id)
+            .copied()
+            .collect();
+        self.set_icons(rest);
+    }
+
+    fn start_hold(&self, icon: &IconView, origin: DVec3) -> Hold {
+        Hold {
+            icon: icon.id,
+            origin,
+            icon_origin: icon.position,
+            offset: DVec3::ZERO,
+            spring: (icon.role == IconRole::Load).then(|| DragSpring::new(self.surface_area)),
+        }
+    }
+
+    fn nearest_free_icon(&self, at: DVec3, reach: f64) -> Option<IconView> {
+        let held: Vec<IconId> = self
+            .hands
+            .iter()
+            .filter_map(|h| h.hold.as_ref().map(|g| g.icon))
+            .collect();
+        self.icons
+            .values()
+            .filter(|i| i.state != IconState::Sleeping && !held.contains(&i.id))
+            .map(|i| (i.position.distance(at), i))
+            .filter(|(d, _)| *d <= reach)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, i)| *i)
+    }
+
+    /// Handles one sample, appending the resulting commands to `out`.
+    pub fn handle(&mut self, sample: &Sample, out: &mut Vec<Command>) {
+        match sample.reading {
+            Reading::Pose {
+                sensor,
+                position,
+                orientation,
+            } => {
+                for i in 0..self.hands.len() {
+                    let h = &mut self.hands[i];
+                    if h.tracker != sample.source || h.sensor != sensor {
+                        continue;
+                    }
+                    let pose = h.hand.update_pose(position, orientation, sample.time);
+                    if let Some(g) = &mut h.hold {
+                        g.offset = pose.position - g.origin;
+                        if let Some(icon) = self.icons.get(&g.icon) {
+                            out.push(drag_command(icon, g));
+                        }
+                    }
+                }
+            }
+            Reading::Glove(values) => {
+                for i in 0..self.hands.len() {
+                    if self.hands[i].glove != Some(sample.source) {
+                        continue;
+                    }
+                    let Some(gesture) = self.hands[i].hand.update_glove(&values) else {
+                        continue;
+                    };
+                    self.gesture(i, gesture, out);
+                }
+            }
+            Reading::Button { button, pressed } => {
+                if Some(sample.source) == self.menu_device && pressed {
+                    if let Some(action) = self.menu.buttons.get(&button).copied() {
+                        self.menu_action(action, out);
+                    }
+                }
+            }
+            Reading::Motion { translation, .. } => {
+                if Some(sample.source) == self.menu_device {
+                    self.mouse_motion(translation, sample.time, out);
+                }
+            }
+        }
+    }
+
+    fn gesture(&mut self, i: usize, gesture: Gesture, out: &mut Vec<Command>) {
+        match gesture {
+            Gesture::Grab => {
+                if self.hands[i].hold.is_some() {
+                    return;
+                }
+                let Some(pose) = self.hands[i].hand.pose() else {
+                    return;
+                };
+                let Some(icon) = self.nearest_free_icon(pose.position, self.hands[i].reach) else {
+                    return;
+                };
+                let hold = self.start_hold(&icon, pose.position);
+                let h = &mut self.hands[i];
+                tracing::info!(icon = icon.id, sensor = %h.sensor_name, "grab");
+                out.push(Command::Bind {
+                    icon: icon.id,
+                    sensor: h.sensor_name.clone(),
+                });
+                out.push(Command::SetState {
+                    icon: icon.id,
+                    state: IconState::Driving,
+                });
+                h.hold = Some(hold);
+                self.selected = Some(icon.id);
+                // A mouse drag of the same icon yields to the hand.
+                if self.mouse_hold.as_ref().is_some_and(|m| m.icon == icon.id) {
+                    self.mouse_hold = None;
+                }
+            }
+            Gesture::Open | Gesture::Point => {
+                if let Some(g) = self.hands[i].hold.take() {
+                    tracing::info!(icon = g.icon, "release");
+                    if g.spring.is_some() {
+                        // A released load stops pulling.
+                        out.push(Command::Load {
+                            icon: g.icon,
+                            force: DVec3::ZERO,
+                        });
+                    }
+                    out.push(Command::Unbind { icon: g.icon });
+                    out.push(Command::SetState {
+                        icon: g.icon,
+                        state: IconState::Passive,
+                    });
+                }
+            }
+        }
+    }
+
+    fn menu_action(&mut self, action: MenuAction, out: &mut Vec<Command>) {
+        match action {
+            MenuAction::NextEntry => self.entry = (self.entry + 1) % MENU.len(),
+            MenuAction::PreviousEntry => self.entry = (self.entry + MENU.len() - 1) % MENU.len(),
+            MenuAction::SelectNextIcon => {
+                self.mouse_hold = None;
+                let next = match self.selected {
+                    Some(s) => self
+                        .icons
+                        .range(s + 1..)
+                        .next()
+                        .or_else(|| self.icons.iter().next()),
+                    None => self.icons.iter().next(),
+                };
+                self.selected = next.map(|(id, _)| *id);
+            }
+            MenuAction::ApplyEntry => {
+                let Some(icon) = self.selected.and_then(|s| self.icons.get(&s)) else {
+                    return;
+                };
+                let id = icon.id;
+                match MENU[self.entry] {
+                    MenuEntry::Role(role) if role != icon.role => {
+                        out.push(Command::SetRole { icon: id, role });
+                    }
+                    MenuEntry::Kind(kind) if kind != icon.kind => {
+                        out.push(Command::SetKind { icon: id, kind });
+                    }
+                    MenuEntry::State(state) if state != icon.state => {
+                        out.push(Command::SetState { icon: id, state });
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    fn mouse_motion(&mut self, t: DVec3, time: Timestamp, out: &mut Vec<Command>) {
+        let dt = self
+            .mouse_time
+            .map_or(0.0, |p| time.since(p).as_secs_f64().min(0.1));
+        self.mouse_time = Some(time);
+        let dz = self.menu.deadzone;
+        let t = DVec3::new(
+            if t.x.abs() < dz { 0.0 } else { t.x },
+            if t.y.abs() < dz { 0.0 } else { t.y },
+            if t.z.abs() < dz { 0.0 } else { t.z },
+        );
+        let Some(icon) = self.selected.and_then(|s| self.icons.get(&s)).copied() else {
+            return;
+        };
+        if self
+            .hands
+            .iter()
+            .any(|h| h.hold.as_ref().is_some_and(|g| g.icon == icon.id))
+        {
+            return; // a hand holds it
+        }
+        if t == DVec3::ZERO && self.mouse_hold.is_none() {
+            return;
+        }
+        if self.mouse_hold.as_ref().is_none_or(|g| g.icon != icon.id) {
+            self.mouse_hold = Some(self.start_hold(&icon, DVec3::ZERO));
+        }
+        let speed = self.menu.speed;
+        if let Some(g) = &mut self.mouse_hold {
+            g.offset += t * speed * dt;
+            out.push(drag_command(&icon, g));
+        }
+    }
+}
+
+fn drag_command(icon: &IconView, g: &Hold) -> Command {
+    match (&g.spring, icon.role) {
+        (Some(s), IconRole::Load) => Command::Load {
+            icon: icon.id,
+            force: s.force(g.offset),
+        },
+        _ => Command::Drag {
+            icon: icon.id,
+            target: g.icon_origin + g.offset,
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{DeviceConfig, HandConfig};
+    use crate::device::GloveValues;
+    use crate::hand::{GloveCalibration, glove_shape};
+
+    fn config() -> Config {
+        let mut tracker = DeviceConfig::new("tracker", DeviceKind::Flock);
+        tracker.port = Some("/dev/null".into());
+        let mut glove = DeviceConfig::new("glove", DeviceKind::Cyberglove);
+        glove.port = Some("/dev/null".into());
+        let mouse = DeviceConfig::new("mouse", DeviceKind::Spacenavd);
+        let c = Config {
+            devices: vec![tracker, glove, mouse],
+            hands: vec![HandConfig {
+                name: "right".into(),
+                tracker: "tracker".into(),
+                sensor: 0,
+                glove: Some("glove".into()),
+                reach: 0.1,
+                calibration: GloveCalibration::default(),
+            }],
+            ..Default::default()
+        };
+        c.validate().unwrap();
+        c
+    }
+
+    fn icon(id: IconId, p: DVec3, role: IconRole) -> IconView {
+        IconView {
+            id,
+            position: p,
+            role,
+            kind: IconKind::Position,
+            state: IconState::Passive,
+        }
+    }
+
+    fn pose(p: DVec3) -> Sample {
+        Sample {
+            source: SourceId(0),
+            time: Timestamp(0),
+            reading: Reading::Pose {
+                sensor: 0,
+                position: p,
+                orientation: glam::DQuat::IDENTITY,
+            },
+        }
+    }
+
+    fn hand(index: f64, others: f64) -> Sample {
+        Sample {
+            source: SourceId(1),
+            time: Timestamp(0),
+            reading: Reading::Glove(GloveValues::new(&glove_shape(22, index, others)).unwrap()),
+        }
+    }
+
+    fn run(i: &mut Interaction, samples: &[Sample]) -> Vec<Command> {
+        let mut out = Vec::new();
+        for s in samples {
+            i.handle(s, &mut out);
+        }
+        out
+    }
+
+    #[test]
+    fn grab_nearest_drag_constraint_release() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([
+            icon(1, DVec3::new(0.0, 0.0, 0.0), IconRole::Constraint),
+            icon(2, DVec3::new(0.05, 0.0, 0.0), IconRole::Constraint),
+            icon(3, DVec3::new(0.5, 0.0, 0.0), IconRole::Constraint),
+        ]);
+        let out = run(&mut i, &[pose(DVec3::new(0.04, 0.0, 0.0)), hand(1.0, 1.0)]);
+        assert_eq!(
+            out,
+            vec![
+                Command::Bind {
+                    icon: 2,
+                    sensor: "tracker:0".into()
+                },
+                Command::SetState {
+                    icon: 2,
+                    state: IconState::Driving
+                }
+            ]
+        );
+        assert_eq!(i.bindings(), vec![(2, "tracker:0".to_string())]);
+        let out = run(&mut i, &[pose(DVec3::new(0.04, 0.1, 0.0))]);
+        assert_eq!(
+            out,
+            vec![Command::Drag {
+                icon: 2,
+                target: DVec3::new(0.05, 0.1, 0.0)
+            }]
+        );
+        let out = run(&mut i, &[hand(0.0, 0.0)]);
+        assert_eq!(
+            out,
+            vec![
+                Command::Unbind { icon: 2 },
+                Command::SetState {
+                    icon: 2,
+                    state: IconState::Passive
+                }
+            ]
+        );
+        // moving an open hand drags nothing
+        assert!(run(&mut i, &[pose(DVec3::ZERO)]).is_empty());
+    }
+
+    #[test]
+    fn nothing_within_reach_or_sleeping_is_not_grabbed() {
+        let mut i = Interaction::new(&config());
+        let mut sleeping = icon(1, DVec3::ZERO, IconRole::Constraint);
+        sleeping.state = IconState::Sleeping;
+        i.set_icons([
+            sleeping,
+            icon(2, DVec3::new(1.0, 0.0, 0.0), IconRole::Constraint),
+        ]);
+        assert!(run(&mut i, &[pose(DVec3::ZERO), hand(1.0, 1.0)]).is_empty());
+        assert!(i.bindings().is_empty());
+    }
+
+    #[test]
+    fn load_icons_get_spring_forces_that_adapt() {
+        let mut c = config();
+        c.hands[0].reach = 1.0;
+        let mut i = Interaction::new(&c);
+        i.set_surface_area(2.0);
+        i.set_icons([icon(7, DVec3::ZERO, IconRole::Load)]);
+        run(&mut i, &[pose(DVec3::ZERO), hand(1.0, 1.0)]);
+        let out = run(&mut i, &[pose(DVec3::new(0.0, 0.0, 0.1))]);
+        assert_eq!(
+            out,
+            vec![Command::Load {
+                icon: 7,
+                force: DVec3::new(0.0, 0.0, 0.2)
+            }]
+        );
+        // the server reports the icon moved only 0.02 (ratio 0.2): the spring stiffens
+        i.update_icon(icon(7, DVec3::new(0.0, 0.0, 0.02), IconRole::Load));
+        let out = run(&mut i, &[pose(DVec3::new(0.0, 0.0, 0.1))]);
+        match &out[0] {
+            Command::Load { force, .. } => assert!((force.z - 0.4).abs() < 1e-12, "{force}"),
+            c => panic!("{c:?}"),
+        }
+        // release zeroes the load
+        let out = run(&mut i, &[hand(0.0, 0.0)]);
+        assert_eq!(
+            out[0],
+            Command::Load {
+                icon: 7,
+                force: DVec3::ZERO
+            }
+        );
+    }
+
+    #[test]
+    fn menu_buttons_and_mouse_axes() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([
+            icon(4, DVec3::ZERO, IconRole::Constraint),
+            icon(9, DVec3::ONE, IconRole::Constraint),
+        ]);
+        let button = |b: u16| Sample {
+            source: SourceId(2),
+            time: Timestamp(0),
+            reading: Reading::Button {
+                button: b,
+                pressed: true,
+            },
+        };
+        // select icon 4, move to the "load" entry, apply
+        let out = run(&mut i, &[button(2), button(0), button(1)]);
+        assert_eq!(i.selected(), Some(4));
+        assert_eq!(
+            out,
+            vec![Command::SetRole {
+                icon: 4,
+                role: IconRole::Load
+            }]
+        );
+        // previous entry twice wraps to "sleeping"
+        run(&mut i, &[button(3), button(3)]);
+        assert_eq!(i.menu_entry(), MenuEntry::State(IconState::Sleeping));
+        // axes: full right for 0.1 s at 0.2 units/s moves the selected icon by 0.02
+        let motion = |t: u64, x: f64| Sample {
+            source: SourceId(2),
+            time: Timestamp(t),
+            reading: Reading::Motion {
+                translation: DVec3::new(x, 0.01, 0.0),
+                rotation: DVec3::ZERO,
+            },
+        };
+        let out = run(&mut i, &[motion(0, 1.0), motion(100_000, 1.0)]);
+        assert_eq!(out.len(), 2);
+        match out[1] {
+            Command::Drag { icon, target } => {
+                assert_eq!(icon, 4);
+                assert!((target - DVec3::new(0.02, 0.0, 0.0)).length() < 1e-12);
+            }
+            ref c => panic!("{c:?}"),
+        }
+    }
+
+    #[test]
+    fn restore_rebinds_held_icons_and_vanished_icons_drop_holds() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([icon(5, DVec3::ZERO, IconRole::Constraint)]);
+        run(
+            &mut i,
+            &[pose(DVec3::ZERO), hand(1.0, 1.0), pose(DVec3::X * 0.01)],
+        );
+        let r = i.restore();
+        assert_eq!(
+            r[0],
+            Command::Bind {
+                icon: 5,
+                sensor: "tracker:0".into()
+            }
+        );
+        assert_eq!(
+            r[2],
+            Command::Drag {
+                icon: 5,
+                target: DVec3::X * 0.01
+            }
+        );
+        i.remove_icon(5);
+        assert!(i.bindings().is_empty());
+        assert!(i.restore().is_empty());
+    }
+}
