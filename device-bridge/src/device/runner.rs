@@ -1,0 +1,187 @@
+//! Keeps one device running in its own thread: opens it, reads samples into a
+//! sink, and when the device fails (unplugged, garbage it cannot resync from, a
+//! VRPN server gone) closes it and reopens it with exponential backoff. Each
+//! kind of failure is logged once, and recovery once.
+
+use super::driver::{Device, DeviceError};
+use super::sample::Sample;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Timing of a device runner.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunOptions {
+    /// Longest single read.
+    pub read_timeout: Duration,
+    /// First reopen delay.
+    pub backoff_min: Duration,
+    /// Longest reopen delay.
+    pub backoff_max: Duration,
+    /// Reopen when an open device sends no valid sample for this long (`None` for
+    /// devices that are legitimately silent, like an untouched 3D mouse).
+    pub silence: Option<Duration>,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            read_timeout: Duration::from_millis(50),
+            backoff_min: Duration::from_millis(50),
+            backoff_max: Duration::from_secs(2),
+            silence: Some(Duration::from_secs(3)),
+        }
+    }
+}
+
+/// Counters of a running device.
+#[derive(Debug, Default)]
+pub struct RunStats {
+    /// Samples delivered.
+    pub samples: AtomicU64,
+    /// Successful opens.
+    pub opens: AtomicU64,
+    /// Failures (open errors and lost devices).
+    pub failures: AtomicU64,
+}
+
+/// A device running in a thread; dropping it stops the thread and closes the device.
+pub struct DeviceRunner {
+    name: String,
+    stop: Arc<AtomicBool>,
+    stats: Arc<RunStats>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl DeviceRunner {
+    /// Starts `device`; every batch of samples goes to `sink`, which returns false
+    /// to stop the runner.
+    pub fn spawn(
+        mut device: Box<dyn Device>,
+        options: RunOptions,
+        mut sink: impl FnMut(&[Sample]) -> bool + Send + 'static,
+    ) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let stats = Arc::new(RunStats::default());
+        let name = device.name().to_owned();
+        let (s, st) = (stop.clone(), stats.clone());
+        let thread = std::thread::Builder::new()
+            .name(format!("device {name}"))
+            .spawn(move || run(device.as_mut(), options, &mut sink, &s, &st))
+            .ok();
+        if thread.is_none() {
+            tracing::error!(device = %name, "cannot start a thread for the device");
+        }
+        Self {
+            name,
+            stop,
+            stats,
+            thread,
+        }
+    }
+
+    /// The device's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> &RunStats {
+        &self.stats
+    }
+
+    /// Stops the runner and waits for it.
+    pub fn stop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for DeviceRunner {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+fn sleep_unless_stopped(d: Duration, stop: &AtomicBool) {
+    let end = Instant::now() + d;
+    while !stop.load(Ordering::SeqCst) {
+        let now = Instant::now();
+        if now >= end {
+            return;
+        }
+        std::thread::sleep((end - now).min(Duration::from_millis(20)));
+    }
+}
+
+fn same_kind(a: &DeviceError, b: &DeviceError) -> bool {
+    std::mem::discriminant(a) == std::mem::discriminant(b)
+}
+
+fn run(
+    device: &mut dyn Device,
+    o: RunOptions,
+    sink: &mut dyn FnMut(&[Sample]) -> bool,
+    stop: &AtomicBool,
+    stats: &RunStats,
+) {
+    let name = device.name().to_owned();
+    let mut backoff = o.backoff_min;
+    let mut last_error: Option<DeviceError> = None;
+    let mut buf = Vec::with_capacity(64);
+    while !stop.load(Ordering::SeqCst) {
+        if let Err(e) = device.open() {
+            stats.failures.fetch_add(1, Ordering::Relaxed);
+            if last_error.as_ref().is_none_or(|l| !same_kind(l, &e)) {
+                tracing::warn!(device = %name, error = %e, "cannot open device; retrying");
+            }
+            last_error = Some(e);
+            sleep_unless_stopped(backoff, stop);
+            backoff = (backoff * 2).min(o.backoff_max);
+            continue;
+        }
+        stats.opens.fetch_add(1, Ordering::Relaxed);
+        if last_error.take().is_some() {
+            tracing::info!(device = %name, "device open again");
+        } else {
+            tracing::info!(device = %name, "device open");
+        }
+        let mut last_sample = Instant::now();
+        let failure = loop {
+            if stop.load(Ordering::SeqCst) {
+                break None;
+            }
+            buf.clear();
+            let r = device.read(o.read_timeout, &mut buf);
+            if !buf.is_empty() {
+                last_sample = Instant::now();
+                backoff = o.backoff_min;
+                stats.samples.fetch_add(buf.len() as u64, Ordering::Relaxed);
+                if !sink(&buf) {
+                    stop.store(true, Ordering::SeqCst);
+                    break None;
+                }
+            }
+            if let Err(e) = r {
+                break Some(e);
+            }
+            if o.silence.is_some_and(|s| last_sample.elapsed() > s) {
+                break Some(DeviceError::Handshake(format!(
+                    "no valid record for {:?}",
+                    o.silence.unwrap_or_default()
+                )));
+            }
+        };
+        device.close();
+        if let Some(e) = failure {
+            stats.failures.fetch_add(1, Ordering::Relaxed);
+            tracing::warn!(device = %name, error = %e, "device lost; reopening");
+            last_error = Some(e);
+            sleep_unless_stopped(backoff, stop);
+            backoff = (backoff * 2).min(o.backoff_max);
+        }
+    }
+}
