@@ -7,10 +7,14 @@
 //! * [`hand`] — tracker + glove → hand pose and gesture.
 //! * [`spring`] — the adaptive spring of a load drag.
 //! * [`interaction`] — grab / drag / release and the 3D-mouse menu, as a pure state machine.
+//! * [`listing`] — `--list`: HID devices, serial ports, spacenavd, VRPN sources.
+//! * [`recording`] — record raw device traffic, replay it through the same decoders.
 
 pub mod config;
 pub mod device;
 pub mod hand;
 pub mod interaction;
+pub mod listing;
+pub mod recording;
 pub mod sim;
 pub mod spring;

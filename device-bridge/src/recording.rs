@@ -1,0 +1,477 @@
+//! Record and replay of raw device traffic.
+//!
+//! `vsculpt-bridge record FILE` keeps every raw chunk each device delivered, with
+//! its arrival time, plus the moments devices were (re)opened; `replay FILE` feeds
+//! the chunks back through the very same decoders ([`crate::config::build_decoder`]),
+//! so a replayed session produces exactly the samples the live one did.
+//!
+//! File layout (all integers little-endian):
+//! * magic `VSBREC01`, `u32` length, then that many bytes of JSON: the device list
+//!   of the configuration that recorded (so replay builds the same decoders);
+//! * events until the end of the file, each `u8` tag, `u64` time in µs, `u16` device:
+//!   tag 0 (frame) — `u32` length and the bytes; tag 1 (opened) — `u8` 1 and
+//!   `u16` vendor, `u16` product when the device has a USB identity, else `u8` 0.
+
+use crate::config::{DeviceConfig, build_decoder};
+use crate::device::{Decoder, RawFrame, Sample, SourceId, TapEvent, Timestamp};
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::Path;
+use std::sync::mpsc::{Sender, channel};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+use thiserror::Error;
+
+/// File magic.
+pub const MAGIC: &[u8; 8] = b"VSBREC01";
+/// Largest frame accepted when reading (a device chunk is at most a few KiB).
+const MAX_FRAME: u32 = 1 << 20;
+/// Largest header accepted.
+const MAX_HEADER: u32 = 1 << 24;
+
+/// A recording that cannot be written or read.
+#[derive(Debug, Error)]
+pub enum RecordingError {
+    /// I/O failure.
+    #[error("recording i/o: {0}")]
+    Io(#[from] std::io::Error),
+    /// Not a recording, or damaged.
+    #[error("not a valid recording: {0}")]
+    Format(String),
+}
+
+fn write_event<W: Write>(w: &mut W, e: &TapEvent) -> std::io::Result<()> {
+    match e {
+        TapEvent::Frame(f) => {
+            w.write_all(&[0])?;
+            w.write_all(&f.time.0.to_le_bytes())?;
+            w.write_all(&f.source.0.to_le_bytes())?;
+            w.write_all(&(f.bytes.len() as u32).to_le_bytes())?;
+            w.write_all(&f.bytes)
+        }
+        TapEvent::Opened {
+            source,
+            time,
+            identity,
+        } => {
+            w.write_all(&[1])?;
+            w.write_all(&time.0.to_le_bytes())?;
+            w.write_all(&source.0.to_le_bytes())?;
+            match identity {
+                Some((v, p)) => {
+                    w.write_all(&[1])?;
+                    w.write_all(&v.to_le_bytes())?;
+                    w.write_all(&p.to_le_bytes())
+                }
+                None => w.write_all(&[0]),
+            }
+        }
+    }
+}
+
+/// Writes a recording from the events sent to its [`Recorder::tap`].
+pub struct Recorder {
+    tap: Sender<TapEvent>,
+    thread: Option<JoinHandle<Result<u64, RecordingError>>>,
+}
+
+impl Recorder {
+    /// Creates `path` for the devices `devices` and starts the writer thread.
+    pub fn create(path: &Path, devices: &[DeviceConfig]) -> Result<Self, RecordingError> {
+        let mut w = BufWriter::new(std::fs::File::create(path)?);
+        let header =
+            serde_json::to_vec(devices).map_err(|e| RecordingError::Format(e.to_string()))?;
+        w.write_all(MAGIC)?;
+        w.write_all(&(header.len() as u32).to_le_bytes())?;
+        w.write_all(&header)?;
+        w.flush()?;
+        let (tap, rx) = channel::<TapEvent>();
+        let thread = std::thread::spawn(move || -> Result<u64, RecordingError> {
+            let mut n = 0u64;
+            let mut last_flush = Instant::now();
+            loop {
+                match rx.recv_timeout(Duration::from_millis(200)) {
+                    Ok(e) => {
+                        write_event(&mut w, &e)?;
+                        n += 1;
+                    }
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {}
+                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+                }
+                if last_flush.elapsed() > Duration::from_millis(500) {
+                    w.flush()?;
+                    last_flush = Instant::now();
+                }
+            }
+            w.flush()?;
+            Ok(n)
+        });
+        Ok(Self {
+            tap,
+            thread: Some(thread),
+        })
+    }
+
+    /// A sender to hand to each driver ([`crate::device::Driver::set_tap`]).
+    pub fn tap(&self) -> Sender<TapEvent> {
+        self.tap.clone()
+    }
+
+    /// Stops once every tap is dropped; returns the number of events written.
+    pub fn finish(mut self) -> Result<u64, RecordingError> {
+        let (dummy, _) = channel();
+        drop(std::mem::replace(&mut self.tap, dummy));
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| RecordingError::Format("recorder thread panicked".into()))?,
+            None => Ok(0),
+        }
+    }
+}
+
+/// A recording opened for replay.
+pub struct Recording {
+    /// The devices that were recorded.
+    pub devices: Vec<DeviceConfig>,
+    reader: BufReader<std::fs::File>,
+}
+
+fn read_exact_or_eof<R: Read>(r: &mut R, buf: &mut [u8]) -> Result<bool, RecordingError> {
+    let mut got = 0;
+    while got < buf.len() {
+        match r.read(&mut buf[got..])? {
+            0 if got == 0 => return Ok(false),
+            0 => return Err(RecordingError::Format("truncated event".into())),
+            n => got += n,
+        }
+    }
+    Ok(true)
+}
+
+impl Recording {
+    /// Opens `path` and reads its header.
+    pub fn open(path: &Path) -> Result<Self, RecordingError> {
+        let mut reader = BufReader::new(std::fs::File::open(path)?);
+        let mut magic = [0u8; 8];
+        if !read_exact_or_eof(&mut reader, &mut magic)? || &magic != MAGIC {
+            return Err(RecordingError::Format("bad magic".into()));
+        }
+        let mut len = [0u8; 4];
+        if !read_exact_or_eof(&mut reader, &mut len)? {
+            return Err(RecordingError::Format("no header".into()));
+        }
+        let len = u32::from_le_bytes(len);
+        if len > MAX_HEADER {
+            return Err(RecordingError::Format("header too large".into()));
+        }
+        let mut header = vec![0u8; len as usize];
+        if !read_exact_or_eof(&mut reader, &mut header)? {
+            return Err(RecordingError::Format("no header".into()));
+        }
+        let devices: Vec<DeviceConfig> =
+            serde_json::from_slice(&header).map_err(|e| RecordingError::Format(e.to_string()))?;
+        Ok(Self { devices, reader })
+    }
+
+    /// The next event; `Ok(None)` at the end.
+    pub fn next_event(&mut self) -> Result<Option<TapEvent>, RecordingError> {
+        let r = &mut self.reader;
+        let mut head = [0u8; 11];
+        if !read_exact_or_eof(r, &mut head)? {
+            return Ok(None);
+        }
+        let time = Timestamp(u64::from_le_bytes(
+            head[1..9].try_into().unwrap_or_default(),
+        ));
+        let source = SourceId(u16::from_le_bytes([head[9], head[10]]));
+        if usize::from(source.0) >= self.devices.len() {
+            return Err(RecordingError::Format(format!(
+                "unknown device {}",
+                source.0
+            )));
+        }
+        match head[0] {
+            0 => {
+                let mut len = [0u8; 4];
+                if !read_exact_or_eof(r, &mut len)? {
+                    return Err(RecordingError::Format("truncated frame".into()));
+                }
+                let len = u32::from_le_bytes(len);
+                if len > MAX_FRAME {
+                    return Err(RecordingError::Format("frame too large".into()));
+                }
+                let mut bytes = vec![0u8; len as usize];
+                if len > 0 && !read_exact_or_eof(r, &mut bytes)? {
+                    return Err(RecordingError::Format("truncated frame".into()));
+                }
+                Ok(Some(TapEvent::Frame(RawFrame {
+                    source,
+                    time,
+                    bytes,
+                })))
+            }
+            1 => {
+                let mut flag = [0u8; 1];
+                if !read_exact_or_eof(r, &mut flag)? {
+                    return Err(RecordingError::Format("truncated open event".into()));
+                }
+                let identity = if flag[0] == 1 {
+                    let mut ids = [0u8; 4];
+                    if !read_exact_or_eof(r, &mut ids)? {
+                        return Err(RecordingError::Format("truncated open event".into()));
+                    }
+                    Some((
+                        u16::from_le_bytes([ids[0], ids[1]]),
+                        u16::from_le_bytes([ids[2], ids[3]]),
+                    ))
+                } else {
+                    None
+                };
+                Ok(Some(TapEvent::Opened {
+                    source,
+                    time,
+                    identity,
+                }))
+            }
+            t => Err(RecordingError::Format(format!("unknown event tag {t}"))),
+        }
+    }
+}
+
+/// Replays a recording through fresh decoders.
+pub struct Replayer {
+    recording: Recording,
+    decoders: Vec<Box<dyn Decoder>>,
+}
+
+impl Replayer {
+    /// Opens `path` and builds one decoder per recorded device.
+    pub fn open(path: &Path) -> Result<Self, RecordingError> {
+        let recording = Recording::open(path)?;
+        let decoders = recording
+            .devices
+            .iter()
+            .enumerate()
+            .map(|(i, d)| build_decoder(SourceId(i as u16), d))
+            .collect();
+        Ok(Self {
+            recording,
+            decoders,
+        })
+    }
+
+    /// The recorded devices.
+    pub fn devices(&self) -> &[DeviceConfig] {
+        &self.recording.devices
+    }
+
+    /// Plays the recording at `speed` × real time (`f64::INFINITY` = as fast as
+    /// possible), handing each batch of samples to `sink` (false stops). Sample
+    /// times are the recorded times, compressed by `speed`, on the current clock.
+    /// Returns the number of samples produced.
+    pub fn play(
+        mut self,
+        speed: f64,
+        mut sink: impl FnMut(&[Sample]) -> bool,
+    ) -> Result<u64, RecordingError> {
+        if !(speed > 0.0) {
+            return Err(RecordingError::Format(format!(
+                "speed must be positive, got {speed}"
+            )));
+        }
+        let start = Instant::now();
+        let start_ts = Timestamp::from_instant(start);
+        let mut first: Option<Timestamp> = None;
+        let mut out = Vec::new();
+        let mut produced = 0u64;
+        while let Some(event) = self.recording.next_event()? {
+            let (source, time) = match &event {
+                TapEvent::Frame(f) => (f.source, f.time),
+                TapEvent::Opened { source, time, .. } => (*source, *time),
+            };
+            let t0 = *first.get_or_insert(time);
+            let offset = time
+                .since(t0)
+                .div_f64(if speed.is_finite() { speed } else { f64::MAX });
+            if speed.is_finite() {
+                let due = start + offset;
+                let now = Instant::now();
+                if due > now {
+                    std::thread::sleep(due - now);
+                }
+            }
+            let at = Timestamp(start_ts.0 + offset.as_micros() as u64);
+            let decoder = &mut self.decoders[usize::from(source.0)];
+            match event {
+                TapEvent::Opened { identity, .. } => {
+                    decoder.reset();
+                    if let Some(ids) = identity {
+                        decoder.set_identity(ids);
+                    }
+                }
+                TapEvent::Frame(f) => {
+                    out.clear();
+                    decoder.feed(&f.bytes, at, &mut out);
+                    if decoder.fatal().is_some() {
+                        // As live: the link would be reopened; start the decoder afresh.
+                        decoder.reset();
+                    }
+                    if !out.is_empty() {
+                        produced += out.len() as u64;
+                        if !sink(&out) {
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        Ok(produced)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::DeviceKind;
+    use crate::device::flock::{FlockSettings, encode_record, pose_words};
+    use glam::{DQuat, DVec3};
+
+    fn temp(name: &str) -> std::path::PathBuf {
+        std::env::temp_dir().join(format!("vsculpt-rec-{}-{name}", std::process::id()))
+    }
+
+    #[test]
+    fn round_trip_reproduces_the_samples() {
+        let path = temp("rt");
+        let mut flock = DeviceConfig::new("tracker", DeviceKind::Flock);
+        flock.port = Some("/dev/null".into());
+        let mouse = DeviceConfig::new("mouse", DeviceKind::SpacemouseHid);
+        let devices = vec![flock.clone(), mouse];
+        let rec = Recorder::create(&path, &devices).unwrap();
+        let tap = rec.tap();
+        let s = FlockSettings::default();
+        let rec_bytes = encode_record(
+            &pose_words(&s, DVec3::new(0.1, 0.0, 0.0), DQuat::IDENTITY),
+            None,
+            None,
+        );
+        tap.send(TapEvent::Opened {
+            source: SourceId(1),
+            time: Timestamp(10),
+            identity: Some((0x046d, 0xc603)),
+        })
+        .unwrap();
+        // a record split over two frames, garbage in between
+        tap.send(TapEvent::Frame(RawFrame {
+            source: SourceId(0),
+            time: Timestamp(100),
+            bytes: rec_bytes[..5].to_vec(),
+        }))
+        .unwrap();
+        tap.send(TapEvent::Frame(RawFrame {
+            source: SourceId(0),
+            time: Timestamp(200),
+            bytes: rec_bytes[5..].to_vec(),
+        }))
+        .unwrap();
+        tap.send(TapEvent::Frame(RawFrame {
+            source: SourceId(0),
+            time: Timestamp(300),
+            bytes: vec![1, 2, 3],
+        }))
+        .unwrap();
+        // 13-byte report from a Plus XT (no axis swap): y stays y
+        let mut rep = vec![1u8];
+        for v in [0i16, 175, 0, 0, 0, 0] {
+            rep.extend_from_slice(&v.to_le_bytes());
+        }
+        tap.send(TapEvent::Frame(RawFrame {
+            source: SourceId(1),
+            time: Timestamp(400),
+            bytes: rep,
+        }))
+        .unwrap();
+        drop(tap);
+        assert_eq!(rec.finish().unwrap(), 5);
+
+        let r = Replayer::open(&path).unwrap();
+        assert_eq!(r.devices(), &devices[..]);
+        let mut got = Vec::new();
+        let n = r
+            .play(f64::INFINITY, |s| {
+                got.extend_from_slice(s);
+                true
+            })
+            .unwrap();
+        assert_eq!(n, 2);
+        assert_eq!(got[0].source, SourceId(0));
+        assert!(
+            matches!(got[0].reading, crate::device::Reading::Pose { position, .. } if (position.x - 0.1).abs() < 1e-3)
+        );
+        assert!(
+            matches!(got[1].reading, crate::device::Reading::Motion { translation, .. } if translation.y == 0.5)
+        );
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn damaged_files_are_errors_not_panics() {
+        let path = temp("bad");
+        std::fs::write(&path, b"NOTAREC!").unwrap();
+        assert!(Replayer::open(&path).is_err());
+        let mut flock = DeviceConfig::new("tracker", DeviceKind::Flock);
+        flock.port = Some("/dev/null".into());
+        let rec = Recorder::create(&path, &[flock]).unwrap();
+        rec.tap()
+            .send(TapEvent::Frame(RawFrame {
+                source: SourceId(0),
+                time: Timestamp(1),
+                bytes: vec![0x80; 20],
+            }))
+            .unwrap();
+        rec.finish().unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes.truncate(bytes.len() - 3);
+        bytes.extend_from_slice(&[9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9]);
+        std::fs::write(&path, &bytes).unwrap();
+        let r = Replayer::open(&path).unwrap();
+        assert!(r.play(f64::INFINITY, |_| true).is_err());
+        let r = Replayer::open(&path).unwrap();
+        assert!(r.play(0.0, |_| true).is_err());
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn replay_paces_at_the_requested_speed() {
+        let path = temp("pace");
+        let mut flock = DeviceConfig::new("tracker", DeviceKind::Flock);
+        flock.port = Some("/dev/null".into());
+        let rec = Recorder::create(&path, &[flock]).unwrap();
+        let s = FlockSettings::default();
+        let bytes = encode_record(&pose_words(&s, DVec3::ZERO, DQuat::IDENTITY), None, None);
+        for i in 0..3u64 {
+            rec.tap()
+                .send(TapEvent::Frame(RawFrame {
+                    source: SourceId(0),
+                    time: Timestamp(i * 100_000),
+                    bytes: bytes.clone(),
+                }))
+                .unwrap();
+        }
+        rec.finish().unwrap();
+        let mut times = Vec::new();
+        let t = Instant::now();
+        Replayer::open(&path)
+            .unwrap()
+            .play(2.0, |s| {
+                times.push(s[0].time);
+                true
+            })
+            .unwrap();
+        // 200 ms recorded at speed 2 takes at least 100 ms, and sample times are 50 ms apart
+        assert!(t.elapsed() >= Duration::from_millis(100));
+        assert_eq!(times[1].since(times[0]), Duration::from_millis(50));
+        assert_eq!(times[2].since(times[1]), Duration::from_millis(50));
+        let _ = std::fs::remove_file(&path);
+    }
+}
