@@ -1,0 +1,176 @@
+//! The running bridge: device runners (or a replay) feed samples into the
+//! [`Interaction`] state machine, whose commands go to the server [`Link`]; what
+//! the server reports about icons flows back into the interaction (positions for
+//! grabbing, displacements for the spring). On every (re)connection the held
+//! bindings are restored.
+
+use crate::config::{Config, DeviceKind, build_driver};
+use crate::device::Sample;
+use crate::device::runner::{DeviceRunner, RunOptions};
+use crate::interaction::{Command, Interaction};
+use crate::link::{Link, LinkOptions, ServerEvent, Wire};
+use crate::recording::{Recorder, RecordingError, Replayer};
+use std::future::Future;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::mpsc;
+
+/// How long a finished replay waits for its last commands to leave.
+const DRAIN_GRACE: Duration = Duration::from_millis(500);
+
+/// Runner timing for a device family.
+pub fn run_options(kind: DeviceKind) -> RunOptions {
+    RunOptions {
+        silence: match kind {
+            // Serial trackers and gloves talk all the time (streamed or polled).
+            DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Cyberglove => {
+                Some(Duration::from_secs(3))
+            }
+            // An untouched 3D mouse and an idle VRPN server are legitimately quiet.
+            DeviceKind::SpacemouseHid | DeviceKind::Spacenavd | DeviceKind::Vrpn => None,
+        },
+        ..RunOptions::default()
+    }
+}
+
+/// Applies one server event to the interaction, sending what it implies (the
+/// restored bindings after a snapshot) through `link`.
+pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Option<&Link>) {
+    match event {
+        ServerEvent::Connected => {
+            if let Some(l) = link {
+                l.clear();
+            }
+        }
+        ServerEvent::Disconnected => {}
+        ServerEvent::Icons { icons, area } => {
+            if let Some(a) = area {
+                interaction.set_surface_area(a);
+            }
+            interaction.set_icons(icons);
+            // A snapshot follows every (re)connection: put the bindings back.
+            if let Some(l) = link {
+                l.send(interaction.restore());
+            }
+        }
+        ServerEvent::Icon(icon) => interaction.update_icon(icon),
+        ServerEvent::IconRemoved(id) => interaction.remove_icon(id),
+        ServerEvent::Error(e) => tracing::warn!(error = %e, "server refused a command"),
+    }
+}
+
+/// Drives the interaction from `samples` until they end (plus a grace period to
+/// flush) or `shutdown` completes. Without a server URL, commands are only logged.
+pub async fn drive(
+    config: &Config,
+    wire: Arc<dyn Wire>,
+    mut samples: mpsc::UnboundedReceiver<Vec<Sample>>,
+    shutdown: impl Future<Output = ()>,
+) {
+    let mut interaction = Interaction::new(config);
+    let (ev_tx, mut events) = mpsc::unbounded_channel();
+    let link = (!config.server.url.is_empty()).then(|| {
+        let mut o = LinkOptions::new(config.server.url.clone());
+        o.token = config.server.token.clone();
+        o.design = config.server.design;
+        Link::spawn(o, wire, ev_tx.clone())
+    });
+    tokio::pin!(shutdown);
+    let mut cmds: Vec<Command> = Vec::new();
+    let mut samples_open = true;
+    loop {
+        tokio::select! {
+            batch = samples.recv(), if samples_open => match batch {
+                Some(batch) => {
+                    cmds.clear();
+                    for s in &batch {
+                        interaction.handle(s, &mut cmds);
+                    }
+                    if !cmds.is_empty() {
+                        match &link {
+                            Some(l) => l.send(cmds.drain(..)),
+                            None => tracing::debug!(?cmds, "no server configured"),
+                        }
+                    }
+                }
+                None => samples_open = false,
+            },
+            ev = events.recv() => if let Some(ev) = ev {
+                apply_event(&mut interaction, ev, link.as_ref());
+            },
+            _ = tokio::time::sleep(DRAIN_GRACE), if !samples_open => break,
+            _ = &mut shutdown => break,
+        }
+    }
+}
+
+/// Runs every configured device (recording raw traffic to `record` when given)
+/// until `shutdown`.
+pub async fn run_live(
+    config: Config,
+    wire: Arc<dyn Wire>,
+    record: Option<&Path>,
+    shutdown: impl Future<Output = ()>,
+) -> Result<(), RecordingError> {
+    let recorder = match record {
+        Some(p) => Some(Recorder::create(p, &config.devices)?),
+        None => None,
+    };
+    let (tx, rx) = mpsc::unbounded_channel::<Vec<Sample>>();
+    let mut runners = Vec::new();
+    for (i, d) in config.devices.iter().enumerate() {
+        let mut driver = build_driver(crate::device::SourceId(i as u16), d);
+        if let Some(r) = &recorder {
+            driver.set_tap(r.tap());
+        }
+        let tx = tx.clone();
+        runners.push(DeviceRunner::spawn(
+            Box::new(driver),
+            run_options(d.kind),
+            move |s| tx.send(s.to_vec()).is_ok(),
+        ));
+    }
+    drop(tx);
+    drive(&config, wire, rx, shutdown).await;
+    for mut r in runners {
+        tokio::task::block_in_place(|| r.stop());
+    }
+    if let Some(r) = recorder {
+        let n = tokio::task::block_in_place(|| r.finish())?;
+        tracing::info!(events = n, "recording written");
+    }
+    Ok(())
+}
+
+/// Replays `path` at `speed` through the same decoders and interaction; `config`
+/// supplies the server, hands and menu (its devices must match the recording's).
+pub async fn run_replay(
+    mut config: Config,
+    wire: Arc<dyn Wire>,
+    path: &Path,
+    speed: f64,
+    shutdown: impl Future<Output = ()>,
+) -> Result<u64, RecordingError> {
+    let replayer = Replayer::open(path)?;
+    if config.devices.is_empty() {
+        config.devices = replayer.devices().to_vec();
+    } else if config.devices.len() != replayer.devices().len()
+        || config
+            .devices
+            .iter()
+            .zip(replayer.devices())
+            .any(|(a, b)| a.name != b.name || a.kind != b.kind)
+    {
+        return Err(RecordingError::Format(
+            "the configuration's devices do not match the recording's".into(),
+        ));
+    }
+    let (tx, rx) = mpsc::unbounded_channel::<Vec<Sample>>();
+    let player =
+        tokio::task::spawn_blocking(move || replayer.play(speed, |s| tx.send(s.to_vec()).is_ok()));
+    drive(&config, wire, rx, shutdown).await;
+    player
+        .await
+        .map_err(|e| RecordingError::Format(e.to_string()))?
+}

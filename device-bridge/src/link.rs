@@ -1,0 +1,330 @@
+//! The WebSocket link to the server (tokio-tungstenite).
+//!
+//! [`Link::spawn`] keeps one connection alive: it connects, sends the hello with
+//! the device token, forwards what the server says as [`ServerEvent`]s, and sends
+//! whatever the [`Outbox`] holds each time it is notified — at the device rate,
+//! but with drags coalesced to the newest. When the server vanishes it reconnects
+//! with exponential backoff and reports [`ServerEvent::Connected`] again, so the
+//! caller can restore its bindings. Failures are logged once per outage.
+//!
+//! The JSON mapping lives in a [`Wire`] (see [`crate::wire`]), so this file only
+//! knows about connections.
+
+use crate::interaction::{Command, IconView};
+use crate::outbox::Outbox;
+use futures_util::{SinkExt, StreamExt};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::sync::{Notify, mpsc, watch};
+use tokio_tungstenite::tungstenite::Message;
+
+/// What the server told the bridge.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ServerEvent {
+    /// A connection was (re)established and accepted.
+    Connected,
+    /// The connection is gone; a reconnect is under way.
+    Disconnected,
+    /// The full icon set and the surface area (a snapshot).
+    Icons {
+        /// Every icon.
+        icons: Vec<IconView>,
+        /// Surface area S (for the spring stiffness), if known.
+        area: Option<f64>,
+    },
+    /// One icon changed (position after a solve, state, role …).
+    Icon(IconView),
+    /// An icon was deleted.
+    IconRemoved(u64),
+    /// The server refused something; the text says what.
+    Error(String),
+}
+
+/// Maps bridge commands and server messages to the protocol's JSON.
+pub trait Wire: Send + Sync + 'static {
+    /// The first message of a connection (version + token).
+    fn hello(&self, token: &str, design: Option<u64>) -> String;
+    /// The message(s) for one command.
+    fn encode(&self, cmd: &Command) -> Vec<String>;
+    /// Events in one server text message; an `Err` closes the connection.
+    fn decode(&self, text: &str) -> Result<Vec<ServerEvent>, String>;
+    /// Events in one binary server message (geometry frames); the default ignores them.
+    fn decode_binary(&self, _bytes: &[u8]) -> Vec<ServerEvent> {
+        Vec::new()
+    }
+    /// True once `event` means the server accepted the hello.
+    fn accepts(&self, event: &ServerEvent) -> bool;
+}
+
+/// Where and how to connect.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LinkOptions {
+    /// `ws://host:port/ws?design=…&token=…`.
+    pub url: String,
+    /// The device token for the hello (taken from the URL when `None`).
+    pub token: Option<String>,
+    /// The design (taken from the URL when `None`).
+    pub design: Option<u64>,
+    /// First reconnect delay.
+    pub backoff_min: Duration,
+    /// Longest reconnect delay.
+    pub backoff_max: Duration,
+}
+
+impl LinkOptions {
+    /// Options for `url` with default backoff (100 ms doubling to 5 s).
+    pub fn new(url: impl Into<String>) -> Self {
+        Self {
+            url: url.into(),
+            token: None,
+            design: None,
+            backoff_min: Duration::from_millis(100),
+            backoff_max: Duration::from_secs(5),
+        }
+    }
+
+    fn query(&self, key: &str) -> Option<String> {
+        let q = self.url.split_once('?')?.1;
+        q.split('&')
+            .filter_map(|kv| kv.split_once('='))
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| v.to_owned())
+    }
+
+    /// The token to present.
+    pub fn token(&self) -> String {
+        self.token
+            .clone()
+            .or_else(|| self.query("token"))
+            .unwrap_or_default()
+    }
+
+    /// The design to open.
+    pub fn design(&self) -> Option<u64> {
+        self.design
+            .or_else(|| self.query("design").and_then(|d| d.parse().ok()))
+    }
+}
+
+/// Counters of the link.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LinkStats {
+    /// Connections accepted so far.
+    pub connections: u64,
+    /// Messages sent.
+    pub sent: u64,
+}
+
+/// The running link; dropping it stops the connection task.
+pub struct Link {
+    outbox: Arc<Mutex<Outbox>>,
+    notify: Arc<Notify>,
+    stats: watch::Receiver<LinkStats>,
+    task: tokio::task::JoinHandle<()>,
+}
+
+impl Link {
+    /// Starts the connection task; events go to `events`.
+    pub fn spawn(
+        options: LinkOptions,
+        wire: Arc<dyn Wire>,
+        events: mpsc::UnboundedSender<ServerEvent>,
+    ) -> Self {
+        let outbox = Arc::new(Mutex::new(Outbox::new()));
+        let notify = Arc::new(Notify::new());
+        let (stats_tx, stats) = watch::channel(LinkStats::default());
+        let task = tokio::spawn(run(
+            options,
+            wire,
+            events,
+            outbox.clone(),
+            notify.clone(),
+            stats_tx,
+        ));
+        Self {
+            outbox,
+            notify,
+            stats,
+            task,
+        }
+    }
+
+    /// Queues commands for the server.
+    pub fn send(&self, cmds: impl IntoIterator<Item = Command>) {
+        let mut any = false;
+        {
+            let mut o = self.outbox.lock().unwrap_or_else(|e| e.into_inner());
+            for c in cmds {
+                o.push(c);
+                any = true;
+            }
+        }
+        if any {
+            self.notify.notify_one();
+        }
+    }
+
+    /// Drops every pending command (before restoring state on a new connection).
+    pub fn clear(&self) {
+        self.outbox
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clear();
+    }
+
+    /// Drags replaced by newer ones before they were sent.
+    pub fn coalesced(&self) -> u64 {
+        self.outbox
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .coalesced()
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> LinkStats {
+        *self.stats.borrow()
+    }
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        self.task.abort();
+    }
+}
+
+async fn run(
+    o: LinkOptions,
+    wire: Arc<dyn Wire>,
+    events: mpsc::UnboundedSender<ServerEvent>,
+    outbox: Arc<Mutex<Outbox>>,
+    notify: Arc<Notify>,
+    stats: watch::Sender<LinkStats>,
+) {
+    let mut backoff = o.backoff_min;
+    let mut outage_logged = false;
+    let token = o.token();
+    let design = o.design();
+    loop {
+        match session(
+            &o.url,
+            &token,
+            design,
+            wire.as_ref(),
+            &events,
+            &outbox,
+            &notify,
+            &stats,
+        )
+        .await
+        {
+            Ok(accepted) => {
+                if accepted {
+                    backoff = o.backoff_min;
+                    outage_logged = false;
+                    tracing::warn!(url = %o.url, "server connection closed; reconnecting");
+                }
+            }
+            Err(e) => {
+                if !outage_logged {
+                    tracing::warn!(url = %o.url, error = %e, "server unreachable; retrying with backoff");
+                    outage_logged = true;
+                }
+            }
+        }
+        if events.send(ServerEvent::Disconnected).is_err() {
+            return;
+        }
+        tokio::time::sleep(backoff).await;
+        backoff = (backoff * 2).min(o.backoff_max);
+    }
+}
+
+/// One connection; `Ok(true)` when it was accepted before it ended.
+#[allow(clippy::too_many_arguments)]
+async fn session(
+    url: &str,
+    token: &str,
+    design: Option<u64>,
+    wire: &dyn Wire,
+    events: &mpsc::UnboundedSender<ServerEvent>,
+    outbox: &Mutex<Outbox>,
+    notify: &Notify,
+    stats: &watch::Sender<LinkStats>,
+) -> Result<bool, String> {
+    let (ws, _) = tokio_tungstenite::connect_async(url)
+        .await
+        .map_err(|e| e.to_string())?;
+    if let Ok(tcp) = match ws.get_ref() {
+        tokio_tungstenite::MaybeTlsStream::Plain(s) => Ok(s),
+        _ => Err(()),
+    } {
+        let _ = tcp.set_nodelay(true);
+    }
+    let (mut tx, mut rx) = ws.split();
+    tx.send(Message::text(wire.hello(token, design)))
+        .await
+        .map_err(|e| e.to_string())?;
+    let mut accepted = false;
+    loop {
+        tokio::select! {
+            msg = rx.next() => {
+                let evs = match msg {
+                    None => return Ok(accepted),
+                    Some(Err(e)) => return if accepted { Ok(true) } else { Err(e.to_string()) },
+                    Some(Ok(Message::Text(t))) => match wire.decode(t.as_str()) {
+                        Ok(evs) => evs,
+                        Err(e) => {
+                            tracing::warn!(error = %e, "server message not understood");
+                            Vec::new()
+                        }
+                    },
+                    Some(Ok(Message::Binary(b))) => wire.decode_binary(&b),
+                    Some(Ok(Message::Close(_))) => return if accepted { Ok(true) } else { Err("closed by server".into()) },
+                    Some(Ok(_)) => Vec::new(),
+                };
+                for ev in evs {
+                    if !accepted && wire.accepts(&ev) {
+                        accepted = true;
+                        stats.send_modify(|s| s.connections += 1);
+                        tracing::info!(url, "connected to server");
+                        if events.send(ServerEvent::Connected).is_err() {
+                            return Ok(true);
+                        }
+                    }
+                    if let ServerEvent::Error(e) = &ev && !accepted {
+                        return Err(e.clone());
+                    }
+                    if events.send(ev).is_err() {
+                        return Ok(accepted);
+                    }
+                }
+            }
+            _ = notify.notified(), if accepted => {
+                let cmds = outbox.lock().unwrap_or_else(|e| e.into_inner()).drain();
+                for c in &cmds {
+                    for text in wire.encode(c) {
+                        tx.send(Message::text(text)).await.map_err(|e| e.to_string())?;
+                        stats.send_modify(|s| s.sent += 1);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn token_and_design_from_the_printed_url() {
+        let o = LinkOptions::new("ws://127.0.0.1:7878/ws?design=3&token=abc-123");
+        assert_eq!(o.token(), "abc-123");
+        assert_eq!(o.design(), Some(3));
+        let mut o = LinkOptions::new("ws://h/ws");
+        o.token = Some("t".into());
+        o.design = Some(9);
+        assert_eq!(o.token(), "t");
+        assert_eq!(o.design(), Some(9));
+    }
+}

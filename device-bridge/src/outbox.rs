@@ -1,0 +1,100 @@
+//! The queue of commands waiting for the server link: ordered for discrete
+//! commands (bind, state changes), latest-wins for continuous ones (drag, load),
+//! so a slow link skips stale drag targets instead of falling behind.
+//!
+//! Order is kept where it matters: a discrete command about an icon first flushes
+//! that icon's pending drag, so "drag then release" never arrives reversed.
+
+use crate::interaction::{Command, IconId};
+use std::collections::{BTreeMap, VecDeque};
+
+/// Pending commands.
+#[derive(Debug, Default)]
+pub struct Outbox {
+    ordered: VecDeque<Command>,
+    latest: BTreeMap<IconId, Command>,
+    coalesced: u64,
+}
+
+impl Outbox {
+    /// An empty outbox.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Queues `cmd`.
+    pub fn push(&mut self, cmd: Command) {
+        let icon = cmd.icon();
+        if cmd.is_continuous() {
+            if self.latest.insert(icon, cmd).is_some() {
+                self.coalesced += 1;
+            }
+        } else {
+            if let Some(pending) = self.latest.remove(&icon) {
+                self.ordered.push_back(pending);
+            }
+            self.ordered.push_back(cmd);
+        }
+    }
+
+    /// Takes everything due, in sending order.
+    pub fn drain(&mut self) -> Vec<Command> {
+        let mut v: Vec<Command> = self.ordered.drain(..).collect();
+        v.extend(std::mem::take(&mut self.latest).into_values());
+        v
+    }
+
+    /// Drops everything (a new connection restores state from scratch).
+    pub fn clear(&mut self) {
+        self.ordered.clear();
+        self.latest.clear();
+    }
+
+    /// True when nothing is pending.
+    pub fn is_empty(&self) -> bool {
+        self.ordered.is_empty() && self.latest.is_empty()
+    }
+
+    /// Continuous commands replaced by a newer one before they were sent.
+    pub fn coalesced(&self) -> u64 {
+        self.coalesced
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interaction::IconState;
+    use glam::DVec3;
+
+    fn drag(icon: IconId, x: f64) -> Command {
+        Command::Drag {
+            icon,
+            target: DVec3::X * x,
+        }
+    }
+
+    #[test]
+    fn latest_wins_per_icon_and_order_is_kept_around_discrete_commands() {
+        let mut o = Outbox::new();
+        o.push(drag(1, 1.0));
+        o.push(drag(2, 1.0));
+        o.push(drag(1, 2.0));
+        o.push(drag(1, 3.0));
+        assert_eq!(o.coalesced(), 2);
+        o.push(Command::Unbind { icon: 1 });
+        o.push(drag(2, 5.0));
+        let v = o.drain();
+        assert_eq!(
+            v,
+            vec![drag(1, 3.0), Command::Unbind { icon: 1 }, drag(2, 5.0)]
+        );
+        assert!(o.is_empty());
+        o.push(Command::SetState {
+            icon: 3,
+            state: IconState::Passive,
+        });
+        o.clear();
+        assert!(o.drain().is_empty());
+    }
+}
