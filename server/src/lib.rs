@@ -1,1 +1,14 @@
-//! vsculpt-server: the headless sculpting service (to be built, issue 3).
+//! vsculpt-server: the headless sculpting service. It owns every design
+//! (one actor task each, holding the kernel state), serves the web client,
+//! fans geometry out to WebSocket clients, persists designs and versions in
+//! an embedded SQLite store and exchanges surfaces as IGES and meshes.
+//!
+//! The binary (`src/main.rs`) only parses the command line; everything else
+//! lives here so tests and benches can start a real server in-process.
+
+pub mod cad;
+pub mod config;
+pub mod metrics;
+pub mod shutdown;
+pub mod store;
+pub mod web;

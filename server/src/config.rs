@@ -1,0 +1,67 @@
+//! Server configuration: the command line (clap) and the limits the
+//! WebSocket and REST layers enforce.
+
+use clap::Parser;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+/// `vsculpt-server` command line.
+#[derive(Clone, Debug, Parser)]
+#[command(
+    name = "vsculpt-server",
+    version,
+    about = "The vsculpt sculpting service"
+)]
+pub struct Cli {
+    /// Address to listen on (`127.0.0.1:0` picks a free port).
+    #[arg(long, default_value = "127.0.0.1:7878")]
+    pub listen: SocketAddr,
+    /// Data directory (the embedded database lives here).
+    #[arg(long, default_value = "./data")]
+    pub data: PathBuf,
+    /// The web client's folder (index.html, src/, node_modules/).
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../web-client"))]
+    pub web_dir: PathBuf,
+    /// Do not create the demo design on first start.
+    #[arg(long)]
+    pub no_demo: bool,
+}
+
+/// Everything the server needs to run.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Data directory.
+    pub data_dir: PathBuf,
+    /// Web client folder.
+    pub web_dir: PathBuf,
+    /// Create the demo design when the store has no design.
+    pub demo: bool,
+    /// Largest WebSocket message accepted (bytes); larger ones get an error.
+    pub max_message_bytes: usize,
+    /// Largest HTTP request body (IGES import), bytes.
+    pub max_body_bytes: usize,
+    /// Delay after a change before the working state is written.
+    pub persist_delay: std::time::Duration,
+}
+
+impl Config {
+    /// Defaults for `data_dir`, serving `web_dir`.
+    pub fn new(data_dir: PathBuf, web_dir: PathBuf) -> Self {
+        Self {
+            data_dir,
+            web_dir,
+            demo: true,
+            max_message_bytes: 256 * 1024,
+            max_body_bytes: 16 * 1024 * 1024,
+            persist_delay: std::time::Duration::from_millis(500),
+        }
+    }
+}
+
+impl From<&Cli> for Config {
+    fn from(cli: &Cli) -> Self {
+        let mut c = Config::new(cli.data.clone(), cli.web_dir.clone());
+        c.demo = !cli.no_demo;
+        c
+    }
+}

@@ -1,0 +1,2 @@
+//! The `vsculpt-server` binary.
+fn main() {}

@@ -1,0 +1,327 @@
+//! The embedded store: one SQLite file (`vsculpt.db` in the data directory,
+//! WAL journal, `synchronous=FULL`) holding designs, their tokens, every
+//! committed version and the current working state.
+//!
+//! Durability: every write is its own transaction, and with WAL +
+//! `synchronous=FULL` a transaction is on disk when `commit` returns, so a
+//! version is durable before the client's ack is sent. Working state is
+//! written by the design actor at most about a second after a change (and on
+//! shutdown), so a crash loses at most that last second of uncommitted work.
+//!
+//! Calls block (SQLite is synchronous); async callers go through
+//! `tokio::task::spawn_blocking`.
+
+pub mod tokens;
+
+use rusqlite::{Connection, OptionalExtension, params};
+use serde::Serialize;
+use std::path::Path;
+use std::sync::Mutex;
+use std::time::{SystemTime, UNIX_EPOCH};
+use thiserror::Error;
+pub use tokens::{Role, Tokens};
+
+/// Design id as stored and sent on the wire.
+pub type DesignId = u64;
+
+/// Why a store operation failed.
+#[derive(Debug, Error)]
+pub enum StoreError {
+    /// SQLite failed.
+    #[error("database: {0}")]
+    Sqlite(#[from] rusqlite::Error),
+    /// The data directory could not be created.
+    #[error("data directory: {0}")]
+    Io(#[from] std::io::Error),
+    /// The OS random generator failed.
+    #[error("random tokens: {0}")]
+    Random(String),
+    /// No (live) design with this id.
+    #[error("design {0} does not exist")]
+    UnknownDesign(DesignId),
+}
+
+/// One design's row.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DesignRecord {
+    /// Design id.
+    pub id: DesignId,
+    /// Human name.
+    pub name: String,
+    /// Creation time, ms since the Unix epoch.
+    pub created_ms: i64,
+    /// Access tokens.
+    #[serde(skip)]
+    pub tokens: Tokens,
+}
+
+/// A committed version's metadata.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct VersionInfo {
+    /// Version number, 1, 2, … per design.
+    pub number: u64,
+    /// Commit time, ms since the Unix epoch.
+    pub time_ms: i64,
+    /// Who committed.
+    pub author: String,
+    /// Commit message.
+    pub message: String,
+}
+
+/// The database handle (one connection behind a mutex; writes are few).
+pub struct Store {
+    conn: Mutex<Connection>,
+}
+
+/// Milliseconds since the Unix epoch.
+pub fn now_ms() -> i64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_millis() as i64)
+        .unwrap_or(0)
+}
+
+const SCHEMA: &str = "
+CREATE TABLE IF NOT EXISTS designs (
+    id           INTEGER PRIMARY KEY AUTOINCREMENT,
+    name         TEXT    NOT NULL,
+    created_ms   INTEGER NOT NULL,
+    editor_token TEXT    NOT NULL,
+    viewer_token TEXT    NOT NULL,
+    device_token TEXT    NOT NULL,
+    deleted      INTEGER NOT NULL DEFAULT 0
+);
+CREATE TABLE IF NOT EXISTS versions (
+    design_id INTEGER NOT NULL REFERENCES designs(id),
+    number    INTEGER NOT NULL,
+    time_ms   INTEGER NOT NULL,
+    author    TEXT    NOT NULL,
+    message   TEXT    NOT NULL,
+    snapshot  BLOB    NOT NULL,
+    PRIMARY KEY (design_id, number)
+);
+CREATE TABLE IF NOT EXISTS working (
+    design_id  INTEGER PRIMARY KEY REFERENCES designs(id),
+    updated_ms INTEGER NOT NULL,
+    snapshot   BLOB    NOT NULL
+);
+";
+
+impl Store {
+    /// Opens (creating when missing) `dir/vsculpt.db`.
+    pub fn open(dir: &Path) -> Result<Self, StoreError> {
+        std::fs::create_dir_all(dir)?;
+        let conn = Connection::open(dir.join("vsculpt.db"))?;
+        conn.pragma_update(None, "journal_mode", "WAL")?;
+        conn.pragma_update(None, "synchronous", "FULL")?;
+        conn.pragma_update(None, "foreign_keys", "ON")?;
+        conn.busy_timeout(std::time::Duration::from_secs(5))?;
+        conn.execute_batch(SCHEMA)?;
+        Ok(Self {
+            conn: Mutex::new(conn),
+        })
+    }
+
+    fn conn(&self) -> std::sync::MutexGuard<'_, Connection> {
+        // A panic while holding the lock cannot leave SQLite inconsistent
+        // (transactions roll back), so a poisoned lock is still usable.
+        self.conn.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Creates a design with fresh tokens and its initial working state.
+    pub fn create_design(&self, name: &str, snapshot: &[u8]) -> Result<DesignRecord, StoreError> {
+        let tokens = Tokens::generate().map_err(|e| StoreError::Random(e.to_string()))?;
+        let created_ms = now_ms();
+        let mut conn = self.conn();
+        let tx = conn.transaction()?;
+        tx.execute(
+            "INSERT INTO designs (name, created_ms, editor_token, viewer_token, device_token) VALUES (?1, ?2, ?3, ?4, ?5)",
+            params![name, created_ms, tokens.editor, tokens.viewer, tokens.device],
+        )?;
+        let id = tx.last_insert_rowid() as DesignId;
+        tx.execute(
+            "INSERT INTO working (design_id, updated_ms, snapshot) VALUES (?1, ?2, ?3)",
+            params![id as i64, created_ms, snapshot],
+        )?;
+        tx.commit()?;
+        Ok(DesignRecord {
+            id,
+            name: name.to_string(),
+            created_ms,
+            tokens,
+        })
+    }
+
+    fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<DesignRecord> {
+        Ok(DesignRecord {
+            id: row.get::<_, i64>(0)? as DesignId,
+            name: row.get(1)?,
+            created_ms: row.get(2)?,
+            tokens: Tokens {
+                editor: row.get(3)?,
+                viewer: row.get(4)?,
+                device: row.get(5)?,
+            },
+        })
+    }
+
+    /// Every live design, by id.
+    pub fn designs(&self) -> Result<Vec<DesignRecord>, StoreError> {
+        let conn = self.conn();
+        let mut stmt = conn.prepare(
+            "SELECT id, name, created_ms, editor_token, viewer_token, device_token FROM designs WHERE deleted = 0 ORDER BY id",
+        )?;
+        let rows = stmt.query_map([], Self::row_to_record)?;
+        Ok(rows.collect::<Result<Vec<_>, _>>()?)
+    }
+
+    /// One live design.
+    pub fn design(&self, id: DesignId) -> Result<Option<DesignRecord>, StoreError> {
+        let conn = self.conn();
+        Ok(conn
+            .query_row(
+                "SELECT id, name, created_ms, editor_token, viewer_token, device_token FROM designs WHERE id = ?1 AND deleted = 0",
+                params![id as i64],
+                Self::row_to_record,
+            )
+            .optional()?)
+    }
+
+    /// Marks a design deleted (its versions stay on disk but are unreachable).
+    pub fn delete_design(&self, id: DesignId) -> Result<(), StoreError> {
+        let n = self.conn().execute(
+            "UPDATE designs SET deleted = 1 WHERE id = ?1 AND deleted = 0",
+            params![id as i64],
+        )?;
+        if n == 0 {
+            return Err(StoreError::UnknownDesign(id));
+        }
+        Ok(())
+    }
+
+    /// Writes the working state.
+    pub fn save_working(&self, id: DesignId, snapshot: &[u8]) -> Result<(), StoreError> {
+        self.conn().execute(
+            "INSERT INTO working (design_id, updated_ms, snapshot) VALUES (?1, ?2, ?3)
+             ON CONFLICT(design_id) DO UPDATE SET updated_ms = excluded.updated_ms, snapshot = excluded.snapshot",
+            params![id as i64, now_ms(), snapshot],
+        )?;
+        Ok(())
+    }
+
+    /// The working state last written.
+    pub fn working(&self, id: DesignId) -> Result<Option<Vec<u8>>, StoreError> {
+        Ok(self
+            .conn()
+            .query_row(
+                "SELECT snapshot FROM working WHERE design_id = ?1",
+                params![id as i64],
+                |r| r.get(0),
+            )
+            .optional()?)
+    }
+
+    /// Appends a version (number = last + 1) and makes it the working state,
+    /// in one durable transaction.
+    pub fn commit(
+        &self,
+        id: DesignId,
+        author: &str,
+        message: &str,
+        snapshot: &[u8],
+    ) -> Result<VersionInfo, StoreError> {
+        let time_ms = now_ms();
+        let mut conn = self.conn();
+        let tx = conn.transaction()?;
+        let live: Option<i64> = tx
+            .query_row(
+                "SELECT id FROM designs WHERE id = ?1 AND deleted = 0",
+                params![id as i64],
+                |r| r.get(0),
+            )
+            .optional()?;
+        if live.is_none() {
+            return Err(StoreError::UnknownDesign(id));
+        }
+        let number: i64 = tx.query_row(
+            "SELECT COALESCE(MAX(number), 0) + 1 FROM versions WHERE design_id = ?1",
+            params![id as i64],
+            |r| r.get(0),
+        )?;
+        tx.execute(
+            "INSERT INTO versions (design_id, number, time_ms, author, message, snapshot) VALUES (?1, ?2, ?3, ?4, ?5, ?6)",
+            params![id as i64, number, time_ms, author, message, snapshot],
+        )?;
+        tx.execute(
+            "INSERT INTO working (design_id, updated_ms, snapshot) VALUES (?1, ?2, ?3)
+             ON CONFLICT(design_id) DO UPDATE SET updated_ms = excluded.updated_ms, snapshot = excluded.snapshot",
+            params![id as i64, time_ms, snapshot],
+        )?;
+        tx.commit()?;
+        Ok(VersionInfo {
+            number: number as u64,
+            time_ms,
+            author: author.to_string(),
+            message: message.to_string(),
+        })
+    }
+
+    /// Every version's metadata, oldest first.
+    pub fn versions(&self, id: DesignId) -> Result<Vec<VersionInfo>, StoreError> {
+        let conn = self.conn();
+        let mut stmt = conn.prepare(
+            "SELECT number, time_ms, author, message FROM versions WHERE design_id = ?1 ORDER BY number",
+        )?;
+        let rows = stmt.query_map(params![id as i64], |r| {
+            Ok(VersionInfo {
+                number: r.get::<_, i64>(0)? as u64,
+                time_ms: r.get(1)?,
+                author: r.get(2)?,
+                message: r.get(3)?,
+            })
+        })?;
+        Ok(rows.collect::<Result<Vec<_>, _>>()?)
+    }
+
+    /// One version with its snapshot.
+    pub fn version(
+        &self,
+        id: DesignId,
+        number: u64,
+    ) -> Result<Option<(VersionInfo, Vec<u8>)>, StoreError> {
+        Ok(self
+            .conn()
+            .query_row(
+                "SELECT number, time_ms, author, message, snapshot FROM versions WHERE design_id = ?1 AND number = ?2",
+                params![id as i64, number as i64],
+                |r| {
+                    Ok((
+                        VersionInfo {
+                            number: r.get::<_, i64>(0)? as u64,
+                            time_ms: r.get(1)?,
+                            author: r.get(2)?,
+                            message: r.get(3)?,
+                        },
+                        r.get(4)?,
+                    ))
+                },
+            )
+            .optional()?)
+    }
+
+    /// The newest version with its snapshot.
+    pub fn latest_version(
+        &self,
+        id: DesignId,
+    ) -> Result<Option<(VersionInfo, Vec<u8>)>, StoreError> {
+        let n: Option<i64> = self.conn().query_row(
+            "SELECT MAX(number) FROM versions WHERE design_id = ?1",
+            params![id as i64],
+            |r| r.get(0),
+        )?;
+        match n {
+            Some(n) => self.version(id, n as u64),
+            None => Ok(None),
+        }
+    }
+}
