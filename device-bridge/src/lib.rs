@@ -4,6 +4,7 @@
 //! * [`bridge`] — the running bridge: devices or a replay → interaction → link.
 //! * [`device`] — drivers: transports, pure decoders of each family's wire format.
 //! * [`sim`] — simulated devices (pty serial devices, fake spacenavd and VRPN servers, recorded HID streams).
+//! * [`cli`] — the command line.
 //! * [`config`] — the TOML configuration and the driver factory.
 //! * [`hand`] — tracker + glove → hand pose and gesture.
 //! * [`spring`] — the adaptive spring of a load drag.
@@ -14,6 +15,7 @@
 //! * [`recording`] — record raw device traffic, replay it through the same decoders.
 
 pub mod bridge;
+pub mod cli;
 pub mod config;
 pub mod device;
 pub mod hand;
