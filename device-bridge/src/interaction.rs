@@ -411,10 +411,11 @@ impl Interaction {
                 }
             }
             Reading::Button { button, pressed } => {
-                if Some(sample.source) == self.menu_device && pressed {
-                    if let Some(action) = self.menu.buttons.get(&button).copied() {
-                        self.menu_action(action, out);
-                    }
+                if Some(sample.source) == self.menu_device
+                    && pressed
+                    && let Some(action) = self.menu.buttons.get(&button).copied()
+                {
+                    self.menu_action(action, out);
                 }
             }
             Reading::Motion { translation, .. } => {

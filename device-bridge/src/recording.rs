@@ -274,7 +274,7 @@ impl Replayer {
         speed: f64,
         mut sink: impl FnMut(&[Sample]) -> bool,
     ) -> Result<u64, RecordingError> {
-        if !(speed > 0.0) {
+        if speed.is_nan() || speed <= 0.0 {
             return Err(RecordingError::Format(format!(
                 "speed must be positive, got {speed}"
             )));

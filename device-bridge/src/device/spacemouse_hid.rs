@@ -261,11 +261,12 @@ impl Decoder for SpaceMouseDecoder {
                 let n = (report.len() - 1).min(BUTTON_BYTES);
                 now[..n].copy_from_slice(&report[1..1 + n]);
                 self.stats.records += 1;
-                for byte in 0..BUTTON_BYTES {
-                    let changed = now[byte] ^ self.buttons[byte];
+                let before = self.buttons;
+                for (byte, (&new, &old)) in now.iter().zip(before.iter()).enumerate() {
+                    let changed = new ^ old;
                     for bit in 0..8 {
                         if changed & (1 << bit) != 0 {
-                            let pressed = now[byte] & (1 << bit) != 0;
+                            let pressed = new & (1 << bit) != 0;
                             let button = (byte * 8 + bit) as u16;
                             self.push(at, Reading::Button { button, pressed }, out);
                         }

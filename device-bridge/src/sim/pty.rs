@@ -154,11 +154,8 @@ fn run<D: SerialDevice>(
             out.append(&mut inj);
         }
         if !out.is_empty() {
-            match master.write(&out) {
-                Ok(n) => {
-                    out.drain(..n);
-                }
-                Err(_) => {}
+            if let Ok(n) = master.write(&out) {
+                out.drain(..n);
             }
             // Nobody reading: drop the backlog, as an overflowing serial line would.
             if out.len() > BACKLOG {
