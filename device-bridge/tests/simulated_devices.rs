@@ -397,3 +397,19 @@ fn unplugged_tracker_comes_back_through_the_runner() {
             >= 2
     );
 }
+
+#[test]
+fn cyberglove_with_the_wrong_sensor_count_is_refused() {
+    let link = temp_path("glove-count");
+    let _sim = PtySim::start(CyberGloveSim::new(22, 50, Duration::from_millis(5)), &link).unwrap();
+    let mut cfg = DeviceConfig::new("glove", DeviceKind::Cyberglove);
+    cfg.port = Some(link.display().to_string());
+    cfg.settle_ms = 10;
+    cfg.cyberglove.sensors = 18;
+    let mut d = build_driver(SourceId(1), &cfg);
+    let e = d.open().unwrap_err();
+    assert!(
+        matches!(e, vsculpt_bridge::device::DeviceError::Handshake(_)),
+        "{e}"
+    );
+}

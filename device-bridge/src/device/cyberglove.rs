@@ -16,7 +16,7 @@
 //! sensor value that happens to equal `'G'` can never start a wrong record that
 //! survives the checks.
 
-use super::driver::{DecodeStats, Decoder, Script, Step};
+use super::driver::{Check, DecodeStats, Decoder, Script, Step};
 use super::sample::{GloveValues, Reading, Sample, SourceId, Timestamp};
 use serde::{Deserialize, Serialize};
 use std::time::Duration;
@@ -232,11 +232,22 @@ impl CyberGloveDecoder {
     }
 }
 
-/// The command script: polled with `G` (the documented request) or streaming with `S`.
-/// Streaming is stopped with Ctrl-C (0x03), the manual's "^C"; the asr library sends
-/// the two characters `^c` instead, so polling is the default.
+/// The command script: first `?S` (total sensors; the glove answers `?`, `S`, the
+/// count, NUL) checks that the glove has the configured number of sensors; then
+/// polling with `G` (the documented request) or streaming with `S`. Streaming is
+/// stopped with Ctrl-C (0x03), the manual's "^C"; the asr library sends the two
+/// characters `^c` instead, so polling is the default.
 pub fn script(s: &CyberGloveSettings, settle: Duration) -> Script {
-    let mut open = vec![Step::Drain(settle)];
+    let mut open = vec![
+        Step::Send(vec![0x03]),
+        Step::Drain(settle),
+        Step::Send(b"?S".to_vec()),
+        Step::Expect {
+            len: 4,
+            timeout: Duration::from_millis(500).max(settle),
+            check: Check::Equals(vec![b'?', b'S', s.sensors, 0]),
+        },
+    ];
     if s.stream {
         open.push(Step::Send(vec![b'S']));
     }

@@ -130,8 +130,10 @@ pub enum Step {
 }
 
 /// A check on a device's answer to a command.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Check {
+    /// The answer is exactly these bytes.
+    Equals(Vec<u8>),
     /// Accept anything.
     Any,
     /// The first `n` bytes each have bit 7 set (Flock `O 36`: unit accessible).
@@ -143,15 +145,22 @@ pub enum Check {
 impl Check {
     /// Verifies `answer`; `Err` says what was wrong.
     pub fn verify(&self, answer: &[u8]) -> Result<(), String> {
-        match *self {
+        match self {
+            Check::Equals(want) => {
+                if answer == want.as_slice() {
+                    Ok(())
+                } else {
+                    Err(format!("answer {answer:02x?}, expected {want:02x?}"))
+                }
+            }
             Check::Any => Ok(()),
-            Check::HighBitSet(n) => match answer.iter().take(n).position(|b| b & 0x80 == 0) {
+            Check::HighBitSet(n) => match answer.iter().take(*n).position(|b| b & 0x80 == 0) {
                 Some(i) => Err(format!("unit {} is not accessible", i + 1)),
-                None if answer.len() < n => Err("answer too short".into()),
+                None if answer.len() < *n => Err("answer too short".into()),
                 None => Ok(()),
             },
             Check::StartsWith(b) => match answer.first() {
-                Some(&f) if f == b => Ok(()),
+                Some(f) if f == b => Ok(()),
                 _ => Err(format!("answer does not start with {b:#04x}")),
             },
         }
