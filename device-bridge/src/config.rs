@@ -586,6 +586,13 @@ buttons = { 0 = "next_entry", 1 = "apply_entry" }
     }
 
     #[test]
+    fn the_shipped_example_is_valid() {
+        let c = Config::parse(include_str!("../vsculpt-bridge.example.toml")).unwrap();
+        assert_eq!(c.devices.len(), 3);
+        assert_eq!(c.menu_device(), Some(SourceId(2)));
+    }
+
+    #[test]
     fn rejects_bad_configurations() {
         for (bad, why) in [
             (SAMPLE.replace("port = \"/dev/ttyUSB0\"\n", ""), "port"),
