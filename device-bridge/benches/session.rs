@@ -12,6 +12,7 @@ use glam::{DQuat, DVec3};
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::mpsc;
+use vsculpt_bridge::bridge::Input;
 use vsculpt_bridge::config::{
     Config, DeviceConfig, DeviceKind, HandConfig, build_decoder, build_driver,
 };
@@ -205,7 +206,7 @@ fn session_cpu(c: &mut Criterion) {
         .enable_all()
         .build()
         .expect("bridge runtime");
-    let (tx, rx) = mpsc::unbounded_channel::<Vec<Sample>>();
+    let (tx, rx) = mpsc::unbounded_channel::<Input>();
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let cfg2 = cfg.clone();
     let engine = rt.spawn(async move {
@@ -218,10 +219,10 @@ fn session_cpu(c: &mut Criterion) {
     let mut runner = DeviceRunner::spawn(
         Box::new(build_driver(SourceId(0), &cfg.devices[0])),
         RunOptions::default(),
-        move |s| tx2.send(s.to_vec()).is_ok(),
+        move |s| tx2.send(Input::Samples(s.to_vec())).is_ok(),
     );
     std::thread::sleep(Duration::from_millis(500));
-    tx.send(vec![grab()]).expect("grab");
+    tx.send(Input::Samples(vec![grab()])).expect("grab");
     std::thread::sleep(Duration::from_millis(200));
     let mut g = c.benchmark_group("session");
     g.sample_size(10);

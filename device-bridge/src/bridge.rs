@@ -6,7 +6,8 @@
 
 use crate::config::{Config, DeviceKind, build_driver};
 use crate::device::Sample;
-use crate::device::runner::{DeviceRunner, RunOptions};
+use crate::device::SourceId;
+use crate::device::runner::{DeviceRunner, DeviceStatus, RunOptions};
 use crate::interaction::{Command, Interaction};
 use crate::link::{Link, LinkOptions, ServerEvent, Wire};
 use crate::recording::{Recorder, RecordingError, Replayer};
@@ -18,6 +19,15 @@ use tokio::sync::mpsc;
 
 /// How long a finished replay waits for its last commands to leave.
 const DRAIN_GRACE: Duration = Duration::from_millis(500);
+
+/// What the devices (or a replay) hand to the interaction.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Input {
+    /// A batch of samples.
+    Samples(Vec<Sample>),
+    /// A device's availability changed.
+    Status(SourceId, DeviceStatus),
+}
 
 /// Runner timing for a device family.
 pub fn run_options(kind: DeviceKind) -> RunOptions {
@@ -60,12 +70,12 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
     }
 }
 
-/// Drives the interaction from `samples` until they end (plus a grace period to
+/// Drives the interaction from `inputs` until they end (plus a grace period to
 /// flush) or `shutdown` completes. Without a server URL, commands are only logged.
 pub async fn drive(
     config: &Config,
     wire: Arc<dyn Wire>,
-    mut samples: mpsc::UnboundedReceiver<Vec<Sample>>,
+    mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
 ) {
     let mut interaction = Interaction::new(config);
@@ -81,11 +91,20 @@ pub async fn drive(
     let mut samples_open = true;
     loop {
         tokio::select! {
-            batch = samples.recv(), if samples_open => match batch {
-                Some(batch) => {
+            input = inputs.recv(), if samples_open => match input {
+                Some(input) => {
                     cmds.clear();
-                    for s in &batch {
-                        interaction.handle(s, &mut cmds);
+                    match input {
+                        Input::Samples(batch) => {
+                            for s in &batch {
+                                interaction.handle(s, &mut cmds);
+                            }
+                        }
+                        Input::Status(source, DeviceStatus::Lost(e)) => {
+                            tracing::debug!(device = source.0, error = %e, "releasing what the device held");
+                            interaction.device_lost(source, &mut cmds);
+                        }
+                        Input::Status(..) => {}
                     }
                     if !cmds.is_empty() {
                         match &link {
@@ -117,18 +136,22 @@ pub async fn run_live(
         Some(p) => Some(Recorder::create(p, &config.devices)?),
         None => None,
     };
-    let (tx, rx) = mpsc::unbounded_channel::<Vec<Sample>>();
+    let (tx, rx) = mpsc::unbounded_channel::<Input>();
     let mut runners = Vec::new();
     for (i, d) in config.devices.iter().enumerate() {
-        let mut driver = build_driver(crate::device::SourceId(i as u16), d);
+        let mut driver = build_driver(SourceId(i as u16), d);
         if let Some(r) = &recorder {
             driver.set_tap(r.tap());
         }
-        let tx = tx.clone();
-        runners.push(DeviceRunner::spawn(
+        let (tx, tx_status) = (tx.clone(), tx.clone());
+        let source = SourceId(i as u16);
+        runners.push(DeviceRunner::spawn_with_status(
             Box::new(driver),
             run_options(d.kind),
-            move |s| tx.send(s.to_vec()).is_ok(),
+            move |s| tx.send(Input::Samples(s.to_vec())).is_ok(),
+            move |st| {
+                let _ = tx_status.send(Input::Status(source, st));
+            },
         ));
     }
     drop(tx);
@@ -166,9 +189,10 @@ pub async fn run_replay(
             "the configuration's devices do not match the recording's".into(),
         ));
     }
-    let (tx, rx) = mpsc::unbounded_channel::<Vec<Sample>>();
-    let player =
-        tokio::task::spawn_blocking(move || replayer.play(speed, |s| tx.send(s.to_vec()).is_ok()));
+    let (tx, rx) = mpsc::unbounded_channel::<Input>();
+    let player = tokio::task::spawn_blocking(move || {
+        replayer.play(speed, |s| tx.send(Input::Samples(s.to_vec())).is_ok())
+    });
     drive(&config, wire, rx, shutdown).await;
     player
         .await

@@ -426,6 +426,21 @@ impl Interaction {
         }
     }
 
+    /// A device failed: hands using it let go of what they hold (a drag must not
+    /// continue from a stale hand), and a mouse drag by it stops.
+    pub fn device_lost(&mut self, source: SourceId, out: &mut Vec<Command>) {
+        for i in 0..self.hands.len() {
+            let h = &self.hands[i];
+            if h.tracker == source || h.glove == Some(source) {
+                self.gesture(i, Gesture::Open, out);
+            }
+        }
+        if self.menu_device == Some(source) {
+            self.mouse_hold = None;
+            self.mouse_time = None;
+        }
+    }
+
     fn gesture(&mut self, i: usize, gesture: Gesture, out: &mut Vec<Command>) {
         match gesture {
             Gesture::Grab => {
@@ -792,6 +807,12 @@ mod tests {
                 target: DVec3::X * 0.01
             }
         );
+        // the glove failing releases the icon
+        let mut out = Vec::new();
+        i.device_lost(SourceId(1), &mut out);
+        assert_eq!(out[0], Command::Unbind { icon: 5 });
+        run(&mut i, &[hand(0.0, 0.0), hand(1.0, 1.0)]);
+        assert_eq!(i.bindings().len(), 1);
         i.remove_icon(5);
         assert!(i.bindings().is_empty());
         assert!(i.restore().is_empty());

@@ -9,6 +9,7 @@ use std::time::Duration;
 use tokio::net::TcpListener;
 use tokio::sync::mpsc;
 use tokio_tungstenite::tungstenite::Message;
+use vsculpt_bridge::bridge::Input;
 use vsculpt_bridge::config::{Config, DeviceConfig, DeviceKind, HandConfig};
 use vsculpt_bridge::device::{GloveValues, Reading, Sample, SourceId, Timestamp};
 use vsculpt_bridge::hand::{GloveCalibration, glove_shape};
@@ -123,7 +124,7 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
         listener.local_addr().unwrap()
     );
     let cfg = config(url.clone());
-    let (samples_tx, samples_rx) = mpsc::unbounded_channel::<Vec<Sample>>();
+    let (samples_tx, samples_rx) = mpsc::unbounded_channel::<Input>();
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let cfg2 = cfg.clone();
     let bridge = tokio::spawn(async move {
@@ -159,7 +160,9 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
     };
     // wait until the icon is known, then grab it
     tokio::time::sleep(Duration::from_millis(300)).await;
-    samples_tx.send(vec![pose(0.0), glove(1.0)]).unwrap();
+    samples_tx
+        .send(Input::Samples(vec![pose(0.0), glove(1.0)]))
+        .unwrap();
     let got = recv_until(&mut seen, |m| m.starts_with("SetState")).await;
     assert!(
         got[0].starts_with("Bind { icon: 1, sensor: \"tracker:0\""),
@@ -167,7 +170,9 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
     );
     // a burst of 200 poses in one batch: only the newest drag is sent
     samples_tx
-        .send((1..=200).map(|i| pose(i as f64 * 1e-4)).collect())
+        .send(Input::Samples(
+            (1..=200).map(|i| pose(i as f64 * 1e-4)).collect(),
+        ))
         .unwrap();
     let got = recv_until(&mut seen, |m| m.contains("DVec3(0.02,")).await;
     assert_eq!(got.len(), 1, "{got:?}");
@@ -186,7 +191,7 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
     );
     assert!(got.last().unwrap().contains("DVec3(0.02,"), "{got:?}");
     // release after the restart
-    samples_tx.send(vec![glove(0.0)]).unwrap();
+    samples_tx.send(Input::Samples(vec![glove(0.0)])).unwrap();
     let got = recv_until(&mut seen, |m| m.contains("Passive")).await;
     assert!(
         got.iter().any(|m| m.starts_with("Unbind { icon: 1 }")),

@@ -35,6 +35,17 @@ impl Default for RunOptions {
     }
 }
 
+/// A change in a device's availability.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DeviceStatus {
+    /// The device is open and configured.
+    Open,
+    /// The device cannot be opened (yet); the reason.
+    Unavailable(String),
+    /// The device was open and failed; it is being reopened.
+    Lost(String),
+}
+
 /// Counters of a running device.
 #[derive(Debug, Default)]
 pub struct RunStats {
@@ -58,9 +69,20 @@ impl DeviceRunner {
     /// Starts `device`; every batch of samples goes to `sink`, which returns false
     /// to stop the runner.
     pub fn spawn(
+        device: Box<dyn Device>,
+        options: RunOptions,
+        sink: impl FnMut(&[Sample]) -> bool + Send + 'static,
+    ) -> Self {
+        Self::spawn_with_status(device, options, sink, |_| {})
+    }
+
+    /// Like [`DeviceRunner::spawn`], also reporting every change of the device's
+    /// [`DeviceStatus`] to `status`.
+    pub fn spawn_with_status(
         mut device: Box<dyn Device>,
         options: RunOptions,
         mut sink: impl FnMut(&[Sample]) -> bool + Send + 'static,
+        mut status: impl FnMut(DeviceStatus) + Send + 'static,
     ) -> Self {
         let stop = Arc::new(AtomicBool::new(false));
         let stats = Arc::new(RunStats::default());
@@ -68,7 +90,7 @@ impl DeviceRunner {
         let (s, st) = (stop.clone(), stats.clone());
         let thread = std::thread::Builder::new()
             .name(format!("device {name}"))
-            .spawn(move || run(device.as_mut(), options, &mut sink, &s, &st))
+            .spawn(move || run(device.as_mut(), options, &mut sink, &mut status, &s, &st))
             .ok();
         if thread.is_none() {
             tracing::error!(device = %name, "cannot start a thread for the device");
@@ -125,6 +147,7 @@ fn run(
     device: &mut dyn Device,
     o: RunOptions,
     sink: &mut dyn FnMut(&[Sample]) -> bool,
+    status: &mut dyn FnMut(DeviceStatus),
     stop: &AtomicBool,
     stats: &RunStats,
 ) {
@@ -137,6 +160,7 @@ fn run(
             stats.failures.fetch_add(1, Ordering::Relaxed);
             if last_error.as_ref().is_none_or(|l| !same_kind(l, &e)) {
                 tracing::warn!(device = %name, error = %e, "cannot open device; retrying");
+                status(DeviceStatus::Unavailable(e.to_string()));
             }
             last_error = Some(e);
             sleep_unless_stopped(backoff, stop);
@@ -144,6 +168,7 @@ fn run(
             continue;
         }
         stats.opens.fetch_add(1, Ordering::Relaxed);
+        status(DeviceStatus::Open);
         if last_error.take().is_some() {
             tracing::info!(device = %name, "device open again");
         } else {
@@ -179,6 +204,7 @@ fn run(
         if let Some(e) = failure {
             stats.failures.fetch_add(1, Ordering::Relaxed);
             tracing::warn!(device = %name, error = %e, "device lost; reopening");
+            status(DeviceStatus::Lost(e.to_string()));
             last_error = Some(e);
             sleep_unless_stopped(backoff, stop);
             backoff = (backoff * 2).min(o.backoff_max);
