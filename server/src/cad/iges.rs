@@ -505,7 +505,7 @@ pub fn read_iges(text: &str) -> Result<Vec<IgesSurface>, IgesError> {
         return Err(IgesError::NotIges("no Start or Global section".into()));
     }
     let (pd, rd) = delimiters(&global);
-    if dlines.len() % 2 != 0 {
+    if !dlines.len().is_multiple_of(2) {
         return Err(IgesError::Malformed {
             section: 'D',
             line: 0,

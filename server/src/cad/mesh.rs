@@ -53,7 +53,7 @@ impl<'a> Mesh<'a> {
                 normals: normals.len(),
             });
         }
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(MeshError::NotTriangles(indices.len()));
         }
         if let Some(&index) = indices.iter().find(|&&i| i as usize >= positions.len()) {

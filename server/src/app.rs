@@ -1,0 +1,399 @@
+//! The HTTP surface (API.md §4): `/healthz`, `/metrics`, the REST API with
+//! token checks, the WebSocket at `/ws` and the static web client. Tokens
+//! come as `Authorization: Bearer <token>` or `?token=`.
+
+use crate::cad::{self, IgesMeta, Mesh};
+use crate::config::Config;
+use crate::design::{ErrorKind, Hub};
+use crate::metrics::Metrics;
+use crate::store::{DesignId, DesignRecord, Role, Store};
+use axum::Router;
+use axum::body::Bytes;
+use axum::extract::{DefaultBodyLimit, Path, Query, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use serde::Deserialize;
+use serde_json::json;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Everything handlers share.
+pub struct Shared {
+    /// Configuration.
+    pub config: Config,
+    /// The store.
+    pub store: Arc<Store>,
+    /// Metrics.
+    pub metrics: Arc<Metrics>,
+    /// Running designs.
+    pub hub: Hub,
+    /// The administrator token (in `DATA/admin-token`).
+    pub admin_token: String,
+    /// Next WebSocket connection id.
+    pub next_client: std::sync::atomic::AtomicU64,
+    /// Triggered when the server shuts down (WebSocket tasks close).
+    pub shutdown: crate::shutdown::Shutdown,
+}
+
+/// Handler state.
+pub type AppState = Arc<Shared>;
+
+/// An error response: status plus `{"error": {"code", "message"}}`.
+pub struct ApiError(StatusCode, &'static str, String);
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        (
+            self.0,
+            axum::Json(json!({ "error": { "code": self.1, "message": self.2 } })),
+        )
+            .into_response()
+    }
+}
+
+impl From<crate::design::CommandError> for ApiError {
+    fn from(e: crate::design::CommandError) -> Self {
+        let (status, code) = match e.kind {
+            ErrorKind::Forbidden => (StatusCode::FORBIDDEN, "forbidden"),
+            ErrorKind::UnknownDesign => (StatusCode::NOT_FOUND, "unknown_design"),
+            ErrorKind::UnknownIcon => (StatusCode::NOT_FOUND, "unknown_icon"),
+            ErrorKind::UnknownVersion => (StatusCode::NOT_FOUND, "unknown_version"),
+            ErrorKind::InvalidValue => (StatusCode::BAD_REQUEST, "invalid_value"),
+            ErrorKind::OutOfDomain => (StatusCode::BAD_REQUEST, "out_of_domain"),
+            ErrorKind::NothingToUndo => (StatusCode::CONFLICT, "nothing_to_undo"),
+            ErrorKind::Solver => (StatusCode::UNPROCESSABLE_ENTITY, "solver"),
+            ErrorKind::Unavailable => (StatusCode::SERVICE_UNAVAILABLE, "unavailable"),
+            ErrorKind::Storage => (StatusCode::INTERNAL_SERVER_ERROR, "storage"),
+        };
+        ApiError(status, code, e.message)
+    }
+}
+
+fn unauthorized() -> ApiError {
+    ApiError(
+        StatusCode::UNAUTHORIZED,
+        "unauthorized",
+        "a valid token is required (Authorization: Bearer <token> or ?token=)".into(),
+    )
+}
+
+fn storage(e: impl std::fmt::Display) -> ApiError {
+    ApiError(StatusCode::INTERNAL_SERVER_ERROR, "storage", e.to_string())
+}
+
+/// The token of a request, from the Authorization header or `?token=`.
+pub fn request_token(headers: &HeaderMap, query: &HashMap<String, String>) -> Option<String> {
+    if let Some(v) = headers.get(header::AUTHORIZATION).and_then(|v| v.to_str().ok())
+        && let Some(t) = v.strip_prefix("Bearer ")
+    {
+        return Some(t.trim().to_string());
+    }
+    query.get("token").cloned()
+}
+
+/// Who holds a token.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Caller {
+    /// The administrator token.
+    Admin,
+    /// A design token.
+    Design(DesignId, Role),
+}
+
+impl Shared {
+    /// Who `token` belongs to.
+    pub async fn caller(&self, token: &str) -> Result<Option<Caller>, ApiError> {
+        if token.is_empty() {
+            return Ok(None);
+        }
+        if token.len() == self.admin_token.len()
+            && token
+                .bytes()
+                .zip(self.admin_token.bytes())
+                .fold(0u8, |a, (x, y)| a | (x ^ y))
+                == 0
+        {
+            return Ok(Some(Caller::Admin));
+        }
+        let store = self.store.clone();
+        let designs = tokio::task::spawn_blocking(move || store.designs())
+            .await
+            .map_err(storage)?
+            .map_err(storage)?;
+        Ok(designs
+            .iter()
+            .find_map(|d| d.tokens.role_of(token).map(|r| Caller::Design(d.id, r))))
+    }
+
+    /// The role a token grants on design `id` (admin = editor).
+    pub async fn role_on(&self, token: &str, id: DesignId) -> Result<Option<Role>, ApiError> {
+        if let Some(Caller::Admin) = self.caller(token).await? {
+            return Ok(Some(Role::Editor));
+        }
+        let store = self.store.clone();
+        let rec = tokio::task::spawn_blocking(move || store.design(id))
+            .await
+            .map_err(storage)?
+            .map_err(storage)?;
+        Ok(rec.and_then(|r| r.tokens.role_of(token)))
+    }
+}
+
+type Q = Query<HashMap<String, String>>;
+
+async fn need_role(
+    state: &Shared,
+    headers: &HeaderMap,
+    query: &HashMap<String, String>,
+    id: DesignId,
+) -> Result<Role, ApiError> {
+    let token = request_token(headers, query).ok_or_else(unauthorized)?;
+    match state.role_on(&token, id).await? {
+        Some(r) => Ok(r),
+        None => {
+            // Same answer for a wrong token and a missing design: no probing.
+            Err(unauthorized())
+        }
+    }
+}
+
+async fn healthz() -> impl IntoResponse {
+    axum::Json(json!({ "status": "ok" }))
+}
+
+async fn metrics(State(s): State<AppState>, headers: HeaderMap, Query(q): Q) -> Result<Response, ApiError> {
+    let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
+    match s.caller(&token).await? {
+        Some(Caller::Admin) | Some(Caller::Design(_, Role::Editor)) => Ok((
+            [(header::CONTENT_TYPE, "text/plain; version=0.0.4")],
+            s.metrics.render(),
+        )
+            .into_response()),
+        _ => Err(unauthorized()),
+    }
+}
+
+fn design_json(d: &DesignRecord, role: Option<Role>) -> serde_json::Value {
+    json!({ "id": d.id, "name": d.name, "created_ms": d.created_ms, "role": role })
+}
+
+async fn list_designs(State(s): State<AppState>, headers: HeaderMap, Query(q): Q) -> Result<Response, ApiError> {
+    let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
+    let caller = s.caller(&token).await?.ok_or_else(unauthorized)?;
+    let store = s.store.clone();
+    let designs = tokio::task::spawn_blocking(move || store.designs())
+        .await
+        .map_err(storage)?
+        .map_err(storage)?;
+    let list: Vec<_> = designs
+        .iter()
+        .filter_map(|d| match &caller {
+            Caller::Admin => Some(design_json(d, Some(Role::Editor))),
+            Caller::Design(..) => d.tokens.role_of(&token).map(|r| design_json(d, Some(r))),
+        })
+        .collect();
+    Ok(axum::Json(json!({ "designs": list })).into_response())
+}
+
+/// Body of `POST /api/designs`.
+#[derive(Debug, Deserialize)]
+pub struct CreateDesign {
+    /// Name of the new design.
+    pub name: String,
+    /// Control points along u (default 16).
+    #[serde(default)]
+    pub nu: Option<usize>,
+    /// Control points along v (default 12).
+    #[serde(default)]
+    pub nv: Option<usize>,
+}
+
+async fn create_design(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Query(q): Q,
+    body: Bytes,
+) -> Result<Response, ApiError> {
+    let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
+    match s.caller(&token).await? {
+        Some(Caller::Admin) | Some(Caller::Design(_, Role::Editor)) => {}
+        _ => return Err(unauthorized()),
+    }
+    let req: CreateDesign = serde_json::from_slice(&body)
+        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "malformed", e.to_string()))?;
+    let name = req.name.trim();
+    if name.is_empty() || name.len() > 200 {
+        return Err(ApiError(
+            StatusCode::BAD_REQUEST,
+            "invalid_value",
+            "name must have 1 to 200 characters".into(),
+        ));
+    }
+    let (nu, nv) = (req.nu.unwrap_or(16), req.nv.unwrap_or(12));
+    if !(4..=200).contains(&nu) || !(4..=200).contains(&nv) {
+        return Err(ApiError(
+            StatusCode::BAD_REQUEST,
+            "invalid_value",
+            "nu and nv must be between 4 and 200".into(),
+        ));
+    }
+    let doc = crate::design::demo::plate(name, nu, nv)?;
+    let rec = s.hub.create(doc, "rest").await?;
+    Ok((
+        StatusCode::CREATED,
+        axum::Json(json!({
+            "id": rec.id,
+            "name": rec.name,
+            "tokens": { "editor": rec.tokens.editor, "viewer": rec.tokens.viewer, "device": rec.tokens.device }
+        })),
+    )
+        .into_response())
+}
+
+async fn get_design(
+    State(s): State<AppState>,
+    Path(id): Path<DesignId>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
+    let role = need_role(&s, &headers, &q, id).await?;
+    let handle = s.hub.open(id).await?;
+    let doc = handle.state().await?;
+    Ok(axum::Json(json!({ "id": id, "role": role, "design": &*doc })).into_response())
+}
+
+async fn list_versions(
+    State(s): State<AppState>,
+    Path(id): Path<DesignId>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
+    need_role(&s, &headers, &q, id).await?;
+    let store = s.store.clone();
+    let v = tokio::task::spawn_blocking(move || store.versions(id))
+        .await
+        .map_err(storage)?
+        .map_err(storage)?;
+    Ok(axum::Json(json!({ "id": id, "versions": v })).into_response())
+}
+
+async fn get_version(
+    State(s): State<AppState>,
+    Path((id, number)): Path<(DesignId, u64)>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
+    need_role(&s, &headers, &q, id).await?;
+    let store = s.store.clone();
+    let v = tokio::task::spawn_blocking(move || store.version(id, number))
+        .await
+        .map_err(storage)?
+        .map_err(storage)?;
+    let (info, bytes) = v.ok_or_else(|| {
+        ApiError(
+            StatusCode::NOT_FOUND,
+            "unknown_version",
+            format!("design {id} has no version {number}"),
+        )
+    })?;
+    let doc = crate::design::DesignDoc::from_bytes(&bytes)?;
+    Ok(axum::Json(json!({ "id": id, "version": info, "design": doc })).into_response())
+}
+
+async fn import(
+    State(s): State<AppState>,
+    Path(id): Path<DesignId>,
+    headers: HeaderMap,
+    Query(q): Q,
+    body: Bytes,
+) -> Result<Response, ApiError> {
+    let role = need_role(&s, &headers, &q, id).await?;
+    if !role.can_manage() {
+        return Err(ApiError(
+            StatusCode::FORBIDDEN,
+            "forbidden",
+            "only an editor may import".into(),
+        ));
+    }
+    let text = std::str::from_utf8(&body)
+        .map_err(|_| ApiError(StatusCode::BAD_REQUEST, "malformed", "IGES must be ASCII".into()))?;
+    let surfaces = cad::read_iges(text)
+        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "invalid_iges", e.to_string()))?;
+    let handle = s.hub.open(id).await?;
+    let current = handle.state().await?;
+    let doc = crate::design::model::with_surface(&current, &surfaces[0])?;
+    handle.replace(doc).await?;
+    let state = handle.state().await?;
+    Ok(axum::Json(json!({ "id": id, "design": &*state })).into_response())
+}
+
+async fn export(
+    State(s): State<AppState>,
+    Path((id, file)): Path<(DesignId, String)>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
+    need_role(&s, &headers, &q, id).await?;
+    let ext = file.strip_prefix("export.").ok_or_else(|| {
+        ApiError(StatusCode::NOT_FOUND, "not_found", format!("no resource {file}"))
+    })?;
+    if !matches!(ext, "igs" | "obj" | "stl" | "gltf") {
+        return Err(ApiError(
+            StatusCode::NOT_FOUND,
+            "not_found",
+            format!("unknown export format {ext} (igs, obj, stl, gltf)"),
+        ));
+    }
+    let handle = s.hub.open(id).await?;
+    let doc = handle.state().await?;
+    let name = doc.name.clone();
+    let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
+    if ext == "igs" {
+        let text = cad::write_iges(&doc.surface.to_iges(), &IgesMeta::now(&name, "vsculpt"))
+            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "export", e.to_string()))?;
+        return Ok((
+            [
+                (header::CONTENT_TYPE, "model/iges".to_string()),
+                (header::CONTENT_DISPOSITION, disposition),
+            ],
+            text,
+        )
+            .into_response());
+    }
+    let m = handle.mesh(8).await?;
+    let mesh = Mesh::new(&m.positions, &m.normals, &m.indices)
+        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "export", e.to_string()))?;
+    let (ctype, body): (&str, Vec<u8>) = match ext {
+        "obj" => ("model/obj", cad::write_obj(&mesh, &name).into_bytes()),
+        "stl" => ("model/stl", cad::write_stl(&mesh, &name)),
+        _ => ("model/gltf+json", cad::write_gltf(&mesh, &name).into_bytes()),
+    };
+    Ok((
+        [
+            (header::CONTENT_TYPE, ctype.to_string()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        body,
+    )
+        .into_response())
+}
+
+/// The whole router.
+pub fn router(state: AppState) -> Router {
+    let web = crate::web::router(&state.config.web_dir);
+    let limit = state.config.max_body_bytes;
+    Router::new()
+        .route("/healthz", get(healthz))
+        .route("/metrics", get(metrics))
+        .route("/ws", get(crate::ws::upgrade))
+        .route("/api/designs", get(list_designs).post(create_design))
+        .route("/api/designs/{id}", get(get_design))
+        .route("/api/designs/{id}/versions", get(list_versions))
+        .route("/api/designs/{id}/versions/{v}", get(get_version))
+        .route("/api/designs/{id}/import", post(import))
+        .route("/api/designs/{id}/{file}", get(export))
+        .layer(DefaultBodyLimit::max(limit))
+        .with_state(state)
+        .merge(web)
+}

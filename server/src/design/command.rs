@@ -1,0 +1,60 @@
+//! What clients ask of a design actor, protocol-neutral: the ws layer maps
+//! protocol messages to these (see `convert`), the actor checks the
+//! client's role and runs them in order.
+
+use super::model::Edit;
+use glam::DVec3;
+
+/// A command from one client.
+#[derive(Clone, Debug)]
+pub enum Command {
+    /// An undoable change of icons, material or surface.
+    Edit(Edit),
+    /// Move a held icon to `xyz` (a drag frame; coalesced per client).
+    Drag {
+        /// The dragged icon.
+        icon: u64,
+        /// Where the icon's handle is now.
+        xyz: DVec3,
+    },
+    /// End a drag: the icon keeps the shape it reached.
+    Release {
+        /// The released icon.
+        icon: u64,
+    },
+    /// Store the working state as a new version.
+    Commit {
+        /// The commit message.
+        message: String,
+    },
+    /// Back to the last committed version.
+    Revert,
+    /// Undo the last change.
+    Undo,
+    /// Redo the last undone change.
+    Redo,
+    /// Make a stored version the working state.
+    Restore {
+        /// Version number.
+        version: u64,
+    },
+}
+
+impl Command {
+    /// Whether the command changes the design's shape or icons.
+    pub fn edits(&self) -> bool {
+        matches!(
+            self,
+            Command::Edit(_) | Command::Drag { .. } | Command::Release { .. }
+        )
+    }
+}
+
+/// What an accepted command produced, for the client that sent it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Ack {
+    /// The id of an icon the command created.
+    pub created_icon: Option<u64>,
+    /// The version a commit created or a restore/revert loaded.
+    pub version: Option<u64>,
+}

@@ -1,0 +1,357 @@
+//! The design document: everything that defines a design (name, surface,
+//! material, icons) as plain serde data. It is what the store persists (as
+//! JSON: the working state and every version), what undo keeps and what a
+//! joining client receives. Validation of untrusted values (finite numbers,
+//! (u, v) inside the domain, sizes) happens here, before the kernel sees them.
+
+use super::error::{CommandError, ErrorKind};
+use crate::cad::IgesSurface;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Format version of the persisted document.
+pub const DOC_FORMAT: u32 = 1;
+
+fn invalid(msg: impl Into<String>) -> CommandError {
+    CommandError::new(ErrorKind::InvalidValue, msg)
+}
+
+/// A B-spline surface: degrees, full knot vectors, control points row-major
+/// (`i * nv + j`, `i` along u).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SurfaceDoc {
+    /// Degree in u.
+    pub u_degree: usize,
+    /// Degree in v.
+    pub v_degree: usize,
+    /// Knots in u.
+    pub u_knots: Vec<f64>,
+    /// Knots in v.
+    pub v_knots: Vec<f64>,
+    /// Control points along u.
+    pub nu: usize,
+    /// Control points along v.
+    pub nv: usize,
+    /// Control points.
+    pub points: Vec<[f64; 3]>,
+}
+
+impl SurfaceDoc {
+    /// The parameter domain ((u0, u1), (v0, v1)).
+    pub fn domain(&self) -> ((f64, f64), (f64, f64)) {
+        (
+            (self.u_knots[self.u_degree], self.u_knots[self.nu]),
+            (self.v_knots[self.v_degree], self.v_knots[self.nv]),
+        )
+    }
+
+    /// Whether (u, v) lies in the domain.
+    pub fn contains(&self, u: f64, v: f64) -> bool {
+        let ((u0, u1), (v0, v1)) = self.domain();
+        u.is_finite() && v.is_finite() && u >= u0 && u <= u1 && v >= v0 && v <= v1
+    }
+
+    /// Structural checks (sizes, finiteness); knot rules are the kernel's.
+    pub fn validate(&self) -> Result<(), CommandError> {
+        if self.u_degree == 0 || self.v_degree == 0 || self.u_degree > 7 || self.v_degree > 7 {
+            return Err(invalid("degrees must be between 1 and 7"));
+        }
+        if self.nu <= self.u_degree || self.nv <= self.v_degree {
+            return Err(invalid("too few control points for the degree"));
+        }
+        if self.nu > 400 || self.nv > 400 {
+            return Err(invalid("at most 400 control points per direction"));
+        }
+        if self.points.len() != self.nu * self.nv {
+            return Err(invalid("control point count does not match nu × nv"));
+        }
+        if self.u_knots.len() != self.nu + self.u_degree + 1
+            || self.v_knots.len() != self.nv + self.v_degree + 1
+        {
+            return Err(invalid("knot count does not match"));
+        }
+        let finite = self.u_knots.iter().chain(&self.v_knots).all(|x| x.is_finite())
+            && self.points.iter().flatten().all(|x| x.is_finite());
+        if !finite {
+            return Err(invalid("non-finite knot or control point"));
+        }
+        let ((u0, u1), (v0, v1)) = self.domain();
+        if u1 <= u0 || v1 <= v0 {
+            return Err(invalid("empty parameter domain"));
+        }
+        Ok(())
+    }
+
+    /// Control points as vectors.
+    pub fn dpoints(&self) -> Vec<DVec3> {
+        self.points.iter().map(|&p| DVec3::from(p)).collect()
+    }
+
+    /// As IGES data.
+    pub fn to_iges(&self) -> IgesSurface {
+        IgesSurface {
+            u_degree: self.u_degree,
+            v_degree: self.v_degree,
+            u_knots: self.u_knots.clone(),
+            v_knots: self.v_knots.clone(),
+            nu: self.nu,
+            nv: self.nv,
+            points: self.dpoints(),
+        }
+    }
+
+    /// From IGES data.
+    pub fn from_iges(s: &IgesSurface) -> Self {
+        Self {
+            u_degree: s.u_degree,
+            v_degree: s.v_degree,
+            u_knots: s.u_knots.clone(),
+            v_knots: s.v_knots.clone(),
+            nu: s.nu,
+            nv: s.nv,
+            points: s.points.iter().map(|p| p.to_array()).collect(),
+        }
+    }
+}
+
+/// The thin-plate material (paper 003): stretch α and bend β weights.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MaterialDoc {
+    /// α11.
+    pub alpha11: f64,
+    /// α12.
+    pub alpha12: f64,
+    /// α22.
+    pub alpha22: f64,
+    /// β11.
+    pub beta11: f64,
+    /// β12.
+    pub beta12: f64,
+    /// β22.
+    pub beta22: f64,
+}
+
+impl Default for MaterialDoc {
+    fn default() -> Self {
+        Self {
+            alpha11: 0.1,
+            alpha12: 0.0,
+            alpha22: 0.1,
+            beta11: 1.0,
+            beta12: 1.0,
+            beta22: 1.0,
+        }
+    }
+}
+
+impl MaterialDoc {
+    /// Finite, non-negative weights.
+    pub fn validate(&self) -> Result<(), CommandError> {
+        let all = [
+            self.alpha11,
+            self.alpha12,
+            self.alpha22,
+            self.beta11,
+            self.beta12,
+            self.beta22,
+        ];
+        if all.iter().any(|x| !x.is_finite()) {
+            return Err(invalid("material weights must be finite"));
+        }
+        if [self.alpha11, self.alpha22, self.beta11, self.beta12, self.beta22]
+            .iter()
+            .any(|&x| x < 0.0)
+        {
+            return Err(invalid("material weights must not be negative"));
+        }
+        Ok(())
+    }
+}
+
+/// Where an icon sits on the surface.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum AnchorDoc {
+    /// A point at (u, v).
+    Point {
+        /// u.
+        u: f64,
+        /// v.
+        v: f64,
+    },
+    /// A curve in the (u, v) domain through these parameter points.
+    Curve {
+        /// (u, v) points the curve passes through (at least 2).
+        uv: Vec<[f64; 2]>,
+    },
+    /// A parameter rectangle from two corners.
+    Region {
+        /// First corner.
+        from: [f64; 2],
+        /// Opposite corner.
+        to: [f64; 2],
+        /// Deformation asked inside (true) or outside the region.
+        inside: bool,
+    },
+}
+
+impl AnchorDoc {
+    /// Every (u, v) the anchor uses.
+    pub fn params(&self) -> Vec<[f64; 2]> {
+        match self {
+            AnchorDoc::Point { u, v } => vec![[*u, *v]],
+            AnchorDoc::Curve { uv } => uv.clone(),
+            AnchorDoc::Region { from, to, .. } => vec![*from, *to],
+        }
+    }
+
+    /// Checks every parameter is finite and inside `surface`'s domain.
+    pub fn validate(&self, surface: &SurfaceDoc) -> Result<(), CommandError> {
+        let ps = self.params();
+        if let AnchorDoc::Curve { uv } = self
+            && !(2..=256).contains(&uv.len())
+        {
+            return Err(invalid("a curve icon needs 2 to 256 (u, v) points"));
+        }
+        for [u, v] in ps {
+            if !u.is_finite() || !v.is_finite() {
+                return Err(invalid("icon parameters must be finite"));
+            }
+            if !surface.contains(u, v) {
+                let ((u0, u1), (v0, v1)) = surface.domain();
+                return Err(CommandError::new(
+                    ErrorKind::OutOfDomain,
+                    format!("(u, v) = ({u}, {v}) is outside the domain [{u0}, {u1}] × [{v0}, {v1}]"),
+                ));
+            }
+        }
+        if let AnchorDoc::Region { from, to, .. } = self
+            && (from[0] == to[0] || from[1] == to[1])
+        {
+            return Err(invalid("a region needs two distinct corners"));
+        }
+        Ok(())
+    }
+}
+
+/// What an icon does (paper 003's icon kinds).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IconRoleDoc {
+    /// A load pulling the surface.
+    Load,
+    /// A position constraint w = P0.
+    Position,
+    /// Derivative constraint w_u = T.
+    R,
+    /// Derivative constraint w_v = T.
+    V,
+    /// Derivative constraint w_uu = T.
+    R2,
+    /// Derivative constraint w_vv = T.
+    V2,
+    /// Derivative constraint w_uv = T.
+    Rv,
+    /// Normal constraint N·w_u = N·w_v = 0.
+    Normal,
+}
+
+/// An icon's state (paper 003).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IconStateDoc {
+    /// Bound to a sensor; moving it drives the deformation.
+    Driving,
+    /// Holds (constraint) or follows the surface (load).
+    Passive,
+    /// No effect; follows the surface.
+    Sleeping,
+}
+
+/// One icon.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IconDoc {
+    /// Id, unique within the design.
+    pub id: u64,
+    /// Where it sits.
+    pub anchor: AnchorDoc,
+    /// What it does.
+    pub role: IconRoleDoc,
+    /// Its state.
+    pub state: IconStateDoc,
+    /// The handle's space point (target of a position constraint, where a
+    /// load's handle is).
+    pub xyz: [f64; 3],
+    /// The vector of a derivative constraint (T) or normal constraint (N).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vector: Option<[f64; 3]>,
+    /// Sensors bound to it.
+    #[serde(default)]
+    pub sensors: Vec<String>,
+}
+
+/// A whole design.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DesignDoc {
+    /// Document format version.
+    pub format: u32,
+    /// Name.
+    pub name: String,
+    /// The surface.
+    pub surface: SurfaceDoc,
+    /// Material.
+    pub material: MaterialDoc,
+    /// Icons.
+    pub icons: Vec<IconDoc>,
+    /// The id the next icon gets.
+    pub next_icon: u64,
+}
+
+impl DesignDoc {
+    /// Serialised for the store.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        // Serialising plain data with finite floats cannot fail.
+        serde_json::to_vec(self).unwrap_or_default()
+    }
+
+    /// Parsed from the store.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, CommandError> {
+        let doc: DesignDoc = serde_json::from_slice(bytes).map_err(|e| {
+            CommandError::new(ErrorKind::Storage, format!("stored design unreadable: {e}"))
+        })?;
+        if doc.format != DOC_FORMAT {
+            return Err(CommandError::new(
+                ErrorKind::Storage,
+                format!("stored design has format {}, expected {DOC_FORMAT}", doc.format),
+            ));
+        }
+        Ok(doc)
+    }
+
+    /// The icon with `id`.
+    pub fn icon(&self, id: u64) -> Option<&IconDoc> {
+        self.icons.iter().find(|i| i.id == id)
+    }
+
+    /// Full validation of untrusted content.
+    pub fn validate(&self) -> Result<(), CommandError> {
+        self.surface.validate()?;
+        self.material.validate()?;
+        for i in &self.icons {
+            i.anchor.validate(&self.surface)?;
+            if i.xyz.iter().chain(i.vector.iter().flatten()).any(|x| !x.is_finite()) {
+                return Err(invalid("icon coordinates must be finite"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A finite point or an `InvalidValue` error.
+pub fn finite_point(p: [f64; 3]) -> Result<DVec3, CommandError> {
+    if p.iter().all(|x| x.is_finite()) {
+        Ok(DVec3::from(p))
+    } else {
+        Err(invalid("coordinates must be finite (no NaN or ∞)"))
+    }
+}

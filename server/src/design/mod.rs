@@ -1,0 +1,18 @@
+//! Designs at run time: one actor task per design holding its kernel state
+//! ([`actor`]), the commands it runs ([`command`]), undo/redo ([`undo`]),
+//! the document it persists and the kernel model it drives ([`model`]), and
+//! the registry of running actors ([`hub`]).
+
+pub mod actor;
+pub mod command;
+pub mod demo;
+pub mod error;
+pub mod hub;
+pub mod model;
+pub mod undo;
+
+pub use actor::{ClientInfo, DesignEvent, DesignHandle, Joined, Presence};
+pub use command::{Ack, Command};
+pub use error::{CommandError, ErrorKind};
+pub use hub::Hub;
+pub use model::{DesignDoc, DesignModel, Edit};

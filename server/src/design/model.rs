@@ -1,0 +1,153 @@
+//! The live model of one design as its actor holds it: the document (the
+//! persisted truth) plus the kernel engine built from it. Edits produce a new
+//! document, the engine rebuilds from it and solves; only when that succeeds
+//! does the model switch, so a refused edit changes nothing. Drags go
+//! straight to the engine (no rebuild, no refactor).
+
+use super::doc::DesignDoc;
+pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc};
+pub use super::edit::Edit;
+use super::engine::Engine;
+use super::error::{CommandError, ErrorKind};
+use crate::cad::IgesSurface;
+use glam::DVec3;
+
+/// A tessellation for mesh export.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Triangle indices.
+    pub indices: Vec<u32>,
+}
+
+/// One geometry frame, encoded once for every client.
+#[derive(Clone, Debug)]
+pub struct Geometry {
+    /// Geometry revision (increases with every published frame).
+    pub rev: u64,
+    /// The binary WebSocket frame.
+    pub frame: axum::body::Bytes,
+}
+
+/// Document + kernel engine.
+pub struct DesignModel {
+    doc: DesignDoc,
+    engine: Engine,
+}
+
+impl DesignModel {
+    /// Builds the model from a document (validated; the engine solves once).
+    pub fn load(doc: &DesignDoc) -> Result<Self, CommandError> {
+        doc.validate()?;
+        let engine = Engine::build(doc)?;
+        let mut m = Self {
+            doc: doc.clone(),
+            engine,
+        };
+        m.sync();
+        Ok(m)
+    }
+
+    /// Copies solved points and re-placed icon positions into the document.
+    fn sync(&mut self) {
+        self.doc.surface.points = self.engine.points().iter().map(|p| p.to_array()).collect();
+        for icon in &mut self.doc.icons {
+            if let Some(p) = self.engine.icon_xyz(icon.id) {
+                icon.xyz = p.to_array();
+            }
+        }
+    }
+
+    /// The current document (points as solved).
+    pub fn to_doc(&self) -> DesignDoc {
+        let mut d = self.doc.clone();
+        d.surface.points = self.engine.points().iter().map(|p| p.to_array()).collect();
+        for icon in &mut d.icons {
+            if let Some(p) = self.engine.icon_xyz(icon.id) {
+                icon.xyz = p.to_array();
+            }
+        }
+        d
+    }
+
+    /// Applies an edit; returns the created icon's id.
+    pub fn apply(&mut self, edit: Edit) -> Result<Option<u64>, CommandError> {
+        let current = self.to_doc();
+        let engine = &self.engine;
+        let (doc, created) =
+            super::edit::apply(&current, &edit, &|u, v| engine.surface_point(u, v).to_array())?;
+        let engine = Engine::build(&doc)?;
+        self.doc = doc;
+        self.engine = engine;
+        self.sync();
+        Ok(created)
+    }
+
+    fn check_icon(&self, icon: u64) -> Result<(), CommandError> {
+        if self.doc.icon(icon).is_none() {
+            return Err(CommandError::new(
+                ErrorKind::UnknownIcon,
+                format!("no icon {icon}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A drag frame: icon `icon`'s handle is at `xyz`.
+    pub fn drag(&mut self, icon: u64, xyz: DVec3) -> Result<(), CommandError> {
+        self.check_icon(icon)?;
+        if !xyz.is_finite() {
+            return Err(CommandError::new(
+                ErrorKind::InvalidValue,
+                "coordinates must be finite (no NaN or ∞)",
+            ));
+        }
+        self.engine.drag(icon, xyz)
+    }
+
+    /// Ends a drag of `icon`.
+    pub fn release(&mut self, icon: u64) -> Result<(), CommandError> {
+        self.check_icon(icon)?;
+        self.engine.release(icon)?;
+        self.sync();
+        Ok(())
+    }
+
+    /// The encoded geometry frame of revision `rev`.
+    pub fn geometry(&self, rev: u64) -> Geometry {
+        Geometry {
+            rev,
+            frame: crate::convert::geometry_frame(
+                rev,
+                self.doc.surface.nu,
+                self.doc.surface.nv,
+                self.engine.points(),
+            ),
+        }
+    }
+
+    /// A tessellation with `density` samples per knot span.
+    pub fn mesh(&self, density: usize) -> Result<MeshData, CommandError> {
+        self.engine.mesh(density.clamp(1, 32))
+    }
+}
+
+/// `current` with its surface replaced by `s` (IGES import): icons whose
+/// (u, v) fall outside the new domain are dropped; the others keep their
+/// parameters and are re-placed on the new surface.
+pub fn with_surface(current: &DesignDoc, s: &IgesSurface) -> Result<DesignDoc, CommandError> {
+    let surface = SurfaceDoc::from_iges(s);
+    surface.validate()?;
+    let mut doc = current.clone();
+    doc.surface = surface;
+    doc.icons.retain(|i| i.anchor.validate(&doc.surface).is_ok());
+    let engine = Engine::build_unsolved(&doc)?;
+    for icon in &mut doc.icons {
+        let [u, v] = icon.anchor.params()[0];
+        icon.xyz = engine.surface_point(u, v).to_array();
+    }
+    Ok(doc)
+}

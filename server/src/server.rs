@@ -1,0 +1,178 @@
+//! Starting and stopping the whole service: open the store (creating the
+//! demo design on first start), bind the router to a listener, serve until
+//! the shutdown signal, then stop every design actor so working states are
+//! flushed. [`Server::links`] gives the start banner of API.md §4.
+
+use crate::app::{self, Shared};
+use crate::config::Config;
+use crate::design::Hub;
+use crate::metrics::Metrics;
+use crate::shutdown::Shutdown;
+use crate::store::{DesignRecord, Store, StoreError};
+use std::future::IntoFuture;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use thiserror::Error;
+use tokio::net::TcpListener;
+
+/// Why the server could not start or run.
+#[derive(Debug, Error)]
+pub enum ServerError {
+    /// The store failed.
+    #[error("store: {0}")]
+    Store(#[from] StoreError),
+    /// Binding or serving failed.
+    #[error("network: {0}")]
+    Io(#[from] std::io::Error),
+    /// The demo design could not be built.
+    #[error("demo design: {0}")]
+    Demo(String),
+}
+
+/// A started server (store open, listener bound), not yet serving.
+pub struct Server {
+    shared: Arc<Shared>,
+    listener: TcpListener,
+    addr: SocketAddr,
+}
+
+fn read_or_create_admin_token(config: &Config) -> Result<String, ServerError> {
+    let path = config.data_dir.join("admin-token");
+    if let Ok(t) = std::fs::read_to_string(&path) {
+        let t = t.trim().to_string();
+        if t.len() >= 32 {
+            return Ok(t);
+        }
+    }
+    let token =
+        crate::store::tokens::random_token().map_err(|e| ServerError::Demo(e.to_string()))?;
+    std::fs::write(&path, format!("{token}\n"))?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600))?;
+    }
+    Ok(token)
+}
+
+impl Server {
+    /// Opens the store in `config.data_dir` (creating the demo design when
+    /// the store is empty and `config.demo`) and takes `listener`.
+    pub async fn start(
+        listener: TcpListener,
+        config: Config,
+        shutdown: Shutdown,
+    ) -> Result<Self, ServerError> {
+        let addr = listener.local_addr()?;
+        let dir = config.data_dir.clone();
+        let store = Arc::new(
+            tokio::task::spawn_blocking(move || Store::open(&dir))
+                .await
+                .map_err(|e| ServerError::Demo(e.to_string()))??,
+        );
+        let admin_token = read_or_create_admin_token(&config)?;
+        let metrics = Arc::new(Metrics::new());
+        let hub = Hub::new(store.clone(), metrics.clone(), config.persist_delay);
+        let empty = {
+            let s = store.clone();
+            tokio::task::spawn_blocking(move || s.designs())
+                .await
+                .map_err(|e| ServerError::Demo(e.to_string()))??
+                .is_empty()
+        };
+        if empty && config.demo {
+            let doc = crate::design::demo::demo().map_err(|e| ServerError::Demo(e.to_string()))?;
+            let rec = hub
+                .create(doc, "vsculpt")
+                .await
+                .map_err(|e| ServerError::Demo(e.to_string()))?;
+            tracing::info!(design = rec.id, "created the demo design");
+        }
+        let shared = Arc::new(Shared {
+            config,
+            store,
+            metrics,
+            hub,
+            admin_token,
+            next_client: std::sync::atomic::AtomicU64::new(1),
+            shutdown,
+        });
+        Ok(Self {
+            shared,
+            listener,
+            addr,
+        })
+    }
+
+    /// The bound address.
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// The administrator token (also in `DATA/admin-token`).
+    pub fn admin_token(&self) -> &str {
+        &self.shared.admin_token
+    }
+
+    /// Every live design with its tokens.
+    pub fn designs(&self) -> Result<Vec<DesignRecord>, ServerError> {
+        Ok(self.shared.store.designs()?)
+    }
+
+    /// The start banner, one line each, exactly as API.md §4 gives it.
+    pub fn links(&self) -> Result<String, ServerError> {
+        let base = format!("http://{}", self.addr);
+        let ws = format!("ws://{}", self.addr);
+        let mut out = format!("vsculpt-server listening on {base}\nweb client: {base}/\n");
+        for d in self.designs()? {
+            let (id, name) = (d.id, &d.name);
+            out.push_str(&format!(
+                "design {id} \"{name}\" editor: {base}/?design={id}&token={}\n",
+                d.tokens.editor
+            ));
+            out.push_str(&format!(
+                "design {id} \"{name}\" viewer: {base}/?design={id}&token={}\n",
+                d.tokens.viewer
+            ));
+            out.push_str(&format!(
+                "design {id} \"{name}\" device: {ws}/ws?design={id}&token={}\n",
+                d.tokens.device
+            ));
+        }
+        Ok(out)
+    }
+
+    /// Serves until `shutdown` triggers, then stops every design actor
+    /// (flushing working states to the store).
+    pub async fn run(self) -> Result<(), ServerError> {
+        let shared = self.shared.clone();
+        let router = app::router(self.shared.clone());
+        let stop = shared.shutdown.clone();
+        tracing::info!(addr = %self.addr, "serving");
+        let serving = axum::serve(self.listener, router)
+            .with_graceful_shutdown(async move { stop.wait().await })
+            .into_future();
+        // WebSocket tasks close on the signal; a client that does not answer
+        // the close gets two seconds before the server stops anyway.
+        let stop = shared.shutdown.clone();
+        let served = tokio::select! {
+            r = serving => r,
+            _ = async {
+                stop.wait().await;
+                tokio::time::sleep(std::time::Duration::from_secs(2)).await;
+            } => Ok(()),
+        };
+        shared.hub.stop_all().await;
+        tracing::info!("store flushed, server stopped");
+        served.map_err(ServerError::Io)
+    }
+}
+
+/// Starts a server on `listener` and serves until `shutdown` triggers.
+pub async fn serve(
+    listener: TcpListener,
+    config: Config,
+    shutdown: Shutdown,
+) -> Result<(), ServerError> {
+    Server::start(listener, config, shutdown).await?.run().await
+}

@@ -1,0 +1,367 @@
+//! One WebSocket connection: the hello (protocol version + token), joining
+//! the design, then the reader loop that validates every message at the
+//! edge and turns it into a design command. Bad input of any kind (malformed
+//! JSON, unknown message, oversized message, NaN, unknown ids, a viewer's
+//! edit) gets an error reply with a stable code; the connection and the
+//! server stay up and the design is unchanged.
+
+use super::writer::{self, Out};
+use crate::app::{AppState, Caller};
+use crate::convert::{self, Inbound, WireError};
+use crate::design::{ClientInfo, CommandError, DesignHandle, ErrorKind};
+use crate::store::{DesignId, Role};
+use axum::extract::ws::{Message, WebSocket};
+use futures_util::StreamExt;
+use futures_util::stream::SplitStream;
+use std::collections::HashMap;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+use tokio::sync::mpsc;
+
+/// How long a new connection may take to send its hello.
+pub const HELLO_TIMEOUT: Duration = Duration::from_secs(10);
+/// Capacity of a client's reply queue.
+pub const REPLY_CAPACITY: usize = 64;
+
+struct ClientGuard(std::sync::Arc<crate::metrics::Metrics>);
+
+impl Drop for ClientGuard {
+    fn drop(&mut self) {
+        self.0.client(-1);
+    }
+}
+
+/// The session of an authenticated connection.
+struct Session {
+    state: AppState,
+    client: u64,
+    name: String,
+    token: String,
+    design: DesignId,
+    role: Role,
+    handle: DesignHandle,
+    out: mpsc::Sender<Out>,
+}
+
+async fn send_now(socket: &mut WebSocket, text: axum::extract::ws::Utf8Bytes) {
+    let _ = socket.send(Message::Text(text)).await;
+}
+
+async fn refuse(mut socket: WebSocket, err: WireError, close_code: u16) {
+    send_now(&mut socket, convert::error(None, &err)).await;
+    let _ = socket
+        .send(Message::Close(Some(axum::extract::ws::CloseFrame {
+            code: close_code,
+            reason: err.message.chars().take(100).collect::<String>().into(),
+        })))
+        .await;
+}
+
+/// Runs one connection to its end.
+pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, String>) {
+    state.metrics.client(1);
+    let _guard = ClientGuard(state.metrics.clone());
+    let limit = state.config.max_message_bytes;
+
+    // 1. The hello.
+    let first = tokio::select! {
+        m = tokio::time::timeout(HELLO_TIMEOUT, socket.recv()) => m,
+        _ = state.shutdown.wait() => return,
+    };
+    let text = match first {
+        Ok(Some(Ok(Message::Text(t)))) => t,
+        Ok(Some(Ok(_))) => {
+            return refuse(socket, WireError::malformed("the first message must be a JSON hello"), 1008).await;
+        }
+        Ok(_) => return,
+        Err(_) => {
+            return refuse(socket, WireError::malformed("no hello within 10 s"), 1008).await;
+        }
+    };
+    if text.len() > limit {
+        return refuse(socket, WireError::too_large(text.len(), limit), 1009).await;
+    }
+    let hello = match convert::decode_hello(text.as_str()) {
+        Ok(h) => h,
+        Err(e) => return refuse(socket, e, 1008).await,
+    };
+    let design = match hello
+        .design
+        .or_else(|| query.get("design").and_then(|d| d.parse().ok()))
+    {
+        Some(d) => d,
+        None => {
+            return refuse(socket, WireError::malformed("the hello names no design"), 1008).await;
+        }
+    };
+    let token = if hello.token.is_empty() {
+        query.get("token").cloned().unwrap_or_default()
+    } else {
+        hello.token.clone()
+    };
+    let role = match state.role_on(&token, design).await {
+        Ok(Some(r)) => r,
+        _ => return refuse(socket, WireError::unauthorized(), 1008).await,
+    };
+    let handle = match state.hub.open(design).await {
+        Ok(h) => h,
+        Err(e) => return refuse(socket, WireError::from(e), 1008).await,
+    };
+    let client = state.next_client.fetch_add(1, Ordering::Relaxed);
+    let name = hello.name.clone().unwrap_or_else(|| format!("{role:?} {client}").to_lowercase());
+    let info = ClientInfo {
+        id: client,
+        name: name.clone(),
+        role,
+    };
+    let joined = match handle.join(info).await {
+        Ok(j) => j,
+        Err(e) => return refuse(socket, WireError::from(e), 1011).await,
+    };
+    tracing::info!(design, client, ?role, "client connected");
+
+    // 2. Welcome and the full snapshot, then the writer takes over.
+    if socket
+        .send(Message::Text(convert::welcome(client, design, role)))
+        .await
+        .is_err()
+        || socket
+            .send(Message::Text(convert::snapshot(&joined.state, &joined.presence)))
+            .await
+            .is_err()
+    {
+        let _ = handle.send(crate::design::actor::Request::Leave { client }).await;
+        return;
+    }
+    let (sink, stream) = socket.split();
+    let (out_tx, out_rx) = mpsc::channel(REPLY_CAPACITY);
+    let writer = tokio::spawn(writer::run(
+        sink,
+        out_rx,
+        joined,
+        handle.clone(),
+        state.metrics.clone(),
+    ));
+    let mut session = Session {
+        state: state.clone(),
+        client,
+        name,
+        token,
+        design,
+        role,
+        handle,
+        out: out_tx,
+    };
+    session.read(stream).await;
+    let _ = session
+        .handle
+        .send(crate::design::actor::Request::Leave { client })
+        .await;
+    drop(session);
+    let _ = writer.await;
+    tracing::info!(design, client, "client disconnected");
+}
+
+impl Session {
+    async fn reply(&self, text: axum::extract::ws::Utf8Bytes) {
+        let _ = self.out.send(Out::Msg(Message::Text(text))).await;
+    }
+
+    async fn error(&self, id: Option<u64>, e: WireError) {
+        self.state.metrics.error_sent();
+        self.reply(convert::error(id, &e)).await;
+    }
+
+    async fn read(&mut self, mut stream: SplitStream<WebSocket>) {
+        let limit = self.state.config.max_message_bytes;
+        let shutdown = self.state.shutdown.clone();
+        loop {
+            let msg = tokio::select! {
+                m = stream.next() => m,
+                _ = shutdown.wait() => {
+                    let _ = self.out.send(Out::Close(1001, "server shutting down".into())).await;
+                    return;
+                }
+            };
+            let text = match msg {
+                None | Some(Err(_)) => return,
+                Some(Ok(Message::Close(_))) => return,
+                Some(Ok(Message::Ping(_) | Message::Pong(_))) => continue,
+                Some(Ok(Message::Binary(b))) => {
+                    let e = if b.len() > limit {
+                        WireError::too_large(b.len(), limit)
+                    } else {
+                        WireError::malformed("clients send JSON text messages only")
+                    };
+                    self.error(None, e).await;
+                    continue;
+                }
+                Some(Ok(Message::Text(t))) => t,
+            };
+            if text.len() > limit {
+                self.error(None, WireError::too_large(text.len(), limit)).await;
+                continue;
+            }
+            match convert::decode(text.as_str()) {
+                Ok((id, inbound)) => self.dispatch(id, inbound).await,
+                Err((id, e)) => self.error(id, e).await,
+            }
+        }
+    }
+
+    async fn dispatch(&mut self, id: Option<u64>, inbound: Inbound) {
+        match inbound {
+            Inbound::Hello => {
+                self.error(id, WireError::malformed("already said hello")).await;
+            }
+            Inbound::Ping => self.reply(convert::pong(id)).await,
+            Inbound::Command(crate::design::Command::Drag { icon, xyz }) if id.is_none() => {
+                // Drag frames without a request id are fire-and-forget and
+                // coalesced by the actor; refusals are rare (role, unknown
+                // icon) and checked here so the client still hears of them.
+                if !self.role.can_edit() {
+                    self.error(id, WireError::from(forbidden(self.role))).await;
+                } else if let Err(e) = self.handle.drag(self.client, icon, xyz).await {
+                    self.error(id, WireError::from(e)).await;
+                }
+            }
+            Inbound::Command(cmd) => {
+                if cmd.edits() && !self.role.can_edit() {
+                    self.error(id, WireError::from(forbidden(self.role))).await;
+                    return;
+                }
+                match self.handle.command(self.client, cmd).await {
+                    Ok(ack) => self.reply(convert::ack(id, &ack)).await,
+                    Err(e) => self.error(id, WireError::from(e)).await,
+                }
+            }
+            Inbound::Device(report) => {
+                if !self.role.can_edit() {
+                    self.error(id, WireError::from(forbidden(self.role))).await;
+                    return;
+                }
+                if let Err(e) = self
+                    .handle
+                    .send(crate::design::actor::Request::Device {
+                        client: self.client,
+                        report,
+                    })
+                    .await
+                {
+                    self.error(id, WireError::from(e)).await;
+                }
+            }
+            Inbound::ListDesigns => self.list(id).await,
+            Inbound::CreateDesign { name } => self.create(id, name).await,
+            Inbound::DeleteDesign { design } => self.delete(id, design).await,
+            Inbound::OpenDesign { design, token } => self.open(id, design, token).await,
+        }
+    }
+
+    async fn list(&self, id: Option<u64>) {
+        let caller = self.state.caller(&self.token).await.ok().flatten();
+        let store = self.state.store.clone();
+        let designs = match tokio::task::spawn_blocking(move || store.designs()).await {
+            Ok(Ok(d)) => d,
+            _ => {
+                return self
+                    .error(id, WireError::from(CommandError::new(ErrorKind::Storage, "cannot list designs")))
+                    .await;
+            }
+        };
+        let visible: Vec<_> = designs
+            .into_iter()
+            .filter_map(|d| match caller {
+                Some(Caller::Admin) => Some((d.id, d.name, Role::Editor)),
+                _ => d.tokens.role_of(&self.token).map(|r| (d.id, d.name, r)),
+            })
+            .collect();
+        self.reply(convert::design_list(id, &visible)).await;
+    }
+
+    async fn create(&self, id: Option<u64>, name: String) {
+        if self.role != Role::Editor {
+            return self.error(id, WireError::from(forbidden(self.role))).await;
+        }
+        let name = name.trim().to_string();
+        if name.is_empty() || name.len() > 200 {
+            return self
+                .error(id, WireError::invalid("a design name has 1 to 200 characters"))
+                .await;
+        }
+        let doc = match crate::design::demo::plate(&name, 16, 12) {
+            Ok(d) => d,
+            Err(e) => return self.error(id, WireError::from(e)).await,
+        };
+        match self.state.hub.create(doc, &self.name).await {
+            Ok(rec) => self.reply(convert::design_created(id, &rec)).await,
+            Err(e) => self.error(id, WireError::from(e)).await,
+        }
+    }
+
+    async fn delete(&self, id: Option<u64>, design: DesignId) {
+        match self.state.role_on(&self.token, design).await {
+            Ok(Some(Role::Editor)) => {}
+            Ok(Some(r)) => return self.error(id, WireError::from(forbidden(r))).await,
+            _ => {
+                return self
+                    .error(
+                        id,
+                        WireError::from(CommandError::new(
+                            ErrorKind::UnknownDesign,
+                            format!("no design {design} for this token"),
+                        )),
+                    )
+                    .await;
+            }
+        }
+        match self.state.hub.delete(design).await {
+            Ok(()) => self.reply(convert::ack(id, &Default::default())).await,
+            Err(e) => self.error(id, WireError::from(e)).await,
+        }
+    }
+
+    async fn open(&mut self, id: Option<u64>, design: DesignId, token: Option<String>) {
+        let token = token.unwrap_or_else(|| self.token.clone());
+        let role = match self.state.role_on(&token, design).await {
+            Ok(Some(r)) => r,
+            _ => return self.error(id, WireError::unauthorized()).await,
+        };
+        let handle = match self.state.hub.open(design).await {
+            Ok(h) => h,
+            Err(e) => return self.error(id, WireError::from(e)).await,
+        };
+        let info = ClientInfo {
+            id: self.client,
+            name: self.name.clone(),
+            role,
+        };
+        let joined = match handle.join(info).await {
+            Ok(j) => j,
+            Err(e) => return self.error(id, WireError::from(e)).await,
+        };
+        let _ = self
+            .handle
+            .send(crate::design::actor::Request::Leave {
+                client: self.client,
+            })
+            .await;
+        self.reply(convert::welcome(self.client, design, role)).await;
+        let snapshot = Message::Text(convert::snapshot(&joined.state, &joined.presence));
+        let _ = self
+            .out
+            .send(Out::Rejoin(Box::new(joined), handle.clone(), snapshot))
+            .await;
+        self.design = design;
+        self.role = role;
+        self.token = token;
+        self.handle = handle;
+    }
+}
+
+fn forbidden(role: Role) -> CommandError {
+    CommandError::new(
+        ErrorKind::Forbidden,
+        format!("a {} may not change this design", format!("{role:?}").to_lowercase()),
+    )
+}

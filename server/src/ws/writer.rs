@@ -1,0 +1,155 @@
+//! The per-client writer task: the only place that writes to a client's
+//! socket. It merges three sources, in priority order:
+//!
+//! 1. replies to this client (acks, errors, design lists) from a bounded
+//!    queue its reader fills — a client that never reads stalls only its
+//!    own reader;
+//! 2. the design's ordered events (broadcast): never skipped silently — if
+//!    this client falls more than the channel's capacity behind, it gets a
+//!    fresh full snapshot from the actor and continues from there;
+//! 3. geometry (watch): latest wins — a slow client skips intermediate
+//!    frames instead of queueing them.
+
+use crate::convert;
+use crate::design::{DesignEvent, DesignHandle, Joined};
+use crate::metrics::Metrics;
+use axum::extract::ws::{CloseFrame, Message, WebSocket};
+use futures_util::SinkExt;
+use futures_util::stream::SplitSink;
+use std::sync::Arc;
+use tokio::sync::broadcast::error::RecvError;
+use tokio::sync::mpsc;
+
+/// What the reader hands the writer.
+pub enum Out {
+    /// Send this message.
+    Msg(Message),
+    /// The client switched to (or resynced with) a design: new streams.
+    Rejoin(Box<Joined>, DesignHandle, Message),
+    /// Close with this code and reason, then stop.
+    Close(u16, String),
+}
+
+type Sink = SplitSink<WebSocket, Message>;
+
+async fn send_geometry(
+    sink: &mut Sink,
+    joined: &mut Joined,
+    metrics: &Metrics,
+) -> Result<(), axum::Error> {
+    let g = joined.geometry.borrow_and_update().clone();
+    metrics.frame_sent(g.frame.len());
+    sink.send(Message::Binary(g.frame.clone())).await
+}
+
+/// Runs until the reader drops its sender, a close is requested, the socket
+/// fails or the design goes away.
+pub async fn run(
+    mut sink: Sink,
+    mut out: mpsc::Receiver<Out>,
+    mut joined: Joined,
+    mut handle: DesignHandle,
+    metrics: Arc<Metrics>,
+) {
+    let mut geometry_live = true;
+    if send_geometry(&mut sink, &mut joined, &metrics).await.is_err() {
+        return;
+    }
+    loop {
+        tokio::select! {
+            biased;
+            o = out.recv() => {
+                let ok = match o {
+                    None => break,
+                    Some(Out::Msg(m)) => sink.send(m).await.is_ok(),
+                    Some(Out::Rejoin(j, h, snapshot)) => {
+                        joined = *j;
+                        handle = h;
+                        geometry_live = true;
+                        sink.send(snapshot).await.is_ok()
+                            && send_geometry(&mut sink, &mut joined, &metrics).await.is_ok()
+                    }
+                    Some(Out::Close(code, reason)) => {
+                        let _ = sink
+                            .send(Message::Close(Some(CloseFrame { code, reason: reason.into() })))
+                            .await;
+                        break;
+                    }
+                };
+                if !ok {
+                    break;
+                }
+            }
+            e = joined.events.recv() => {
+                match e {
+                    Ok(ev) => {
+                        let deleted = matches!(ev, DesignEvent::Deleted);
+                        if let Some(text) = convert::event(&ev)
+                            && sink.send(Message::Text(text)).await.is_err()
+                        {
+                            break;
+                        }
+                        if deleted {
+                            geometry_live = false;
+                        }
+                    }
+                    Err(RecvError::Lagged(n)) => {
+                        tracing::info!(design = handle.id, skipped = n, "client lagged; resyncing with a full snapshot");
+                        match handle.resync().await {
+                            Ok(j) => {
+                                let snap = convert::snapshot(&j.state, &j.presence);
+                                joined = j;
+                                if sink.send(Message::Text(snap)).await.is_err()
+                                    || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()
+                                {
+                                    break;
+                                }
+                            }
+                            Err(_) => {
+                                geometry_live = false;
+                            }
+                        }
+                    }
+                    Err(RecvError::Closed) => {
+                        // The actor stopped (deleted or shutting down): wait
+                        // for the reader to close or rejoin.
+                        geometry_live = false;
+                        match out.recv().await {
+                            Some(Out::Msg(m)) => {
+                                if sink.send(m).await.is_err() {
+                                    break;
+                                }
+                            }
+                            Some(Out::Rejoin(j, h, snapshot)) => {
+                                joined = *j;
+                                handle = h;
+                                geometry_live = true;
+                                if sink.send(snapshot).await.is_err()
+                                    || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()
+                                {
+                                    break;
+                                }
+                            }
+                            Some(Out::Close(code, reason)) => {
+                                let _ = sink
+                                    .send(Message::Close(Some(CloseFrame { code, reason: reason.into() })))
+                                    .await;
+                                break;
+                            }
+                            None => break,
+                        }
+                    }
+                }
+            }
+            r = joined.geometry.changed(), if geometry_live => {
+                if r.is_err() {
+                    geometry_live = false;
+                    continue;
+                }
+                if send_geometry(&mut sink, &mut joined, &metrics).await.is_err() {
+                    break;
+                }
+            }
+        }
+    }
+}
