@@ -10,6 +10,7 @@
 //!   surfaces with derivatives, interpolation, knot insertion.
 //! * [`energy`] — the thin-plate deformation energy: Gauss quadrature, the exact
 //!   Galerkin stiffness of curves and surfaces, materials.
+//! * [`quadrature`] — Gauss–Legendre rules, exact for B-spline products per span.
 //! * [`solve`] — the linear problem icons hand to the solver and the solver
 //!   itself: sparse Cholesky of the stiffness, constraints by Schur complement,
 //!   drag frames answered from precomputed columns.
@@ -25,5 +26,6 @@ pub mod bspline;
 pub mod design;
 pub mod energy;
 pub mod icon;
+pub mod quadrature;
 pub mod solve;
 pub mod spring;
