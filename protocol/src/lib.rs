@@ -1,1 +1,35 @@
-//! vsculpt-protocol: every message between server, device bridge and browser (to be built, issue 3).
+//! vsculpt-protocol: every message between the server, the device bridge and
+//! the browser. It knows nothing of the kernel, so the wire stays stable
+//! while the solver changes.
+//!
+//! # Layout
+//!
+//! * [`version`] — the protocol version and the handshake rules.
+//! * [`error`] — stable error codes ([`ErrorCode`]) and decode failures.
+//! * [`limits`] — sizes beyond which a message is refused.
+//! * [`types`] — value types shared by messages: surfaces, icons, materials,
+//!   versions, presence.
+//! * [`client`] — client → server messages ([`ClientMessage`]) and
+//!   [`parse_client`], the one entry point for untrusted text.
+//! * [`server`] — server → client events ([`ServerMessage`]).
+//! * [`validate`] — checks every client message before it touches state.
+//! * [`frame`] — the binary geometry frame ([`GeometryFrame`]).
+//!
+//! `protocol/README.md` documents the sequence of a connection, an example
+//! of every message and the frame layout byte by byte.
+
+pub mod client;
+pub mod error;
+pub mod frame;
+pub mod limits;
+pub mod server;
+pub mod types;
+pub mod validate;
+pub mod version;
+
+pub use client::{ClientEnvelope, ClientMessage, parse_client};
+pub use error::{ErrorCode, ProtocolError};
+pub use frame::{FrameIcon, GeometryFrame};
+pub use server::ServerMessage;
+pub use types::*;
+pub use version::PROTOCOL_VERSION;

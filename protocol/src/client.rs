@@ -1,0 +1,254 @@
+//! Client → server messages and [`parse_client`], the single entry point
+//! for untrusted text from the network.
+//!
+//! Every message is a JSON object with a `type` tag and an optional `req`
+//! number that the server echoes in its `ack` or `error`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{ErrorCode, ProtocolError};
+use crate::limits::MAX_MESSAGE_BYTES;
+use crate::types::{
+    Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Material, Role, Vec3,
+};
+
+/// A client message with its optional request number.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ClientEnvelope {
+    /// Echoed in the reply (`ack` or `error`) so the client can match them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub req: Option<u64>,
+    /// The message.
+    #[serde(flatten)]
+    pub msg: ClientMessage,
+}
+
+/// Everything a client may ask of the server.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ClientMessage {
+    /// The first message of a connection.
+    Hello {
+        /// Must equal [`crate::PROTOCOL_VERSION`].
+        protocol: u32,
+        /// An editor, viewer or device token.
+        token: String,
+        /// The design to join.
+        design: u64,
+        /// A display name for presence.
+        client_name: String,
+        /// What kind of program this is.
+        client_kind: ClientKind,
+    },
+    /// List the designs (answered with `designs`).
+    ListDesigns,
+    /// Create a design from the demo template (editors only; answered with `designs`).
+    CreateDesign {
+        /// Its name.
+        name: String,
+    },
+    /// Delete a design other than the one joined (editors only).
+    DeleteDesign {
+        /// Its id.
+        design: u64,
+    },
+    /// Create an icon (answered with `icon_created`).
+    CreateIcon {
+        /// What it should be.
+        spec: IconSpec,
+    },
+    /// Re-anchor an icon (move it in (u,v), or reshape its curve/region).
+    EditIcon {
+        /// The icon.
+        icon: u64,
+        /// Its new anchor.
+        anchor: Anchor,
+    },
+    /// Set an icon's target (a constraint's position/vector/normal; a
+    /// load's pulled-to point) and solve.
+    MoveIcon {
+        /// The icon.
+        icon: u64,
+        /// The new target.
+        xyz: Vec3,
+    },
+    /// Delete an icon.
+    DeleteIcon {
+        /// The icon.
+        icon: u64,
+    },
+    /// Switch an icon's role (constraint ↔ load; position ↔ tangent ↔ normal).
+    SetRole {
+        /// The icon.
+        icon: u64,
+        /// The new role.
+        role: Role,
+    },
+    /// Switch an icon's state.
+    SetState {
+        /// The icon.
+        icon: u64,
+        /// The new state.
+        state: IconState,
+    },
+    /// Bind a device sensor to an icon.
+    BindSensor {
+        /// The icon.
+        icon: u64,
+        /// The sensor, e.g. "right-hand".
+        sensor: String,
+    },
+    /// Unbind a device sensor from an icon.
+    UnbindSensor {
+        /// The icon.
+        icon: u64,
+        /// The sensor.
+        sensor: String,
+    },
+    /// Grab an icon: it becomes driving and held by this client.
+    DragStart {
+        /// The icon.
+        icon: u64,
+    },
+    /// Drag a held icon to `xyz` (coalesced: only the newest counts).
+    Drag {
+        /// The icon.
+        icon: u64,
+        /// Where the pointer or hand is.
+        xyz: Vec3,
+    },
+    /// Release a held icon: it becomes passive and the shape is kept.
+    DragEnd {
+        /// The icon.
+        icon: u64,
+    },
+    /// A device sample from the bridge.
+    DeviceSample {
+        /// The sensor, e.g. "right-hand".
+        sensor: String,
+        /// Position in model space.
+        position: Vec3,
+        /// Orientation quaternion (w, x, y, z).
+        orientation: [f64; 4],
+        /// Glove finger flexion in radians, if a glove is part of the sensor.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        flexion: Option<Vec<f64>>,
+        /// Button bitmask.
+        #[serde(default)]
+        buttons: u32,
+        /// Device time, microseconds.
+        time_us: u64,
+    },
+    /// A device's condition changed.
+    DeviceStatus {
+        /// The device name from the bridge's config.
+        device: String,
+        /// Its condition.
+        condition: DeviceCondition,
+        /// Details.
+        #[serde(default)]
+        message: String,
+    },
+    /// Set the material (α, β).
+    SetMaterial {
+        /// The new material.
+        material: Material,
+    },
+    /// Commit the current shape as a new version.
+    Commit {
+        /// The commit message.
+        message: String,
+    },
+    /// Back to the last committed version.
+    Revert,
+    /// Undo the last edit.
+    Undo,
+    /// Redo the last undone edit.
+    Redo,
+    /// List the committed versions (answered with `versions`).
+    ListVersions,
+    /// Make a committed version the working state.
+    RestoreVersion {
+        /// The version number.
+        version: u64,
+    },
+    /// Tell others where this client's pointer or hand is.
+    Presence {
+        /// The pointer, if any.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        pointer: Option<Vec3>,
+    },
+    /// Liveness check (answered with `pong`).
+    Ping,
+}
+
+/// The `type` tags of every client message, for telling an unknown type
+/// from a malformed message.
+pub const CLIENT_TYPES: &[&str] = &[
+    "hello",
+    "list_designs",
+    "create_design",
+    "delete_design",
+    "create_icon",
+    "edit_icon",
+    "move_icon",
+    "delete_icon",
+    "set_role",
+    "set_state",
+    "bind_sensor",
+    "unbind_sensor",
+    "drag_start",
+    "drag",
+    "drag_end",
+    "device_sample",
+    "device_status",
+    "set_material",
+    "commit",
+    "revert",
+    "undo",
+    "redo",
+    "list_versions",
+    "restore_version",
+    "presence",
+    "ping",
+];
+
+/// Parses and validates one text message from a client: `too_large`,
+/// `malformed`, `unknown_message`, `not_finite` or `out_of_range` on failure.
+/// Never panics, whatever the input.
+pub fn parse_client(text: &str) -> Result<ClientEnvelope, ProtocolError> {
+    if text.len() > MAX_MESSAGE_BYTES {
+        return Err(ProtocolError::new(
+            ErrorCode::TooLarge,
+            format!(
+                "message of {} bytes exceeds {MAX_MESSAGE_BYTES}",
+                text.len()
+            ),
+        ));
+    }
+    let value: serde_json::Value = serde_json::from_str(text)
+        .map_err(|e| ProtocolError::new(ErrorCode::Malformed, format!("not JSON: {e}")))?;
+    let Some(kind) = value.get("type") else {
+        return Err(ProtocolError::new(
+            ErrorCode::Malformed,
+            "no \"type\" field",
+        ));
+    };
+    let Some(kind) = kind.as_str().map(str::to_owned) else {
+        return Err(ProtocolError::new(
+            ErrorCode::Malformed,
+            "\"type\" is not a string",
+        ));
+    };
+    if !CLIENT_TYPES.contains(&kind.as_str()) {
+        let shown: String = kind.chars().take(64).collect();
+        return Err(ProtocolError::new(
+            ErrorCode::UnknownMessage,
+            format!("unknown message type {shown:?}"),
+        ));
+    }
+    let envelope: ClientEnvelope = serde_json::from_value(value)
+        .map_err(|e| ProtocolError::new(ErrorCode::Malformed, format!("bad {kind}: {e}")))?;
+    envelope.msg.validate()?;
+    Ok(envelope)
+}

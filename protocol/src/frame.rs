@@ -1,0 +1,274 @@
+//! The binary geometry frame: the solved control net of a design, its knots
+//! and the positions of its icons, sent as one binary WebSocket message per
+//! solved frame. Clients tessellate it themselves, so a frame costs
+//! kilobytes where a mesh would cost megabytes (protocol/README.md gives
+//! the layout byte by byte and the measured sizes).
+//!
+//! All integers and floats are little-endian. Knots are f64 (exact knot
+//! values matter for evaluation), control points f32 (display precision; the
+//! server keeps f64). Sections are aligned so JavaScript can view the arrays
+//! with `Float64Array` / `Float32Array` without copying.
+
+use crate::error::{ErrorCode, ProtocolError};
+use crate::limits::{MAX_FRAME_ICONS, MAX_GRID};
+use crate::version::PROTOCOL_VERSION;
+
+/// The first four bytes of every frame: "VSGF".
+pub const MAGIC: [u8; 4] = *b"VSGF";
+/// Frame kind: a tensor-product B-spline surface.
+pub const KIND_SURFACE: u8 = 1;
+/// Flag: this frame comes from a drag (more will follow soon).
+pub const FLAG_DRAG: u16 = 1;
+/// Size of the fixed header in bytes.
+pub const HEADER_BYTES: usize = 40;
+/// Size of one icon record in bytes.
+pub const ICON_BYTES: usize = 24;
+/// Highest degree a frame may carry.
+pub const MAX_DEGREE: u8 = 15;
+
+/// An icon's id and position in a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameIcon {
+    /// The icon id.
+    pub id: u64,
+    /// Its position on the solved surface.
+    pub xyz: [f32; 3],
+}
+
+/// One solved frame of a design.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeometryFrame {
+    /// The design.
+    pub design: u64,
+    /// The shape revision (increases with every change).
+    pub revision: u64,
+    /// Bit flags ([`FLAG_DRAG`]).
+    pub flags: u16,
+    /// Degree along u.
+    pub degree_u: u8,
+    /// Degree along v.
+    pub degree_v: u8,
+    /// Control points along u.
+    pub nu: u32,
+    /// Control points along v.
+    pub nv: u32,
+    /// nu + degree_u + 1 knots.
+    pub knots_u: Vec<f64>,
+    /// nv + degree_v + 1 knots.
+    pub knots_v: Vec<f64>,
+    /// nu · nv control points, row-major (i * nv + j, i along u).
+    pub points: Vec<[f32; 3]>,
+    /// Icon positions.
+    pub icons: Vec<FrameIcon>,
+}
+
+fn bad(message: impl Into<String>) -> ProtocolError {
+    ProtocolError::new(ErrorCode::Malformed, message)
+}
+
+fn pad8(n: usize) -> usize {
+    n.div_ceil(8) * 8
+}
+
+/// Byte offsets of the sections of a frame with the given sizes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Offset of the u knots (f64).
+    pub knots_u: usize,
+    /// Offset of the v knots (f64).
+    pub knots_v: usize,
+    /// Offset of the control points (f32 × 3 each).
+    pub points: usize,
+    /// Offset of the icon records.
+    pub icons: usize,
+    /// Total length.
+    pub total: usize,
+}
+
+impl Layout {
+    /// The layout, or `None` if the sizes overflow.
+    pub fn new(nu: usize, nv: usize, du: usize, dv: usize, icons: usize) -> Option<Self> {
+        let knots_u = HEADER_BYTES;
+        let knots_v = knots_u.checked_add(nu.checked_add(du + 1)?.checked_mul(8)?)?;
+        let points = knots_v.checked_add(nv.checked_add(dv + 1)?.checked_mul(8)?)?;
+        let point_bytes = nu.checked_mul(nv)?.checked_mul(12)?;
+        let icons_at = pad8(points.checked_add(point_bytes)?);
+        let total = icons_at.checked_add(icons.checked_mul(ICON_BYTES)?)?;
+        Some(Self {
+            knots_u,
+            knots_v,
+            points,
+            icons: icons_at,
+            total,
+        })
+    }
+}
+
+impl GeometryFrame {
+    fn layout(&self) -> Result<Layout, ProtocolError> {
+        Layout::new(
+            self.nu as usize,
+            self.nv as usize,
+            self.degree_u as usize,
+            self.degree_v as usize,
+            self.icons.len(),
+        )
+        .ok_or_else(|| ProtocolError::new(ErrorCode::TooLarge, "frame sizes overflow"))
+    }
+
+    /// Checks the sizes, knots and numbers (the same checks `decode` makes).
+    pub fn check(&self) -> Result<(), ProtocolError> {
+        let (nu, nv) = (self.nu as usize, self.nv as usize);
+        if nu > MAX_GRID || nv > MAX_GRID || self.icons.len() > MAX_FRAME_ICONS {
+            return Err(ProtocolError::new(
+                ErrorCode::TooLarge,
+                "frame exceeds the size limits",
+            ));
+        }
+        for (d, n) in [(self.degree_u, nu), (self.degree_v, nv)] {
+            if d == 0 || d > MAX_DEGREE || n < d as usize + 1 {
+                return Err(bad(format!("degree {d} with {n} control points")));
+            }
+        }
+        if self.knots_u.len() != nu + self.degree_u as usize + 1
+            || self.knots_v.len() != nv + self.degree_v as usize + 1
+        {
+            return Err(bad("knot count does not match degree and control points"));
+        }
+        for k in [&self.knots_u, &self.knots_v] {
+            if k.iter().any(|x| !x.is_finite()) || k.windows(2).any(|w| w[1] < w[0]) {
+                return Err(bad("knots must be finite and non-decreasing"));
+            }
+        }
+        if self.points.len() != nu * nv {
+            return Err(bad("control point count does not match nu · nv"));
+        }
+        let finite = |p: &[f32; 3]| p.iter().all(|x| x.is_finite());
+        if !self.points.iter().all(finite) || !self.icons.iter().all(|i| finite(&i.xyz)) {
+            return Err(ProtocolError::new(
+                ErrorCode::NotFinite,
+                "frame has a non-finite coordinate",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The frame as bytes (after [`check`](Self::check)).
+    pub fn encode(&self) -> Result<Vec<u8>, ProtocolError> {
+        self.check()?;
+        let layout = self.layout()?;
+        let mut out = Vec::with_capacity(layout.total);
+        out.extend_from_slice(&MAGIC);
+        out.push(KIND_SURFACE);
+        out.push(PROTOCOL_VERSION as u8);
+        out.extend_from_slice(&self.flags.to_le_bytes());
+        out.extend_from_slice(&self.design.to_le_bytes());
+        out.extend_from_slice(&self.revision.to_le_bytes());
+        out.extend_from_slice(&self.nu.to_le_bytes());
+        out.extend_from_slice(&self.nv.to_le_bytes());
+        out.push(self.degree_u);
+        out.push(self.degree_v);
+        out.extend_from_slice(&[0, 0]);
+        out.extend_from_slice(&(self.icons.len() as u32).to_le_bytes());
+        debug_assert_eq!(out.len(), HEADER_BYTES);
+        for k in self.knots_u.iter().chain(&self.knots_v) {
+            out.extend_from_slice(&k.to_le_bytes());
+        }
+        for p in &self.points {
+            for c in p {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        out.resize(layout.icons, 0);
+        for icon in &self.icons {
+            out.extend_from_slice(&icon.id.to_le_bytes());
+            for c in icon.xyz {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+            out.extend_from_slice(&[0; 4]);
+        }
+        debug_assert_eq!(out.len(), layout.total);
+        Ok(out)
+    }
+
+    /// Parses a frame. Any byte string gives a frame or an error; never a panic.
+    pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
+        if bytes.len() < HEADER_BYTES {
+            return Err(bad(format!(
+                "frame of {} bytes is shorter than its header",
+                bytes.len()
+            )));
+        }
+        if bytes[0..4] != MAGIC {
+            return Err(bad("not a geometry frame (bad magic)"));
+        }
+        if bytes[4] != KIND_SURFACE {
+            return Err(bad(format!("unknown frame kind {}", bytes[4])));
+        }
+        if bytes[5] as u32 != PROTOCOL_VERSION {
+            return Err(ProtocolError::new(
+                ErrorCode::BadVersion,
+                format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
+            ));
+        }
+        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
+        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+        let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let (nu, nv) = (u32_at(24), u32_at(28));
+        let (degree_u, degree_v) = (bytes[32], bytes[33]);
+        let n_icons = u32_at(36) as usize;
+        if nu as usize > MAX_GRID || nv as usize > MAX_GRID || n_icons > MAX_FRAME_ICONS {
+            return Err(ProtocolError::new(
+                ErrorCode::TooLarge,
+                "frame exceeds the size limits",
+            ));
+        }
+        let layout = Layout::new(
+            nu as usize,
+            nv as usize,
+            degree_u as usize,
+            degree_v as usize,
+            n_icons,
+        )
+        .ok_or_else(|| bad("frame sizes overflow"))?;
+        if bytes.len() != layout.total {
+            return Err(bad(format!(
+                "frame has {} bytes, its header says {}",
+                bytes.len(),
+                layout.total
+            )));
+        }
+        let nku = nu as usize + degree_u as usize + 1;
+        let nkv = nv as usize + degree_v as usize + 1;
+        let frame = Self {
+            design: u64_at(8),
+            revision: u64_at(16),
+            flags: u16_at(6),
+            degree_u,
+            degree_v,
+            nu,
+            nv,
+            knots_u: (0..nku).map(|k| f64_at(layout.knots_u + 8 * k)).collect(),
+            knots_v: (0..nkv).map(|k| f64_at(layout.knots_v + 8 * k)).collect(),
+            points: (0..nu as usize * nv as usize)
+                .map(|k| {
+                    let o = layout.points + 12 * k;
+                    [f32_at(o), f32_at(o + 4), f32_at(o + 8)]
+                })
+                .collect(),
+            icons: (0..n_icons)
+                .map(|k| {
+                    let o = layout.icons + ICON_BYTES * k;
+                    FrameIcon {
+                        id: u64_at(o),
+                        xyz: [f32_at(o + 8), f32_at(o + 12), f32_at(o + 16)],
+                    }
+                })
+                .collect(),
+        };
+        frame.check()?;
+        Ok(frame)
+    }
+}

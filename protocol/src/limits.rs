@@ -1,0 +1,20 @@
+//! Sizes beyond which a message is refused with `too_large` / `out_of_range`.
+
+/// Largest accepted text message, in bytes.
+pub const MAX_MESSAGE_BYTES: usize = 256 * 1024;
+/// Longest name, token, sensor id or commit message, in bytes.
+pub const MAX_STRING_BYTES: usize = 1024;
+/// Most control points in a curve icon's (u,v) curve.
+pub const MAX_CURVE_POINTS: usize = 256;
+/// Most knots in any knot vector sent by a client.
+pub const MAX_KNOTS: usize = 1024;
+/// Most glove flexion values in one device sample.
+pub const MAX_FLEXION: usize = 32;
+/// Most sensors bound to one icon.
+pub const MAX_SENSORS_PER_ICON: usize = 16;
+/// Largest control grid (each direction) a frame may carry.
+pub const MAX_GRID: usize = 2048;
+/// Most icons a frame may carry.
+pub const MAX_FRAME_ICONS: usize = 65_536;
+/// Largest magnitude accepted for a coordinate or material parameter.
+pub const MAX_MAGNITUDE: f64 = 1e9;

@@ -1,0 +1,123 @@
+//! Server → client events, sent as JSON text; geometry goes in binary
+//! frames ([`crate::frame`]).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::ErrorCode;
+use crate::types::{
+    Access, DesignInfo, Icon, Material, PresenceEntry, SurfaceData, Vec3, VersionInfo,
+};
+
+/// Everything the server tells a client.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerMessage {
+    /// The hello was accepted.
+    Welcome {
+        /// This connection's id (as used in presence and `holder`).
+        client_id: u64,
+        /// What it may do.
+        access: Access,
+        /// The joined design.
+        design: u64,
+        /// The server's protocol version.
+        protocol: u32,
+    },
+    /// A request succeeded.
+    Ack {
+        /// The request's `req`.
+        req: u64,
+    },
+    /// A request failed and changed nothing.
+    Error {
+        /// The request's `req`, if it had one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        req: Option<u64>,
+        /// The stable code.
+        code: ErrorCode,
+        /// What went wrong.
+        message: String,
+    },
+    /// The full state, sent on join and after revert, undo, redo or restore.
+    Snapshot {
+        /// The design.
+        design: DesignInfo,
+        /// Increases with every change of shape.
+        revision: u64,
+        /// The surface.
+        surface: SurfaceData,
+        /// The material.
+        material: Material,
+        /// Every icon.
+        icons: Vec<Icon>,
+        /// The committed versions, oldest first.
+        versions: Vec<VersionInfo>,
+        /// Who is here.
+        presence: Vec<PresenceEntry>,
+        /// Whether undo has something to undo.
+        can_undo: bool,
+        /// Whether redo has something to redo.
+        can_redo: bool,
+    },
+    /// An icon was created.
+    IconCreated {
+        /// The new icon.
+        icon: Icon,
+    },
+    /// An icon changed (role, state, target, sensors, holder).
+    IconUpdated {
+        /// The icon as it is now.
+        icon: Icon,
+    },
+    /// An icon was deleted.
+    IconDeleted {
+        /// Its id.
+        icon: u64,
+    },
+    /// The material changed.
+    MaterialChanged {
+        /// The new material.
+        material: Material,
+    },
+    /// A version was committed.
+    Committed {
+        /// The new version.
+        version: VersionInfo,
+    },
+    /// The committed versions, oldest first.
+    Versions {
+        /// The versions.
+        versions: Vec<VersionInfo>,
+    },
+    /// The designs on the server.
+    Designs {
+        /// The designs.
+        designs: Vec<DesignInfo>,
+    },
+    /// Who is here and what each holds.
+    Presence {
+        /// Every connected client of the design.
+        clients: Vec<PresenceEntry>,
+    },
+    /// After a solve during a drag: where the dragged icon actually went,
+    /// which the bridge's spring model needs (Δy in paper 003).
+    IconFeedback {
+        /// The icon.
+        icon: u64,
+        /// Where the pointer asked it to be.
+        requested: Vec3,
+        /// Where it is on the solved surface.
+        actual: Vec3,
+        /// The shape revision this belongs to.
+        revision: u64,
+    },
+    /// Undo/redo availability changed.
+    History {
+        /// Whether undo has something to undo.
+        can_undo: bool,
+        /// Whether redo has something to redo.
+        can_redo: bool,
+    },
+    /// Answer to `ping`.
+    Pong,
+}
