@@ -54,37 +54,65 @@ impl IntoResponse for ApiError {
 
 impl From<crate::design::CommandError> for ApiError {
     fn from(e: crate::design::CommandError) -> Self {
-        let (status, code) = match e.kind {
-            ErrorKind::Forbidden => (StatusCode::FORBIDDEN, "forbidden"),
-            ErrorKind::UnknownDesign => (StatusCode::NOT_FOUND, "unknown_design"),
-            ErrorKind::UnknownIcon => (StatusCode::NOT_FOUND, "unknown_icon"),
-            ErrorKind::UnknownVersion => (StatusCode::NOT_FOUND, "unknown_version"),
-            ErrorKind::InvalidValue => (StatusCode::BAD_REQUEST, "invalid_value"),
-            ErrorKind::OutOfDomain => (StatusCode::BAD_REQUEST, "out_of_domain"),
-            ErrorKind::NothingToUndo => (StatusCode::CONFLICT, "nothing_to_undo"),
-            ErrorKind::Solver => (StatusCode::UNPROCESSABLE_ENTITY, "solver"),
-            ErrorKind::Unavailable => (StatusCode::SERVICE_UNAVAILABLE, "unavailable"),
-            ErrorKind::Storage => (StatusCode::INTERNAL_SERVER_ERROR, "storage"),
+        let status = match e.kind {
+            ErrorKind::Forbidden => StatusCode::FORBIDDEN,
+            ErrorKind::UnknownDesign | ErrorKind::UnknownIcon | ErrorKind::UnknownVersion => {
+                StatusCode::NOT_FOUND
+            }
+            ErrorKind::InvalidValue
+            | ErrorKind::NotFinite
+            | ErrorKind::OutOfDomain
+            | ErrorKind::Unsupported => StatusCode::BAD_REQUEST,
+            ErrorKind::NothingToUndo | ErrorKind::Conflict => StatusCode::CONFLICT,
+            ErrorKind::Solver => StatusCode::UNPROCESSABLE_ENTITY,
+            ErrorKind::Unavailable | ErrorKind::Storage => StatusCode::INTERNAL_SERVER_ERROR,
         };
-        ApiError(status, code, e.message)
+        let w = crate::convert::WireError::from(e);
+        ApiError(status, code_name(w.code), w.message)
+    }
+}
+
+/// The snake_case name of a protocol error code.
+fn code_name(code: vsculpt_protocol::ErrorCode) -> &'static str {
+    use vsculpt_protocol::ErrorCode as C;
+    match code {
+        C::BadVersion => "bad_version",
+        C::BadToken => "bad_token",
+        C::BadHandshake => "bad_handshake",
+        C::Malformed => "malformed",
+        C::UnknownMessage => "unknown_message",
+        C::TooLarge => "too_large",
+        C::NotFinite => "not_finite",
+        C::OutOfRange => "out_of_range",
+        C::UnknownDesign => "unknown_design",
+        C::UnknownIcon => "unknown_icon",
+        C::UnknownVersion => "unknown_version",
+        C::OutOfDomain => "out_of_domain",
+        C::Forbidden => "forbidden",
+        C::Conflict => "conflict",
+        C::Unsupported => "unsupported",
+        C::Solver => "solver",
+        C::Internal => "internal",
     }
 }
 
 fn unauthorized() -> ApiError {
     ApiError(
         StatusCode::UNAUTHORIZED,
-        "unauthorized",
+        "bad_token",
         "a valid token is required (Authorization: Bearer <token> or ?token=)".into(),
     )
 }
 
 fn storage(e: impl std::fmt::Display) -> ApiError {
-    ApiError(StatusCode::INTERNAL_SERVER_ERROR, "storage", e.to_string())
+    ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string())
 }
 
 /// The token of a request, from the Authorization header or `?token=`.
 pub fn request_token(headers: &HeaderMap, query: &HashMap<String, String>) -> Option<String> {
-    if let Some(v) = headers.get(header::AUTHORIZATION).and_then(|v| v.to_str().ok())
+    if let Some(v) = headers
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
         && let Some(t) = v.strip_prefix("Bearer ")
     {
         return Some(t.trim().to_string());
@@ -162,7 +190,11 @@ async fn healthz() -> impl IntoResponse {
     axum::Json(json!({ "status": "ok" }))
 }
 
-async fn metrics(State(s): State<AppState>, headers: HeaderMap, Query(q): Q) -> Result<Response, ApiError> {
+async fn metrics(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
     let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
     match s.caller(&token).await? {
         Some(Caller::Admin) | Some(Caller::Design(_, Role::Editor)) => Ok((
@@ -178,7 +210,11 @@ fn design_json(d: &DesignRecord, role: Option<Role>) -> serde_json::Value {
     json!({ "id": d.id, "name": d.name, "created_ms": d.created_ms, "role": role })
 }
 
-async fn list_designs(State(s): State<AppState>, headers: HeaderMap, Query(q): Q) -> Result<Response, ApiError> {
+async fn list_designs(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
     let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
     let caller = s.caller(&token).await?.ok_or_else(unauthorized)?;
     let store = s.store.clone();
@@ -226,7 +262,7 @@ async fn create_design(
     if name.is_empty() || name.len() > 200 {
         return Err(ApiError(
             StatusCode::BAD_REQUEST,
-            "invalid_value",
+            "out_of_range",
             "name must have 1 to 200 characters".into(),
         ));
     }
@@ -234,7 +270,7 @@ async fn create_design(
     if !(4..=200).contains(&nu) || !(4..=200).contains(&nv) {
         return Err(ApiError(
             StatusCode::BAD_REQUEST,
-            "invalid_value",
+            "out_of_range",
             "nu and nv must be between 4 and 200".into(),
         ));
     }
@@ -259,8 +295,14 @@ async fn get_design(
 ) -> Result<Response, ApiError> {
     let role = need_role(&s, &headers, &q, id).await?;
     let handle = s.hub.open(id).await?;
-    let doc = handle.state().await?;
-    Ok(axum::Json(json!({ "id": id, "role": role, "design": &*doc })).into_response())
+    let view = handle.state().await?;
+    Ok(axum::Json(json!({
+        "id": id,
+        "role": role,
+        "revision": view.revision,
+        "design": &*view.doc,
+    }))
+    .into_response())
 }
 
 async fn list_versions(
@@ -316,16 +358,21 @@ async fn import(
             "only an editor may import".into(),
         ));
     }
-    let text = std::str::from_utf8(&body)
-        .map_err(|_| ApiError(StatusCode::BAD_REQUEST, "malformed", "IGES must be ASCII".into()))?;
+    let text = std::str::from_utf8(&body).map_err(|_| {
+        ApiError(
+            StatusCode::BAD_REQUEST,
+            "malformed",
+            "IGES must be ASCII".into(),
+        )
+    })?;
     let surfaces = cad::read_iges(text)
-        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "invalid_iges", e.to_string()))?;
+        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "malformed", format!("IGES: {e}")))?;
     let handle = s.hub.open(id).await?;
     let current = handle.state().await?;
-    let doc = crate::design::model::with_surface(&current, &surfaces[0])?;
+    let doc = crate::design::model::with_surface(&current.doc, &surfaces[0])?;
     handle.replace(doc).await?;
-    let state = handle.state().await?;
-    Ok(axum::Json(json!({ "id": id, "design": &*state })).into_response())
+    let view = handle.state().await?;
+    Ok(axum::Json(json!({ "id": id, "design": &*view.doc })).into_response())
 }
 
 async fn export(
@@ -336,22 +383,26 @@ async fn export(
 ) -> Result<Response, ApiError> {
     need_role(&s, &headers, &q, id).await?;
     let ext = file.strip_prefix("export.").ok_or_else(|| {
-        ApiError(StatusCode::NOT_FOUND, "not_found", format!("no resource {file}"))
+        ApiError(
+            StatusCode::NOT_FOUND,
+            "unknown_message",
+            format!("no resource {file}"),
+        )
     })?;
     if !matches!(ext, "igs" | "obj" | "stl" | "gltf") {
         return Err(ApiError(
             StatusCode::NOT_FOUND,
-            "not_found",
+            "unknown_message",
             format!("unknown export format {ext} (igs, obj, stl, gltf)"),
         ));
     }
     let handle = s.hub.open(id).await?;
-    let doc = handle.state().await?;
+    let doc = handle.state().await?.doc.clone();
     let name = doc.name.clone();
     let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
     if ext == "igs" {
         let text = cad::write_iges(&doc.surface.to_iges(), &IgesMeta::now(&name, "vsculpt"))
-            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "export", e.to_string()))?;
+            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
         return Ok((
             [
                 (header::CONTENT_TYPE, "model/iges".to_string()),
@@ -363,11 +414,14 @@ async fn export(
     }
     let m = handle.mesh(8).await?;
     let mesh = Mesh::new(&m.positions, &m.normals, &m.indices)
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "export", e.to_string()))?;
+        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
     let (ctype, body): (&str, Vec<u8>) = match ext {
         "obj" => ("model/obj", cad::write_obj(&mesh, &name).into_bytes()),
         "stl" => ("model/stl", cad::write_stl(&mesh, &name)),
-        _ => ("model/gltf+json", cad::write_gltf(&mesh, &name).into_bytes()),
+        _ => (
+            "model/gltf+json",
+            cad::write_gltf(&mesh, &name).into_bytes(),
+        ),
     };
     Ok((
         [

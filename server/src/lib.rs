@@ -3,12 +3,18 @@
 //! fans geometry out to WebSocket clients, persists designs and versions in
 //! an embedded SQLite store and exchanges surfaces as IGES and meshes.
 //!
-//! The binary (`src/main.rs`) only parses the command line; everything else
-//! lives here so tests and benches can start a real server in-process.
+//! The binary (`src/main.rs`) only parses the command line and prints the
+//! banner; everything else lives here so tests and benches can start a real
+//! server in-process ([`server::Server`], [`server::serve`]).
 
+pub mod app;
 pub mod cad;
 pub mod config;
+pub mod convert;
+pub mod design;
 pub mod metrics;
+pub mod server;
 pub mod shutdown;
 pub mod store;
 pub mod web;
+pub mod ws;

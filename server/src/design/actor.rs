@@ -9,6 +9,7 @@
 //!   full state (see [`Request::Resync`]).
 
 use super::command::{Ack, Command};
+use super::doc::{IconDoc, MaterialDoc};
 use super::error::{CommandError, ErrorKind};
 use super::model::{DesignDoc, DesignModel, Geometry};
 use super::undo::UndoStack;
@@ -44,35 +45,80 @@ pub struct Presence {
     pub client: ClientInfo,
     /// The icon it is dragging, if any.
     pub holding: Option<u64>,
+    /// Where its pointer or hand is, if it said.
+    pub pointer: Option<[f64; 3]>,
+}
+
+/// The full state a client needs to (re)build its view.
+#[derive(Clone, Debug)]
+pub struct SnapshotView {
+    /// The design id.
+    pub design: DesignId,
+    /// The document.
+    pub doc: Arc<DesignDoc>,
+    /// Shape revision.
+    pub revision: u64,
+    /// Committed versions, oldest first.
+    pub versions: Arc<Vec<VersionInfo>>,
+    /// Who is here.
+    pub presence: Arc<Vec<Presence>>,
+    /// Undo available.
+    pub can_undo: bool,
+    /// Redo available.
+    pub can_redo: bool,
+}
+
+/// Where a dragged icon actually went (the bridge's spring model needs it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Feedback {
+    /// The icon.
+    pub icon: u64,
+    /// Where the client asked it to be.
+    pub requested: DVec3,
+    /// Where it is on the solved surface.
+    pub actual: DVec3,
+    /// Shape revision.
+    pub revision: u64,
 }
 
 /// An ordered event every client of a design receives.
 #[derive(Clone, Debug)]
 pub enum DesignEvent {
-    /// The design's full state changed (icons, material, surface layout).
-    State(Arc<DesignDoc>),
-    /// Who is here and what they hold.
-    Presence(Arc<Vec<Presence>>),
+    /// The whole state (after undo, redo, revert, restore, import).
+    Snapshot(Arc<SnapshotView>),
+    /// An icon was created (with its holder).
+    IconCreated(IconDoc, Option<u64>),
+    /// An icon changed (with its holder).
+    IconUpdated(IconDoc, Option<u64>),
+    /// An icon was deleted.
+    IconDeleted(u64),
+    /// The material changed.
+    MaterialChanged(MaterialDoc),
     /// A version was committed.
     Committed(VersionInfo),
-    /// The working state was replaced by a version (restore or revert).
-    Restored(u64),
-    /// A device bridge reported something (forwarded verbatim).
-    Device(Arc<serde_json::Value>),
+    /// Who is here and what they hold.
+    Presence(Arc<Vec<Presence>>),
+    /// Undo/redo availability changed.
+    History {
+        /// Undo available.
+        can_undo: bool,
+        /// Redo available.
+        can_redo: bool,
+    },
     /// The design was deleted; the actor stops.
-    Deleted,
+    Deleted(DesignId),
 }
 
 /// What a joining (or resyncing) client gets, consistent with each other.
 pub struct Joined {
     /// Full state at the moment of joining.
-    pub state: Arc<DesignDoc>,
-    /// Current presence.
-    pub presence: Arc<Vec<Presence>>,
+    pub view: Arc<SnapshotView>,
     /// Events after that state.
     pub events: broadcast::Receiver<DesignEvent>,
     /// Latest geometry.
     pub geometry: watch::Receiver<Arc<Geometry>>,
+    /// This client's drag feedback (latest wins).
+    pub feedback: watch::Receiver<Option<Feedback>>,
 }
 
 /// A request to the actor.
@@ -86,6 +132,8 @@ pub enum Request {
     },
     /// A lagging client asks for a fresh state and event stream.
     Resync {
+        /// Its connection id.
+        client: u64,
         /// The answer.
         reply: oneshot::Sender<Joined>,
     },
@@ -103,17 +151,22 @@ pub enum Request {
         /// The answer (drag frames pass `None`: no ack per frame).
         reply: Option<oneshot::Sender<Result<Ack, CommandError>>>,
     },
-    /// Forward a device report to every client.
-    Device {
-        /// Connection id of the bridge.
+    /// A client's pointer moved (presence).
+    Pointer {
+        /// Connection id.
         client: u64,
-        /// The report.
-        report: serde_json::Value,
+        /// Where, if anywhere.
+        pointer: Option<[f64; 3]>,
+    },
+    /// The committed versions.
+    Versions {
+        /// The answer.
+        reply: oneshot::Sender<Arc<Vec<VersionInfo>>>,
     },
     /// The current full state.
     State {
         /// The answer.
-        reply: oneshot::Sender<Arc<DesignDoc>>,
+        reply: oneshot::Sender<Arc<SnapshotView>>,
     },
     /// A tessellation for mesh export.
     Mesh {
@@ -169,9 +222,9 @@ impl DesignHandle {
     }
 
     /// A fresh state and event stream for a client that lagged.
-    pub async fn resync(&self) -> Result<Joined, CommandError> {
+    pub async fn resync(&self, client: u64) -> Result<Joined, CommandError> {
         let (reply, rx) = oneshot::channel();
-        self.send(Request::Resync { reply }).await?;
+        self.send(Request::Resync { client, reply }).await?;
         rx.await.map_err(|_| gone())
     }
 
@@ -198,9 +251,16 @@ impl DesignHandle {
     }
 
     /// The design's current state.
-    pub async fn state(&self) -> Result<Arc<DesignDoc>, CommandError> {
+    pub async fn state(&self) -> Result<Arc<SnapshotView>, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::State { reply }).await?;
+        rx.await.map_err(|_| gone())
+    }
+
+    /// The committed versions.
+    pub async fn versions(&self) -> Result<Arc<Vec<VersionInfo>>, CommandError> {
+        let (reply, rx) = oneshot::channel();
+        self.send(Request::Versions { reply }).await?;
         rx.await.map_err(|_| gone())
     }
 
@@ -240,27 +300,32 @@ struct Actor {
     persist_delay: Duration,
     undo: UndoStack,
     clients: BTreeMap<u64, Presence>,
+    feedback: BTreeMap<u64, watch::Sender<Option<Feedback>>>,
     events: broadcast::Sender<DesignEvent>,
     geometry: watch::Sender<Arc<Geometry>>,
-    state: Arc<DesignDoc>,
+    doc: Arc<DesignDoc>,
+    versions: Arc<Vec<VersionInfo>>,
     rev: u64,
     persist_at: Option<Instant>,
-    /// The icon being dragged per client, and whether its undo point is taken.
+    /// The icon each client is dragging.
     dragging: BTreeMap<u64, u64>,
+    /// Whether the geometry published last came from a drag.
+    drag_frame: bool,
 }
 
-/// Starts the actor of design `id` from `doc`.
+/// Starts the actor of design `id` from `doc`, with its committed versions.
 pub fn spawn(
     id: DesignId,
     doc: DesignDoc,
+    versions: Vec<VersionInfo>,
     store: Arc<Store>,
     metrics: Arc<Metrics>,
     persist_delay: Duration,
 ) -> Result<DesignHandle, CommandError> {
     let model = DesignModel::load(&doc)?;
     let (tx, rx) = mpsc::channel(REQUEST_CAPACITY);
-    let state = Arc::new(model.to_doc());
-    let geometry = watch::channel(Arc::new(model.geometry(0))).0;
+    let doc = Arc::new(model.to_doc());
+    let geometry = watch::channel(Arc::new(model.geometry(id, 0, false))).0;
     let actor = Actor {
         id,
         model,
@@ -269,12 +334,15 @@ pub fn spawn(
         persist_delay,
         undo: UndoStack::new(64),
         clients: BTreeMap::new(),
+        feedback: BTreeMap::new(),
         events: broadcast::channel(EVENT_CAPACITY).0,
         geometry,
-        state,
+        doc,
+        versions: Arc::new(versions),
         rev: 0,
         persist_at: None,
         dragging: BTreeMap::new(),
+        drag_frame: false,
     };
     metrics.design_open(1);
     tokio::spawn(actor.run(rx));
@@ -285,8 +353,9 @@ impl Actor {
     async fn run(mut self, mut rx: mpsc::Receiver<Request>) {
         let mut batch: Vec<Request> = Vec::with_capacity(64);
         loop {
-            let sleep = async {
-                match self.persist_at {
+            let persist_at = self.persist_at;
+            let sleep = async move {
+                match persist_at {
                     Some(t) => tokio::time::sleep_until(t.into()).await,
                     None => std::future::pending().await,
                 }
@@ -308,39 +377,48 @@ impl Actor {
         tracing::debug!(design = self.id, "design actor stopped");
     }
 
-    /// Runs a batch; returns true when the actor must stop.
-    async fn handle_batch(&mut self, batch: &mut Vec<Request>) -> bool {
-        // Coalesce drag frames: a frame is skipped when a later frame of the
-        // same client and icon follows before any other command of that client.
+    /// Marks drag frames that a later frame of the same client and icon
+    /// supersedes before any other request of that client.
+    fn superseded(batch: &[Request]) -> Vec<bool> {
         let n = batch.len();
         let mut skip = vec![false; n];
         for k in 0..n {
-            if let Request::Command {
+            let Request::Command {
                 client,
                 command: Command::Drag { icon, .. },
                 reply: None,
             } = &batch[k]
-            {
-                for later in &batch[k + 1..] {
-                    if let Request::Command {
-                        client: c2,
-                        command,
-                        ..
-                    } = later
-                    {
-                        if c2 != client {
-                            continue;
-                        }
-                        if let Command::Drag { icon: i2, .. } = command
-                            && i2 == icon
-                        {
-                            skip[k] = true;
-                        }
-                        break;
-                    }
+            else {
+                continue;
+            };
+            for later in &batch[k + 1..] {
+                let c2 = match later {
+                    Request::Command { client: c2, .. }
+                    | Request::Leave { client: c2 }
+                    | Request::Pointer { client: c2, .. } => *c2,
+                    _ => continue,
+                };
+                if c2 != *client {
+                    continue;
                 }
+                if let Request::Command {
+                    command: Command::Drag { icon: i2, .. },
+                    reply: None,
+                    ..
+                } = later
+                    && i2 == icon
+                {
+                    skip[k] = true;
+                }
+                break;
             }
         }
+        skip
+    }
+
+    /// Runs a batch; returns true when the actor must stop.
+    async fn handle_batch(&mut self, batch: &mut Vec<Request>) -> bool {
+        let skip = Self::superseded(batch);
         let mut geometry_dirty = false;
         let mut stop = false;
         for (k, req) in batch.drain(..).enumerate() {
@@ -350,23 +428,28 @@ impl Actor {
             match req {
                 Request::Join { client, reply } => {
                     tracing::info!(design = self.id, client = client.id, role = ?client.role, "client joined");
+                    let id = client.id;
                     self.clients.insert(
-                        client.id,
+                        id,
                         Presence {
                             client,
                             holding: None,
+                            pointer: None,
                         },
                     );
-                    let presence = self.broadcast_presence();
-                    let _ = reply.send(self.joined(presence));
+                    self.broadcast_presence();
+                    let _ = reply.send(self.joined(id));
                 }
-                Request::Resync { reply } => {
-                    let presence = Arc::new(self.clients.values().cloned().collect());
-                    let _ = reply.send(self.joined(presence));
+                Request::Resync { client, reply } => {
+                    let _ = reply.send(self.joined(client));
                 }
                 Request::Leave { client } => {
+                    self.feedback.remove(&client);
                     if let Some(icon) = self.dragging.remove(&client) {
-                        let _ = self.model.release(icon);
+                        if self.model.release(icon).is_ok() {
+                            self.changed();
+                            self.announce_icon(icon);
+                        }
                         geometry_dirty = true;
                     }
                     if self.clients.remove(&client).is_some() {
@@ -379,33 +462,45 @@ impl Actor {
                     reply,
                 } => {
                     let out = self.command(client, command, &mut geometry_dirty).await;
-                    if let Some(reply) = reply {
-                        let _ = reply.send(out);
-                    } else if let Err(e) = out {
-                        tracing::debug!(design = self.id, client, "drag refused: {e}");
+                    match (reply, out) {
+                        (Some(reply), out) => {
+                            let _ = reply.send(out);
+                        }
+                        (None, Err(e)) => {
+                            tracing::debug!(design = self.id, client, "drag refused: {e}");
+                        }
+                        (None, Ok(_)) => {}
                     }
                 }
-                Request::Device { client, report } => {
-                    let mut report = report;
-                    if let Some(obj) = report.as_object_mut() {
-                        obj.insert("client".into(), client.into());
+                Request::Pointer { client, pointer } => {
+                    let changed = match self.clients.get_mut(&client) {
+                        Some(p) if p.pointer != pointer => {
+                            p.pointer = pointer;
+                            true
+                        }
+                        _ => false,
+                    };
+                    if changed {
+                        self.broadcast_presence();
                     }
-                    let _ = self.events.send(DesignEvent::Device(Arc::new(report)));
+                }
+                Request::Versions { reply } => {
+                    let _ = reply.send(self.versions.clone());
                 }
                 Request::State { reply } => {
-                    let _ = reply.send(self.state.clone());
+                    let _ = reply.send(self.view());
                 }
                 Request::Mesh { density, reply } => {
                     let _ = reply.send(self.model.mesh(density));
                 }
                 Request::Replace { doc, reply } => {
-                    let before = self.model.to_doc();
                     let out = match DesignModel::load(&doc) {
                         Ok(m) => {
-                            self.undo.push(before);
+                            self.undo.push(self.model.to_doc());
                             self.model = m;
-                            self.dragging.clear();
-                            self.changed(true);
+                            self.clear_drags();
+                            self.changed();
+                            self.broadcast_snapshot();
                             geometry_dirty = true;
                             Ok(Ack::default())
                         }
@@ -414,7 +509,7 @@ impl Actor {
                     let _ = reply.send(out);
                 }
                 Request::Delete => {
-                    let _ = self.events.send(DesignEvent::Deleted);
+                    let _ = self.events.send(DesignEvent::Deleted(self.id));
                     self.persist_at = None;
                     stop = true;
                 }
@@ -425,25 +520,53 @@ impl Actor {
                 }
             }
         }
-        if geometry_dirty {
+        if geometry_dirty && !stop {
             self.publish_geometry();
         }
         stop
     }
 
-    fn joined(&self, presence: Arc<Vec<Presence>>) -> Joined {
+    fn holders(&self) -> BTreeMap<u64, u64> {
+        self.dragging.iter().map(|(&c, &i)| (i, c)).collect()
+    }
+
+    fn view(&self) -> Arc<SnapshotView> {
+        Arc::new(SnapshotView {
+            design: self.id,
+            doc: self.doc.clone(),
+            revision: self.rev,
+            versions: self.versions.clone(),
+            presence: Arc::new(self.clients.values().cloned().collect()),
+            can_undo: self.undo.can_undo(),
+            can_redo: self.undo.can_redo(),
+        })
+    }
+
+    fn joined(&mut self, client: u64) -> Joined {
+        let feedback = watch::channel(None);
+        self.feedback.insert(client, feedback.0);
         Joined {
-            state: self.state.clone(),
-            presence,
+            view: self.view(),
             events: self.events.subscribe(),
             geometry: self.geometry.subscribe(),
+            feedback: feedback.1,
         }
     }
 
-    fn broadcast_presence(&self) -> Arc<Vec<Presence>> {
+    fn broadcast_presence(&self) {
         let list: Arc<Vec<Presence>> = Arc::new(self.clients.values().cloned().collect());
-        let _ = self.events.send(DesignEvent::Presence(list.clone()));
-        list
+        let _ = self.events.send(DesignEvent::Presence(list));
+    }
+
+    fn broadcast_snapshot(&self) {
+        let _ = self.events.send(DesignEvent::Snapshot(self.view()));
+    }
+
+    fn broadcast_history(&self) {
+        let _ = self.events.send(DesignEvent::History {
+            can_undo: self.undo.can_undo(),
+            can_redo: self.undo.can_redo(),
+        });
     }
 
     fn set_holding(&mut self, client: u64, icon: Option<u64>) {
@@ -459,22 +582,68 @@ impl Actor {
         }
     }
 
-    /// After a change: refresh the shared state (when icons or layout
-    /// changed), schedule a persist.
-    fn changed(&mut self, state_changed: bool) {
-        if state_changed {
-            self.state = Arc::new(self.model.to_doc());
-            let _ = self.events.send(DesignEvent::State(self.state.clone()));
+    fn clear_drags(&mut self) {
+        let held: Vec<u64> = self.dragging.keys().copied().collect();
+        self.dragging.clear();
+        for c in held {
+            self.set_holding(c, None);
         }
+    }
+
+    /// After a change of the document: refresh it, schedule a persist.
+    fn changed(&mut self) {
+        self.doc = Arc::new(self.model.to_doc());
         if self.persist_at.is_none() {
             self.persist_at = Some(Instant::now() + self.persist_delay);
         }
     }
 
+    /// Events for what differs between `before` and the current document.
+    fn announce_diff(&self, before: &DesignDoc) {
+        let holders = self.holders();
+        for icon in &self.doc.icons {
+            match before.icon(icon.id) {
+                None => {
+                    let _ = self.events.send(DesignEvent::IconCreated(
+                        icon.clone(),
+                        holders.get(&icon.id).copied(),
+                    ));
+                }
+                Some(old) if old != icon => {
+                    let _ = self.events.send(DesignEvent::IconUpdated(
+                        icon.clone(),
+                        holders.get(&icon.id).copied(),
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+        for old in &before.icons {
+            if self.doc.icon(old.id).is_none() {
+                let _ = self.events.send(DesignEvent::IconDeleted(old.id));
+            }
+        }
+        if before.material != self.doc.material {
+            let _ = self
+                .events
+                .send(DesignEvent::MaterialChanged(self.doc.material));
+        }
+    }
+
+    fn announce_icon(&self, icon: u64) {
+        if let Some(i) = self.doc.icon(icon) {
+            let _ = self.events.send(DesignEvent::IconUpdated(
+                i.clone(),
+                self.holders().get(&icon).copied(),
+            ));
+        }
+    }
+
     fn publish_geometry(&mut self) {
         self.rev += 1;
-        let g = Arc::new(self.model.geometry(self.rev));
+        let g = Arc::new(self.model.geometry(self.id, self.rev, self.drag_frame));
         self.geometry.send_replace(g);
+        self.drag_frame = false;
     }
 
     async fn persist(&mut self) {
@@ -495,78 +664,157 @@ impl Actor {
         self.clients.get(&client).map(|p| p.client.role)
     }
 
+    fn check_holder(&self, client: u64, icon: u64) -> Result<(), CommandError> {
+        match self.holders().get(&icon) {
+            Some(&holder) if holder != client => Err(CommandError::new(
+                ErrorKind::Conflict,
+                format!("icon {icon} is held by client {holder}"),
+            )),
+            _ => Ok(()),
+        }
+    }
+
     async fn command(
         &mut self,
         client: u64,
         command: Command,
         geometry_dirty: &mut bool,
     ) -> Result<Ack, CommandError> {
-        // Clients that never joined (REST callers) pass id 0 with the role
-        // already checked by the caller.
+        // REST callers (client 0) were checked by the HTTP layer.
         let role = if client == 0 {
             Role::Editor
         } else {
             self.role(client)
                 .ok_or_else(|| CommandError::new(ErrorKind::Forbidden, "not joined"))?
         };
-        let allowed = match &command {
-            Command::Edit(_) | Command::Drag { .. } | Command::Release { .. } => role.can_edit(),
-            _ => role.can_manage(),
+        let allowed = if command.edits() {
+            role.can_edit()
+        } else {
+            role.can_manage()
         };
         if !allowed {
             return Err(CommandError::new(
                 ErrorKind::Forbidden,
-                format!("a {role:?} may not do this"),
+                format!("a {} may not do this", format!("{role:?}").to_lowercase()),
             ));
         }
         match command {
             Command::Edit(edit) => {
-                let before = self.model.to_doc();
+                if let super::model::Edit::DeleteIcon { id } = &edit {
+                    self.check_holder(client, *id)?;
+                }
+                let before = self.doc.clone();
                 let created = self.model.apply(edit)?;
-                self.undo.push(before);
-                self.changed(true);
+                self.undo.push((*before).clone());
+                // A deleted icon can no longer be held.
+                let gone: Vec<u64> = self
+                    .dragging
+                    .iter()
+                    .filter(|(_, i)| self.model.icon(**i).is_none())
+                    .map(|(&c, _)| c)
+                    .collect();
+                for c in gone {
+                    self.dragging.remove(&c);
+                    self.set_holding(c, None);
+                }
+                self.changed();
+                self.announce_diff(&before);
+                self.broadcast_history();
                 *geometry_dirty = true;
                 Ok(Ack {
                     created_icon: created,
                     version: None,
                 })
             }
-            Command::Drag { icon, xyz } => {
-                let first = self.dragging.get(&client) != Some(&icon);
-                let before = first.then(|| self.model.to_doc());
-                let t = Instant::now();
-                self.model.drag(icon, xyz)?;
-                self.metrics.solve(t.elapsed());
-                if let Some(before) = before {
-                    self.undo.push(before);
-                    self.dragging.insert(client, icon);
-                    self.set_holding(client, Some(icon));
+            Command::Grab { icon } => {
+                self.model.check_icon(icon)?;
+                self.check_holder(client, icon)?;
+                if self.dragging.get(&client) == Some(&icon) {
+                    return Ok(Ack::default());
                 }
-                self.changed(false);
+                if let Some(prev) = self.dragging.remove(&client) {
+                    let _ = self.model.release(prev);
+                }
+                self.undo.push(self.model.to_doc());
+                self.model.grab(icon)?;
+                self.dragging.insert(client, icon);
+                self.set_holding(client, Some(icon));
+                self.changed();
+                self.announce_icon(icon);
+                self.broadcast_history();
+                Ok(Ack::default())
+            }
+            Command::Drag { icon, xyz } => {
+                self.check_holder(client, icon)?;
+                if self.dragging.get(&client) != Some(&icon) {
+                    // A drag without drag_start grabs implicitly.
+                    Box::pin(self.command(client, Command::Grab { icon }, geometry_dirty)).await?;
+                }
+                let t = Instant::now();
+                let actual = self.model.drag(icon, xyz)?;
+                self.metrics.solve(t.elapsed());
+                if self.persist_at.is_none() {
+                    self.persist_at = Some(Instant::now() + self.persist_delay);
+                }
+                self.drag_frame = true;
                 *geometry_dirty = true;
+                if let Some(tx) = self.feedback.get(&client) {
+                    tx.send_replace(Some(Feedback {
+                        icon,
+                        requested: xyz,
+                        actual,
+                        revision: self.rev + 1,
+                    }));
+                }
                 Ok(Ack::default())
             }
             Command::Release { icon } => {
+                self.model.check_icon(icon)?;
+                if self.dragging.get(&client) != Some(&icon) {
+                    self.check_holder(client, icon)?;
+                    return Ok(Ack::default());
+                }
                 self.model.release(icon)?;
                 self.dragging.remove(&client);
                 self.set_holding(client, None);
-                self.changed(true);
+                self.changed();
+                self.announce_icon(icon);
                 *geometry_dirty = true;
                 Ok(Ack::default())
             }
             Command::Undo | Command::Redo => {
                 let current = self.model.to_doc();
-                let target = if matches!(command, Command::Undo) {
-                    self.undo.undo(current)
+                let undo = matches!(command, Command::Undo);
+                let target = if undo {
+                    self.undo.undo(current.clone())
                 } else {
-                    self.undo.redo(current)
+                    self.undo.redo(current.clone())
                 };
                 let doc = target.ok_or_else(|| {
-                    CommandError::new(ErrorKind::NothingToUndo, "nothing to undo or redo")
+                    CommandError::new(
+                        ErrorKind::NothingToUndo,
+                        if undo {
+                            "nothing to undo"
+                        } else {
+                            "nothing to redo"
+                        },
+                    )
                 })?;
-                self.model = DesignModel::load(&doc)?;
-                self.dragging.clear();
-                self.changed(true);
+                match DesignModel::load(&doc) {
+                    Ok(m) => self.model = m,
+                    Err(e) => {
+                        // Put the stacks back as they were.
+                        if undo {
+                            self.undo.redo(doc);
+                        } else {
+                            self.undo.undo(doc);
+                        }
+                        return Err(e);
+                    }
+                }
+                self.clear_drags();
+                self.changed();
+                self.broadcast_snapshot();
                 *geometry_dirty = true;
                 Ok(Ack::default())
             }
@@ -588,6 +836,9 @@ impl Actor {
                 // The commit also wrote the working state.
                 self.persist_at = None;
                 let number = info.number;
+                let mut versions = (*self.versions).clone();
+                versions.push(info.clone());
+                self.versions = Arc::new(versions);
                 let _ = self.events.send(DesignEvent::Committed(info));
                 Ok(Ack {
                     created_icon: None,
@@ -615,9 +866,9 @@ impl Actor {
                 let model = DesignModel::load(&doc)?;
                 self.undo.push(self.model.to_doc());
                 self.model = model;
-                self.dragging.clear();
-                self.changed(true);
-                let _ = self.events.send(DesignEvent::Restored(info.number));
+                self.clear_drags();
+                self.changed();
+                self.broadcast_snapshot();
                 *geometry_dirty = true;
                 Ok(Ack {
                     created_icon: None,

@@ -10,6 +10,11 @@ use glam::DVec3;
 pub enum Command {
     /// An undoable change of icons, material or surface.
     Edit(Edit),
+    /// Grab an icon: it becomes driving and held by this client.
+    Grab {
+        /// The icon.
+        icon: u64,
+    },
     /// Move a held icon to `xyz` (a drag frame; coalesced per client).
     Drag {
         /// The dragged icon.
@@ -45,7 +50,10 @@ impl Command {
     pub fn edits(&self) -> bool {
         matches!(
             self,
-            Command::Edit(_) | Command::Drag { .. } | Command::Release { .. }
+            Command::Edit(_)
+                | Command::Grab { .. }
+                | Command::Drag { .. }
+                | Command::Release { .. }
         )
     }
 }

@@ -70,7 +70,11 @@ impl SurfaceDoc {
         {
             return Err(invalid("knot count does not match"));
         }
-        let finite = self.u_knots.iter().chain(&self.v_knots).all(|x| x.is_finite())
+        let finite = self
+            .u_knots
+            .iter()
+            .chain(&self.v_knots)
+            .all(|x| x.is_finite())
             && self.points.iter().flatten().all(|x| x.is_finite());
         if !finite {
             return Err(invalid("non-finite knot or control point"));
@@ -158,9 +162,15 @@ impl MaterialDoc {
         if all.iter().any(|x| !x.is_finite()) {
             return Err(invalid("material weights must be finite"));
         }
-        if [self.alpha11, self.alpha22, self.beta11, self.beta12, self.beta22]
-            .iter()
-            .any(|&x| x < 0.0)
+        if [
+            self.alpha11,
+            self.alpha22,
+            self.beta11,
+            self.beta12,
+            self.beta22,
+        ]
+        .iter()
+        .any(|&x| x < 0.0)
         {
             return Err(invalid("material weights must not be negative"));
         }
@@ -168,9 +178,20 @@ impl MaterialDoc {
     }
 }
 
+/// A clamped B-spline curve in the surface's (u, v) domain.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UvCurveDoc {
+    /// Degree.
+    pub degree: usize,
+    /// Knots (points + degree + 1).
+    pub knots: Vec<f64>,
+    /// Control points as (u, v).
+    pub points: Vec<[f64; 2]>,
+}
+
 /// Where an icon sits on the surface.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum AnchorDoc {
     /// A point at (u, v).
     Point {
@@ -179,41 +200,61 @@ pub enum AnchorDoc {
         /// v.
         v: f64,
     },
-    /// A curve in the (u, v) domain through these parameter points.
+    /// A curve in the (u, v) domain.
     Curve {
-        /// (u, v) points the curve passes through (at least 2).
-        uv: Vec<[f64; 2]>,
+        /// The curve.
+        curve: UvCurveDoc,
     },
     /// A parameter rectangle from two corners.
     Region {
-        /// First corner.
-        from: [f64; 2],
-        /// Opposite corner.
-        to: [f64; 2],
+        /// First corner u.
+        u0: f64,
+        /// First corner v.
+        v0: f64,
+        /// Second corner u.
+        u1: f64,
+        /// Second corner v.
+        v1: f64,
         /// Deformation asked inside (true) or outside the region.
         inside: bool,
     },
 }
 
 impl AnchorDoc {
-    /// Every (u, v) the anchor uses.
+    /// A representative (u, v): the point, the curve's middle control point
+    /// or the region's centre.
+    pub fn centre(&self) -> [f64; 2] {
+        match self {
+            AnchorDoc::Point { u, v } => [*u, *v],
+            AnchorDoc::Curve { curve } => curve.points[curve.points.len() / 2],
+            AnchorDoc::Region { u0, v0, u1, v1, .. } => [(u0 + u1) / 2.0, (v0 + v1) / 2.0],
+        }
+    }
+
+    /// Every (u, v) the anchor uses (a curve's control points lie in the
+    /// domain iff its convex hull does, which bounds the curve).
     pub fn params(&self) -> Vec<[f64; 2]> {
         match self {
             AnchorDoc::Point { u, v } => vec![[*u, *v]],
-            AnchorDoc::Curve { uv } => uv.clone(),
-            AnchorDoc::Region { from, to, .. } => vec![*from, *to],
+            AnchorDoc::Curve { curve } => curve.points.clone(),
+            AnchorDoc::Region { u0, v0, u1, v1, .. } => vec![[*u0, *v0], [*u1, *v1]],
         }
     }
 
     /// Checks every parameter is finite and inside `surface`'s domain.
     pub fn validate(&self, surface: &SurfaceDoc) -> Result<(), CommandError> {
-        let ps = self.params();
-        if let AnchorDoc::Curve { uv } = self
-            && !(2..=256).contains(&uv.len())
-        {
-            return Err(invalid("a curve icon needs 2 to 256 (u, v) points"));
+        if let AnchorDoc::Curve { curve } = self {
+            if !(2..=256).contains(&curve.points.len()) {
+                return Err(invalid("a curve icon needs 2 to 256 (u, v) control points"));
+            }
+            if curve.degree == 0 || curve.knots.len() != curve.points.len() + curve.degree + 1 {
+                return Err(invalid("curve knots do not match its degree and points"));
+            }
+            if curve.knots.iter().any(|k| !k.is_finite()) {
+                return Err(invalid("curve knots must be finite"));
+            }
         }
-        for [u, v] in ps {
+        for [u, v] in self.params() {
             if !u.is_finite() || !v.is_finite() {
                 return Err(invalid("icon parameters must be finite"));
             }
@@ -221,38 +262,50 @@ impl AnchorDoc {
                 let ((u0, u1), (v0, v1)) = surface.domain();
                 return Err(CommandError::new(
                     ErrorKind::OutOfDomain,
-                    format!("(u, v) = ({u}, {v}) is outside the domain [{u0}, {u1}] × [{v0}, {v1}]"),
+                    format!(
+                        "(u, v) = ({u}, {v}) is outside the domain [{u0}, {u1}] × [{v0}, {v1}]"
+                    ),
                 ));
             }
         }
-        if let AnchorDoc::Region { from, to, .. } = self
-            && (from[0] == to[0] || from[1] == to[1])
+        if let AnchorDoc::Region { u0, v0, u1, v1, .. } = self
+            && (u0 == u1 || v0 == v1)
         {
-            return Err(invalid("a region needs two distinct corners"));
+            return Err(invalid("a region needs two corners differing in u and v"));
         }
         Ok(())
     }
 }
 
+/// Which derivative a derivative constraint fixes (paper 003's labels).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DerivativeDoc {
+    /// w_u.
+    R,
+    /// w_v.
+    V,
+    /// w_uu.
+    R2,
+    /// w_vv.
+    V2,
+    /// w_uv.
+    RV,
+}
+
 /// What an icon does (paper 003's icon kinds).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum IconRoleDoc {
     /// A load pulling the surface.
     Load,
-    /// A position constraint w = P0.
+    /// A position constraint w = target.
     Position,
-    /// Derivative constraint w_u = T.
-    R,
-    /// Derivative constraint w_v = T.
-    V,
-    /// Derivative constraint w_uu = T.
-    R2,
-    /// Derivative constraint w_vv = T.
-    V2,
-    /// Derivative constraint w_uv = T.
-    Rv,
-    /// Normal constraint N·w_u = N·w_v = 0.
+    /// A derivative constraint (the derivative = target).
+    Derivative {
+        /// Which derivative.
+        which: DerivativeDoc,
+    },
+    /// Normal constraint: the surface normal is the target direction.
     Normal,
 }
 
@@ -260,7 +313,7 @@ pub enum IconRoleDoc {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum IconStateDoc {
-    /// Bound to a sensor; moving it drives the deformation.
+    /// Bound to a sensor or pointer; moving it drives the deformation.
     Driving,
     /// Holds (constraint) or follows the surface (load).
     Passive,
@@ -279,12 +332,11 @@ pub struct IconDoc {
     pub role: IconRoleDoc,
     /// Its state.
     pub state: IconStateDoc,
-    /// The handle's space point (target of a position constraint, where a
-    /// load's handle is).
+    /// Where it is on the surface (a curve's or region's centre).
     pub xyz: [f64; 3],
-    /// The vector of a derivative constraint (T) or normal constraint (N).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub vector: Option<[f64; 3]>,
+    /// Its target: a position, a derivative vector or a normal direction
+    /// (for a load, the point its handle pulls to).
+    pub target: [f64; 3],
     /// Sensors bound to it.
     #[serde(default)]
     pub sensors: Vec<String>,
@@ -322,7 +374,10 @@ impl DesignDoc {
         if doc.format != DOC_FORMAT {
             return Err(CommandError::new(
                 ErrorKind::Storage,
-                format!("stored design has format {}, expected {DOC_FORMAT}", doc.format),
+                format!(
+                    "stored design has format {}, expected {DOC_FORMAT}",
+                    doc.format
+                ),
             ));
         }
         Ok(doc)
@@ -339,7 +394,7 @@ impl DesignDoc {
         self.material.validate()?;
         for i in &self.icons {
             i.anchor.validate(&self.surface)?;
-            if i.xyz.iter().chain(i.vector.iter().flatten()).any(|x| !x.is_finite()) {
+            if i.xyz.iter().chain(&i.target).any(|x| !x.is_finite()) {
                 return Err(invalid("icon coordinates must be finite"));
             }
         }
@@ -352,6 +407,9 @@ pub fn finite_point(p: [f64; 3]) -> Result<DVec3, CommandError> {
     if p.iter().all(|x| x.is_finite()) {
         Ok(DVec3::from(p))
     } else {
-        Err(invalid("coordinates must be finite (no NaN or ∞)"))
+        Err(CommandError::new(
+            ErrorKind::NotFinite,
+            "coordinates must be finite (no NaN or ∞)",
+        ))
     }
 }

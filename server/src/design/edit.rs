@@ -6,6 +6,15 @@
 use super::doc::{
     AnchorDoc, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, finite_point,
 };
+
+/// What an edit needs to know of the current surface.
+pub trait SurfaceQuery {
+    /// The surface point at an anchor's centre.
+    fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3];
+    /// The value a new constraint of `role` at `anchor` starts with (the
+    /// surface's current point, derivative or normal there).
+    fn current_target(&self, anchor: &AnchorDoc, role: IconRoleDoc) -> [f64; 3];
+}
 use super::error::{CommandError, ErrorKind};
 
 /// Most icons one design may hold.
@@ -16,7 +25,7 @@ pub const MAX_SENSORS: usize = 16;
 /// One undoable change.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Edit {
-    /// Create an icon; `xyz` defaults to the surface point at the anchor.
+    /// Create an icon; `target` defaults to the surface's current value.
     AddIcon {
         /// Where.
         anchor: AnchorDoc,
@@ -24,16 +33,14 @@ pub enum Edit {
         role: IconRoleDoc,
         /// Its state.
         state: IconStateDoc,
-        /// Handle / target point.
-        xyz: Option<[f64; 3]>,
-        /// T or N for derivative / normal constraints.
-        vector: Option<[f64; 3]>,
+        /// Position, derivative vector or normal direction.
+        target: Option<[f64; 3]>,
     },
-    /// Move an icon's handle (a constraint's target) and solve.
+    /// Set an icon's target and solve.
     MoveIcon {
         /// Icon.
         id: u64,
-        /// New handle point.
+        /// New target.
         xyz: [f64; 3],
     },
     /// Move an icon on the surface (new (u, v)).
@@ -54,8 +61,6 @@ pub enum Edit {
         id: u64,
         /// New role.
         role: IconRoleDoc,
-        /// T or N when the new role needs one.
-        vector: Option<[f64; 3]>,
     },
     /// Switch an icon's state.
     SetState {
@@ -87,23 +92,18 @@ fn unknown(id: u64) -> CommandError {
 }
 
 fn icon_mut(doc: &mut DesignDoc, id: u64) -> Result<&mut IconDoc, CommandError> {
-    doc.icons.iter_mut().find(|i| i.id == id).ok_or_else(|| unknown(id))
+    doc.icons
+        .iter_mut()
+        .find(|i| i.id == id)
+        .ok_or_else(|| unknown(id))
 }
 
-fn check_vector(v: Option<[f64; 3]>) -> Result<(), CommandError> {
-    if let Some(v) = v {
-        finite_point(v)?;
-    }
-    Ok(())
-}
-
-/// Applies `edit` to a copy of `doc`. `surface_point` gives the surface
-/// point at (u, v) for icons created without `xyz`. Returns the new document
-/// and the id of a created icon.
+/// Applies `edit` to a copy of `doc`, asking `surface` for positions and
+/// default targets. Returns the new document and the id of a created icon.
 pub fn apply(
     doc: &DesignDoc,
     edit: &Edit,
-    surface_point: &dyn Fn(f64, f64) -> [f64; 3],
+    surface: &dyn SurfaceQuery,
 ) -> Result<(DesignDoc, Option<u64>), CommandError> {
     let mut doc = doc.clone();
     let mut created = None;
@@ -112,8 +112,7 @@ pub fn apply(
             anchor,
             role,
             state,
-            xyz,
-            vector,
+            target,
         } => {
             if doc.icons.len() >= MAX_ICONS {
                 return Err(CommandError::new(
@@ -122,12 +121,11 @@ pub fn apply(
                 ));
             }
             anchor.validate(&doc.surface)?;
-            check_vector(*vector)?;
-            let [u, v] = anchor.params()[0];
-            let xyz = match xyz {
+            let target = match target {
                 Some(p) => finite_point(*p)?.to_array(),
-                None => surface_point(u, v),
+                None => surface.current_target(anchor, *role),
             };
+            check_role(*role, target)?;
             let id = doc.next_icon;
             doc.next_icon += 1;
             doc.icons.push(IconDoc {
@@ -135,23 +133,32 @@ pub fn apply(
                 anchor: anchor.clone(),
                 role: *role,
                 state: *state,
-                xyz,
-                vector: *vector,
+                xyz: surface.point_at(anchor),
+                target,
                 sensors: Vec::new(),
             });
             created = Some(id);
         }
         Edit::MoveIcon { id, xyz } => {
-            let p = finite_point(*xyz)?;
-            icon_mut(&mut doc, *id)?.xyz = p.to_array();
+            let p = finite_point(*xyz)?.to_array();
+            let icon = icon_mut(&mut doc, *id)?;
+            check_role(icon.role, p)?;
+            icon.target = p;
         }
         Edit::SetAnchor { id, anchor } => {
             anchor.validate(&doc.surface)?;
-            let [u, v] = anchor.params()[0];
-            let p = surface_point(u, v);
+            let xyz = surface.point_at(anchor);
             let icon = icon_mut(&mut doc, *id)?;
+            let moved = icon.anchor != *anchor;
             icon.anchor = anchor.clone();
-            icon.xyz = p;
+            icon.xyz = xyz;
+            if moved && icon.role != IconRoleDoc::Position && icon.role != IconRoleDoc::Load {
+                // A tangent or normal constraint moved along the surface keeps
+                // the surface's current value there until its target is set.
+                icon.target = surface.current_target(anchor, icon.role);
+            } else if moved {
+                icon.target = xyz;
+            }
         }
         Edit::DeleteIcon { id } => {
             let before = doc.icons.len();
@@ -160,12 +167,11 @@ pub fn apply(
                 return Err(unknown(*id));
             }
         }
-        Edit::SetRole { id, role, vector } => {
-            check_vector(*vector)?;
+        Edit::SetRole { id, role } => {
             let icon = icon_mut(&mut doc, *id)?;
-            icon.role = *role;
-            if vector.is_some() {
-                icon.vector = *vector;
+            if icon.role != *role {
+                icon.target = surface.current_target(&icon.anchor, *role);
+                icon.role = *role;
             }
         }
         Edit::SetState { id, state } => {
@@ -206,4 +212,15 @@ pub fn apply(
         }
     }
     Ok((doc, created))
+}
+
+/// A normal constraint needs a non-zero direction.
+fn check_role(role: IconRoleDoc, target: [f64; 3]) -> Result<(), CommandError> {
+    if role == IconRoleDoc::Normal && target.iter().map(|x| x * x).sum::<f64>() < 1e-24 {
+        return Err(CommandError::new(
+            ErrorKind::InvalidValue,
+            "a normal constraint needs a non-zero direction",
+        ));
+    }
+    Ok(())
 }

@@ -14,8 +14,14 @@ pub enum ErrorKind {
     UnknownIcon,
     /// No version with that number.
     UnknownVersion,
-    /// A value is NaN, infinite or otherwise invalid.
+    /// A value is out of its range or otherwise invalid.
     InvalidValue,
+    /// A number is NaN or infinite.
+    NotFinite,
+    /// Someone else holds the icon.
+    Conflict,
+    /// The kind of icon does not allow this.
+    Unsupported,
     /// A (u, v) parameter lies outside the surface's domain.
     OutOfDomain,
     /// Undo or redo with nothing to undo / redo.

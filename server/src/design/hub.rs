@@ -56,17 +56,25 @@ impl Hub {
                     format!("design {id} does not exist"),
                 ));
             }
-            store.working(id).map_err(storage)
+            Ok((
+                store.working(id).map_err(storage)?,
+                store.versions(id).map_err(storage)?,
+            ))
         })
         .await
         .map_err(storage)??;
-        let bytes = loaded.ok_or_else(|| {
-            CommandError::new(ErrorKind::Storage, format!("design {id} has no working state"))
+        let (working, versions) = loaded;
+        let bytes = working.ok_or_else(|| {
+            CommandError::new(
+                ErrorKind::Storage,
+                format!("design {id} has no working state"),
+            )
         })?;
         let doc = DesignDoc::from_bytes(&bytes)?;
         let handle = actor::spawn(
             id,
             doc,
+            versions,
             self.store.clone(),
             self.metrics.clone(),
             self.persist_delay,
@@ -108,7 +116,8 @@ impl Hub {
 
     /// Stops every actor, flushing working states.
     pub async fn stop_all(&self) {
-        let handles: Vec<DesignHandle> = self.running.lock().await.drain().map(|(_, h)| h).collect();
+        let handles: Vec<DesignHandle> =
+            self.running.lock().await.drain().map(|(_, h)| h).collect();
         for h in handles {
             h.stop().await;
         }

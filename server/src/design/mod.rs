@@ -6,6 +6,9 @@
 pub mod actor;
 pub mod command;
 pub mod demo;
+pub mod doc;
+pub mod edit;
+pub mod engine;
 pub mod error;
 pub mod hub;
 pub mod model;

@@ -4,7 +4,7 @@
 //! does the model switch, so a refused edit changes nothing. Drags go
 //! straight to the engine (no rebuild, no refactor).
 
-use super::doc::DesignDoc;
+pub use super::doc::DesignDoc;
 pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc};
 pub use super::edit::Edit;
 use super::engine::Engine;
@@ -76,9 +76,7 @@ impl DesignModel {
     /// Applies an edit; returns the created icon's id.
     pub fn apply(&mut self, edit: Edit) -> Result<Option<u64>, CommandError> {
         let current = self.to_doc();
-        let engine = &self.engine;
-        let (doc, created) =
-            super::edit::apply(&current, &edit, &|u, v| engine.surface_point(u, v).to_array())?;
+        let (doc, created) = super::edit::apply(&current, &edit, &self.engine)?;
         let engine = Engine::build(&doc)?;
         self.doc = doc;
         self.engine = engine;
@@ -86,7 +84,13 @@ impl DesignModel {
         Ok(created)
     }
 
-    fn check_icon(&self, icon: u64) -> Result<(), CommandError> {
+    /// The icon with `id`.
+    pub fn icon(&self, id: u64) -> Option<&IconDoc> {
+        self.doc.icon(id)
+    }
+
+    /// An `UnknownIcon` error unless `icon` exists.
+    pub fn check_icon(&self, icon: u64) -> Result<(), CommandError> {
         if self.doc.icon(icon).is_none() {
             return Err(CommandError::new(
                 ErrorKind::UnknownIcon,
@@ -96,12 +100,24 @@ impl DesignModel {
         Ok(())
     }
 
-    /// A drag frame: icon `icon`'s handle is at `xyz`.
-    pub fn drag(&mut self, icon: u64, xyz: DVec3) -> Result<(), CommandError> {
+    /// Grabs `icon`: it becomes driving (the drag's reference is the
+    /// current shape).
+    pub fn grab(&mut self, icon: u64) -> Result<(), CommandError> {
+        self.check_icon(icon)?;
+        self.engine.grab(icon)?;
+        if let Some(i) = self.doc.icons.iter_mut().find(|i| i.id == icon) {
+            i.state = IconStateDoc::Driving;
+        }
+        Ok(())
+    }
+
+    /// A drag frame: icon `icon`'s handle is at `xyz`. Returns where the
+    /// icon is on the solved surface.
+    pub fn drag(&mut self, icon: u64, xyz: DVec3) -> Result<DVec3, CommandError> {
         self.check_icon(icon)?;
         if !xyz.is_finite() {
             return Err(CommandError::new(
-                ErrorKind::InvalidValue,
+                ErrorKind::NotFinite,
                 "coordinates must be finite (no NaN or ∞)",
             ));
         }
@@ -112,19 +128,39 @@ impl DesignModel {
     pub fn release(&mut self, icon: u64) -> Result<(), CommandError> {
         self.check_icon(icon)?;
         self.engine.release(icon)?;
+        if let Some(i) = self.doc.icons.iter_mut().find(|i| i.id == icon)
+            && i.state == IconStateDoc::Driving
+        {
+            i.state = IconStateDoc::Passive;
+        }
         self.sync();
         Ok(())
     }
 
-    /// The encoded geometry frame of revision `rev`.
-    pub fn geometry(&self, rev: u64) -> Geometry {
+    /// The encoded geometry frame of revision `rev` of design `design`.
+    pub fn geometry(&self, design: u64, rev: u64, drag: bool) -> Geometry {
+        let icons: Vec<(u64, DVec3)> = self
+            .doc
+            .icons
+            .iter()
+            .map(|i| {
+                (
+                    i.id,
+                    self.engine
+                        .icon_xyz(i.id)
+                        .unwrap_or_else(|| DVec3::from(i.xyz)),
+                )
+            })
+            .collect();
         Geometry {
             rev,
             frame: crate::convert::geometry_frame(
+                design,
                 rev,
-                self.doc.surface.nu,
-                self.doc.surface.nv,
+                drag,
+                &self.doc,
                 self.engine.points(),
+                &icons,
             ),
         }
     }
@@ -143,11 +179,13 @@ pub fn with_surface(current: &DesignDoc, s: &IgesSurface) -> Result<DesignDoc, C
     surface.validate()?;
     let mut doc = current.clone();
     doc.surface = surface;
-    doc.icons.retain(|i| i.anchor.validate(&doc.surface).is_ok());
+    doc.icons
+        .retain(|i| i.anchor.validate(&doc.surface).is_ok());
     let engine = Engine::build_unsolved(&doc)?;
     for icon in &mut doc.icons {
-        let [u, v] = icon.anchor.params()[0];
-        icon.xyz = engine.surface_point(u, v).to_array();
+        use super::edit::SurfaceQuery;
+        icon.xyz = engine.point_at(&icon.anchor);
+        icon.target = engine.current_target(&icon.anchor, icon.role);
     }
     Ok(doc)
 }

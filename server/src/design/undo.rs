@@ -45,6 +45,16 @@ impl UndoStack {
         Some(next)
     }
 
+    /// Whether there is something to undo.
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    /// Whether there is something to redo.
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
     /// Number of undo steps available.
     pub fn undo_len(&self) -> usize {
         self.undo.len()

@@ -37,7 +37,6 @@ struct Session {
     client: u64,
     name: String,
     token: String,
-    design: DesignId,
     role: Role,
     handle: DesignHandle,
     out: mpsc::Sender<Out>,
@@ -71,11 +70,16 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     let text = match first {
         Ok(Some(Ok(Message::Text(t)))) => t,
         Ok(Some(Ok(_))) => {
-            return refuse(socket, WireError::malformed("the first message must be a JSON hello"), 1008).await;
+            return refuse(
+                socket,
+                WireError::handshake("the first message must be a JSON hello"),
+                1008,
+            )
+            .await;
         }
         Ok(_) => return,
         Err(_) => {
-            return refuse(socket, WireError::malformed("no hello within 10 s"), 1008).await;
+            return refuse(socket, WireError::handshake("no hello within 10 s"), 1008).await;
         }
     };
     if text.len() > limit {
@@ -85,15 +89,9 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         Ok(h) => h,
         Err(e) => return refuse(socket, e, 1008).await,
     };
-    let design = match hello
-        .design
-        .or_else(|| query.get("design").and_then(|d| d.parse().ok()))
-    {
-        Some(d) => d,
-        None => {
-            return refuse(socket, WireError::malformed("the hello names no design"), 1008).await;
-        }
-    };
+    let design = hello.design;
+    // A device link may carry its token in the URL (the banner's device
+    // link) and leave the hello's token empty.
     let token = if hello.token.is_empty() {
         query.get("token").cloned().unwrap_or_default()
     } else {
@@ -108,7 +106,11 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         Err(e) => return refuse(socket, WireError::from(e), 1008).await,
     };
     let client = state.next_client.fetch_add(1, Ordering::Relaxed);
-    let name = hello.name.clone().unwrap_or_else(|| format!("{role:?} {client}").to_lowercase());
+    let name = if hello.name.trim().is_empty() {
+        format!("{role:?} {client}").to_lowercase()
+    } else {
+        hello.name.trim().to_string()
+    };
     let info = ClientInfo {
         id: client,
         name: name.clone(),
@@ -126,11 +128,13 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         .await
         .is_err()
         || socket
-            .send(Message::Text(convert::snapshot(&joined.state, &joined.presence)))
+            .send(Message::Text(convert::snapshot(&joined.view)))
             .await
             .is_err()
     {
-        let _ = handle.send(crate::design::actor::Request::Leave { client }).await;
+        let _ = handle
+            .send(crate::design::actor::Request::Leave { client })
+            .await;
         return;
     }
     let (sink, stream) = socket.split();
@@ -140,6 +144,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         out_rx,
         joined,
         handle.clone(),
+        client,
         state.metrics.clone(),
     ));
     let mut session = Session {
@@ -147,7 +152,6 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         client,
         name,
         token,
-        design,
         role,
         handle,
         out: out_tx,
@@ -199,7 +203,8 @@ impl Session {
                 Some(Ok(Message::Text(t))) => t,
             };
             if text.len() > limit {
-                self.error(None, WireError::too_large(text.len(), limit)).await;
+                self.error(None, WireError::too_large(text.len(), limit))
+                    .await;
                 continue;
             }
             match convert::decode(text.as_str()) {
@@ -212,13 +217,14 @@ impl Session {
     async fn dispatch(&mut self, id: Option<u64>, inbound: Inbound) {
         match inbound {
             Inbound::Hello => {
-                self.error(id, WireError::malformed("already said hello")).await;
+                self.error(id, WireError::handshake("already said hello"))
+                    .await;
             }
-            Inbound::Ping => self.reply(convert::pong(id)).await,
+            Inbound::Ping => self.reply(convert::pong()).await,
             Inbound::Command(crate::design::Command::Drag { icon, xyz }) if id.is_none() => {
-                // Drag frames without a request id are fire-and-forget and
-                // coalesced by the actor; refusals are rare (role, unknown
-                // icon) and checked here so the client still hears of them.
+                // Drag frames without a request number are fire-and-forget
+                // and coalesced by the actor; the role is checked here so a
+                // viewer still hears of its refusal.
                 if !self.role.can_edit() {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                 } else if let Err(e) = self.handle.drag(self.client, icon, xyz).await {
@@ -231,30 +237,70 @@ impl Session {
                     return;
                 }
                 match self.handle.command(self.client, cmd).await {
-                    Ok(ack) => self.reply(convert::ack(id, &ack)).await,
+                    Ok(ack) => {
+                        if let Some(t) = convert::ack(id, &ack) {
+                            self.reply(t).await;
+                        }
+                    }
                     Err(e) => self.error(id, WireError::from(e)).await,
                 }
             }
-            Inbound::Device(report) => {
-                if !self.role.can_edit() {
+            Inbound::Pointer(p) => {
+                let _ = self
+                    .handle
+                    .send(crate::design::actor::Request::Pointer {
+                        client: self.client,
+                        pointer: p.map(|p| p.to_array()),
+                    })
+                    .await;
+                self.ack(id).await;
+            }
+            Inbound::DeviceSample { sensor, position } => {
+                if self.role == Role::Viewer {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                     return;
                 }
-                if let Err(e) = self
+                tracing::trace!(client = self.client, sensor, "device sample");
+                let _ = self
                     .handle
-                    .send(crate::design::actor::Request::Device {
+                    .send(crate::design::actor::Request::Pointer {
                         client: self.client,
-                        report,
+                        pointer: Some(position.to_array()),
                     })
-                    .await
-                {
-                    self.error(id, WireError::from(e)).await;
-                }
+                    .await;
+                self.ack(id).await;
             }
+            Inbound::DeviceStatus {
+                device,
+                condition,
+                message,
+            } => {
+                if self.role == Role::Viewer {
+                    self.error(id, WireError::from(forbidden(self.role))).await;
+                    return;
+                }
+                tracing::info!(
+                    client = self.client,
+                    device,
+                    condition,
+                    message,
+                    "device status"
+                );
+                self.ack(id).await;
+            }
+            Inbound::ListVersions => match self.handle.versions().await {
+                Ok(v) => self.reply(convert::versions(&v)).await,
+                Err(e) => self.error(id, WireError::from(e)).await,
+            },
             Inbound::ListDesigns => self.list(id).await,
             Inbound::CreateDesign { name } => self.create(id, name).await,
             Inbound::DeleteDesign { design } => self.delete(id, design).await,
-            Inbound::OpenDesign { design, token } => self.open(id, design, token).await,
+        }
+    }
+
+    async fn ack(&self, id: Option<u64>) {
+        if let Some(t) = convert::ack(id, &Default::default()) {
+            self.reply(t).await;
         }
     }
 
@@ -265,18 +311,28 @@ impl Session {
             Ok(Ok(d)) => d,
             _ => {
                 return self
-                    .error(id, WireError::from(CommandError::new(ErrorKind::Storage, "cannot list designs")))
+                    .error(
+                        id,
+                        WireError::from(CommandError::new(
+                            ErrorKind::Storage,
+                            "cannot list designs",
+                        )),
+                    )
                     .await;
             }
         };
+        let store = self.state.store.clone();
         let visible: Vec<_> = designs
             .into_iter()
-            .filter_map(|d| match caller {
-                Some(Caller::Admin) => Some((d.id, d.name, Role::Editor)),
-                _ => d.tokens.role_of(&self.token).map(|r| (d.id, d.name, r)),
+            .filter(|d| {
+                matches!(caller, Some(Caller::Admin)) || d.tokens.role_of(&self.token).is_some()
+            })
+            .map(|d| {
+                let n = store.versions(d.id).map(|v| v.len() as u64).unwrap_or(0);
+                (d.id, d.name, n)
             })
             .collect();
-        self.reply(convert::design_list(id, &visible)).await;
+        self.reply(convert::design_list(&visible)).await;
     }
 
     async fn create(&self, id: Option<u64>, name: String) {
@@ -286,7 +342,10 @@ impl Session {
         let name = name.trim().to_string();
         if name.is_empty() || name.len() > 200 {
             return self
-                .error(id, WireError::invalid("a design name has 1 to 200 characters"))
+                .error(
+                    id,
+                    WireError::invalid("a design name has 1 to 200 characters"),
+                )
                 .await;
         }
         let doc = match crate::design::demo::plate(&name, 16, 12) {
@@ -294,7 +353,7 @@ impl Session {
             Err(e) => return self.error(id, WireError::from(e)).await,
         };
         match self.state.hub.create(doc, &self.name).await {
-            Ok(rec) => self.reply(convert::design_created(id, &rec)).await,
+            Ok(rec) => self.reply(convert::design_created(&rec)).await,
             Err(e) => self.error(id, WireError::from(e)).await,
         }
     }
@@ -316,52 +375,18 @@ impl Session {
             }
         }
         match self.state.hub.delete(design).await {
-            Ok(()) => self.reply(convert::ack(id, &Default::default())).await,
+            Ok(()) => self.ack(id).await,
             Err(e) => self.error(id, WireError::from(e)).await,
         }
-    }
-
-    async fn open(&mut self, id: Option<u64>, design: DesignId, token: Option<String>) {
-        let token = token.unwrap_or_else(|| self.token.clone());
-        let role = match self.state.role_on(&token, design).await {
-            Ok(Some(r)) => r,
-            _ => return self.error(id, WireError::unauthorized()).await,
-        };
-        let handle = match self.state.hub.open(design).await {
-            Ok(h) => h,
-            Err(e) => return self.error(id, WireError::from(e)).await,
-        };
-        let info = ClientInfo {
-            id: self.client,
-            name: self.name.clone(),
-            role,
-        };
-        let joined = match handle.join(info).await {
-            Ok(j) => j,
-            Err(e) => return self.error(id, WireError::from(e)).await,
-        };
-        let _ = self
-            .handle
-            .send(crate::design::actor::Request::Leave {
-                client: self.client,
-            })
-            .await;
-        self.reply(convert::welcome(self.client, design, role)).await;
-        let snapshot = Message::Text(convert::snapshot(&joined.state, &joined.presence));
-        let _ = self
-            .out
-            .send(Out::Rejoin(Box::new(joined), handle.clone(), snapshot))
-            .await;
-        self.design = design;
-        self.role = role;
-        self.token = token;
-        self.handle = handle;
     }
 }
 
 fn forbidden(role: Role) -> CommandError {
     CommandError::new(
         ErrorKind::Forbidden,
-        format!("a {} may not change this design", format!("{role:?}").to_lowercase()),
+        format!(
+            "a {} may not change this design",
+            format!("{role:?}").to_lowercase()
+        ),
     )
 }

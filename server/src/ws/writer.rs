@@ -7,8 +7,8 @@
 //! 2. the design's ordered events (broadcast): never skipped silently — if
 //!    this client falls more than the channel's capacity behind, it gets a
 //!    fresh full snapshot from the actor and continues from there;
-//! 3. geometry (watch): latest wins — a slow client skips intermediate
-//!    frames instead of queueing them.
+//! 3. this client's drag feedback and the geometry (both `watch`): latest
+//!    wins — a slow client skips intermediate frames instead of queueing them.
 
 use crate::convert;
 use crate::design::{DesignEvent, DesignHandle, Joined};
@@ -24,8 +24,6 @@ use tokio::sync::mpsc;
 pub enum Out {
     /// Send this message.
     Msg(Message),
-    /// The client switched to (or resynced with) a design: new streams.
-    Rejoin(Box<Joined>, DesignHandle, Message),
     /// Close with this code and reason, then stop.
     Close(u16, String),
 }
@@ -48,11 +46,15 @@ pub async fn run(
     mut sink: Sink,
     mut out: mpsc::Receiver<Out>,
     mut joined: Joined,
-    mut handle: DesignHandle,
+    handle: DesignHandle,
+    client: u64,
     metrics: Arc<Metrics>,
 ) {
     let mut geometry_live = true;
-    if send_geometry(&mut sink, &mut joined, &metrics).await.is_err() {
+    if send_geometry(&mut sink, &mut joined, &metrics)
+        .await
+        .is_err()
+    {
         return;
     }
     loop {
@@ -62,13 +64,6 @@ pub async fn run(
                 let ok = match o {
                     None => break,
                     Some(Out::Msg(m)) => sink.send(m).await.is_ok(),
-                    Some(Out::Rejoin(j, h, snapshot)) => {
-                        joined = *j;
-                        handle = h;
-                        geometry_live = true;
-                        sink.send(snapshot).await.is_ok()
-                            && send_geometry(&mut sink, &mut joined, &metrics).await.is_ok()
-                    }
                     Some(Out::Close(code, reason)) => {
                         let _ = sink
                             .send(Message::Close(Some(CloseFrame { code, reason: reason.into() })))
@@ -83,7 +78,7 @@ pub async fn run(
             e = joined.events.recv() => {
                 match e {
                     Ok(ev) => {
-                        let deleted = matches!(ev, DesignEvent::Deleted);
+                        let deleted = matches!(ev, DesignEvent::Deleted(_));
                         if let Some(text) = convert::event(&ev)
                             && sink.send(Message::Text(text)).await.is_err()
                         {
@@ -95,9 +90,9 @@ pub async fn run(
                     }
                     Err(RecvError::Lagged(n)) => {
                         tracing::info!(design = handle.id, skipped = n, "client lagged; resyncing with a full snapshot");
-                        match handle.resync().await {
+                        match handle.resync(client).await {
                             Ok(j) => {
-                                let snap = convert::snapshot(&j.state, &j.presence);
+                                let snap = convert::snapshot(&j.view);
                                 joined = j;
                                 if sink.send(Message::Text(snap)).await.is_err()
                                     || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()
@@ -120,16 +115,6 @@ pub async fn run(
                                     break;
                                 }
                             }
-                            Some(Out::Rejoin(j, h, snapshot)) => {
-                                joined = *j;
-                                handle = h;
-                                geometry_live = true;
-                                if sink.send(snapshot).await.is_err()
-                                    || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()
-                                {
-                                    break;
-                                }
-                            }
                             Some(Out::Close(code, reason)) => {
                                 let _ = sink
                                     .send(Message::Close(Some(CloseFrame { code, reason: reason.into() })))
@@ -139,6 +124,17 @@ pub async fn run(
                             None => break,
                         }
                     }
+                }
+            }
+            r = joined.feedback.changed(), if geometry_live => {
+                if r.is_err() {
+                    continue;
+                }
+                let f = *joined.feedback.borrow_and_update();
+                if let Some(f) = f
+                    && sink.send(Message::Text(convert::feedback(&f))).await.is_err()
+                {
+                    break;
                 }
             }
             r = joined.geometry.changed(), if geometry_live => {

@@ -1,0 +1,621 @@
+//! The one place where protocol types (`vsculpt-protocol`, the stable wire)
+//! meet server types (design documents, commands, events): decoding client
+//! messages into commands, encoding events, snapshots and geometry frames.
+//! Neither the design actor nor the kernel sees a protocol type.
+
+use crate::design::actor::{Feedback, Presence, SnapshotView};
+use crate::design::doc::{
+    AnchorDoc, DerivativeDoc, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
+    UvCurveDoc,
+};
+use crate::design::{Ack, Command, CommandError, DesignEvent, Edit, ErrorKind};
+use crate::store::{DesignId, DesignRecord, Role, VersionInfo};
+use axum::body::Bytes;
+use axum::extract::ws::Utf8Bytes;
+use glam::DVec3;
+use std::collections::BTreeMap;
+use vsculpt_protocol as wire;
+use vsculpt_protocol::{ClientMessage, ErrorCode, ServerMessage};
+
+/// An error as sent to a client: a stable protocol code and a message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WireError {
+    /// Stable code.
+    pub code: ErrorCode,
+    /// Human-readable message.
+    pub message: String,
+}
+
+impl WireError {
+    /// An error with `code`.
+    pub fn new(code: ErrorCode, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            message: message.into(),
+        }
+    }
+
+    /// Not a valid message.
+    pub fn malformed(message: impl Into<String>) -> Self {
+        Self::new(ErrorCode::Malformed, message)
+    }
+
+    /// The first message was not a hello, or a second hello came.
+    pub fn handshake(message: impl Into<String>) -> Self {
+        Self::new(ErrorCode::BadHandshake, message)
+    }
+
+    /// A message over the limit.
+    pub fn too_large(len: usize, limit: usize) -> Self {
+        Self::new(
+            ErrorCode::TooLarge,
+            format!("message of {len} bytes exceeds the limit of {limit}"),
+        )
+    }
+
+    /// A bad or missing token.
+    pub fn unauthorized() -> Self {
+        Self::new(
+            ErrorCode::BadToken,
+            "the token is not valid for this design",
+        )
+    }
+
+    /// A value out of its range.
+    pub fn invalid(message: impl Into<String>) -> Self {
+        Self::new(ErrorCode::OutOfRange, message)
+    }
+}
+
+impl From<wire::ProtocolError> for WireError {
+    fn from(e: wire::ProtocolError) -> Self {
+        Self::new(e.code, e.message)
+    }
+}
+
+impl From<CommandError> for WireError {
+    fn from(e: CommandError) -> Self {
+        let code = match e.kind {
+            ErrorKind::Forbidden => ErrorCode::Forbidden,
+            ErrorKind::UnknownDesign => ErrorCode::UnknownDesign,
+            ErrorKind::UnknownIcon => ErrorCode::UnknownIcon,
+            ErrorKind::UnknownVersion => ErrorCode::UnknownVersion,
+            ErrorKind::InvalidValue => ErrorCode::OutOfRange,
+            ErrorKind::NotFinite => ErrorCode::NotFinite,
+            ErrorKind::OutOfDomain => ErrorCode::OutOfDomain,
+            ErrorKind::NothingToUndo | ErrorKind::Conflict => ErrorCode::Conflict,
+            ErrorKind::Unsupported => ErrorCode::Unsupported,
+            ErrorKind::Solver => ErrorCode::Solver,
+            ErrorKind::Unavailable | ErrorKind::Storage => ErrorCode::Internal,
+        };
+        Self::new(code, e.message)
+    }
+}
+
+/// The parts of a hello the server uses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hello {
+    /// Token.
+    pub token: String,
+    /// Design to join.
+    pub design: DesignId,
+    /// Display name.
+    pub name: String,
+}
+
+/// A decoded client message (after the hello).
+#[derive(Clone, Debug)]
+pub enum Inbound {
+    /// A second hello.
+    Hello,
+    /// Liveness check.
+    Ping,
+    /// A design command.
+    Command(Command),
+    /// The client's pointer (presence).
+    Pointer(Option<DVec3>),
+    /// A device sample (its position becomes the bridge's pointer).
+    DeviceSample {
+        /// Sensor name.
+        sensor: String,
+        /// Position.
+        position: DVec3,
+    },
+    /// A device's condition changed.
+    DeviceStatus {
+        /// Device name.
+        device: String,
+        /// Condition, as text.
+        condition: String,
+        /// Details.
+        message: String,
+    },
+    /// List the designs.
+    ListDesigns,
+    /// Create a design.
+    CreateDesign {
+        /// Its name.
+        name: String,
+    },
+    /// Delete a design.
+    DeleteDesign {
+        /// Its id.
+        design: DesignId,
+    },
+    /// List versions.
+    ListVersions,
+}
+
+/// Decodes the first message of a connection, which must be a hello with
+/// this server's protocol version.
+pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
+    let env = wire::parse_client(text)?;
+    match env.msg {
+        ClientMessage::Hello {
+            protocol,
+            token,
+            design,
+            client_name,
+            ..
+        } => {
+            if protocol != wire::PROTOCOL_VERSION {
+                return Err(WireError::new(
+                    ErrorCode::BadVersion,
+                    format!(
+                        "protocol version {protocol} is not supported; this server speaks {}",
+                        wire::PROTOCOL_VERSION
+                    ),
+                ));
+            }
+            Ok(Hello {
+                token,
+                design,
+                name: client_name,
+            })
+        }
+        _ => Err(WireError::handshake("the first message must be a hello")),
+    }
+}
+
+fn req_of(text: &str) -> Option<u64> {
+    serde_json::from_str::<serde_json::Value>(text)
+        .ok()
+        .and_then(|v| v.get("req").and_then(|r| r.as_u64()))
+}
+
+/// Converts a wire anchor.
+pub fn anchor_from_wire(a: &wire::Anchor) -> AnchorDoc {
+    match a {
+        wire::Anchor::Point { u, v } => AnchorDoc::Point { u: *u, v: *v },
+        wire::Anchor::Curve { curve } => AnchorDoc::Curve {
+            curve: UvCurveDoc {
+                degree: curve.knots.degree as usize,
+                knots: curve.knots.knots.clone(),
+                points: curve.points.clone(),
+            },
+        },
+        wire::Anchor::Region {
+            u0,
+            v0,
+            u1,
+            v1,
+            inside,
+        } => AnchorDoc::Region {
+            u0: *u0,
+            v0: *v0,
+            u1: *u1,
+            v1: *v1,
+            inside: *inside,
+        },
+    }
+}
+
+fn anchor_to_wire(a: &AnchorDoc) -> wire::Anchor {
+    match a {
+        AnchorDoc::Point { u, v } => wire::Anchor::Point { u: *u, v: *v },
+        AnchorDoc::Curve { curve } => wire::Anchor::Curve {
+            curve: wire::UvCurve {
+                knots: wire::Knots {
+                    degree: curve.degree as u32,
+                    knots: curve.knots.clone(),
+                },
+                points: curve.points.clone(),
+            },
+        },
+        AnchorDoc::Region {
+            u0,
+            v0,
+            u1,
+            v1,
+            inside,
+        } => wire::Anchor::Region {
+            u0: *u0,
+            v0: *v0,
+            u1: *u1,
+            v1: *v1,
+            inside: *inside,
+        },
+    }
+}
+
+/// Converts a wire role.
+pub fn role_from_wire(r: wire::Role) -> IconRoleDoc {
+    match r {
+        wire::Role::Load => IconRoleDoc::Load,
+        wire::Role::Position => IconRoleDoc::Position,
+        wire::Role::Normal => IconRoleDoc::Normal,
+        wire::Role::Derivative { which } => IconRoleDoc::Derivative {
+            which: match which {
+                wire::Derivative::R => DerivativeDoc::R,
+                wire::Derivative::V => DerivativeDoc::V,
+                wire::Derivative::R2 => DerivativeDoc::R2,
+                wire::Derivative::V2 => DerivativeDoc::V2,
+                wire::Derivative::RV => DerivativeDoc::RV,
+            },
+        },
+    }
+}
+
+fn role_to_wire(r: IconRoleDoc) -> wire::Role {
+    match r {
+        IconRoleDoc::Load => wire::Role::Load,
+        IconRoleDoc::Position => wire::Role::Position,
+        IconRoleDoc::Normal => wire::Role::Normal,
+        IconRoleDoc::Derivative { which } => wire::Role::Derivative {
+            which: match which {
+                DerivativeDoc::R => wire::Derivative::R,
+                DerivativeDoc::V => wire::Derivative::V,
+                DerivativeDoc::R2 => wire::Derivative::R2,
+                DerivativeDoc::V2 => wire::Derivative::V2,
+                DerivativeDoc::RV => wire::Derivative::RV,
+            },
+        },
+    }
+}
+
+fn state_from_wire(s: wire::IconState) -> IconStateDoc {
+    match s {
+        wire::IconState::Driving => IconStateDoc::Driving,
+        wire::IconState::Passive => IconStateDoc::Passive,
+        wire::IconState::Sleeping => IconStateDoc::Sleeping,
+    }
+}
+
+fn state_to_wire(s: IconStateDoc) -> wire::IconState {
+    match s {
+        IconStateDoc::Driving => wire::IconState::Driving,
+        IconStateDoc::Passive => wire::IconState::Passive,
+        IconStateDoc::Sleeping => wire::IconState::Sleeping,
+    }
+}
+
+fn material_from_wire(m: &wire::Material) -> MaterialDoc {
+    MaterialDoc {
+        alpha11: m.alpha11,
+        alpha12: m.alpha12,
+        alpha22: m.alpha22,
+        beta11: m.beta11,
+        beta12: m.beta12,
+        beta22: m.beta22,
+    }
+}
+
+fn material_to_wire(m: &MaterialDoc) -> wire::Material {
+    wire::Material {
+        alpha11: m.alpha11,
+        alpha12: m.alpha12,
+        alpha22: m.alpha22,
+        beta11: m.beta11,
+        beta12: m.beta12,
+        beta22: m.beta22,
+    }
+}
+
+/// An icon as clients see it.
+pub fn icon_to_wire(i: &IconDoc, holder: Option<u64>) -> wire::Icon {
+    wire::Icon {
+        id: i.id,
+        anchor: anchor_to_wire(&i.anchor),
+        role: role_to_wire(i.role),
+        state: state_to_wire(i.state),
+        xyz: i.xyz,
+        target: i.target,
+        sensors: i.sensors.clone(),
+        holder,
+    }
+}
+
+fn access(role: Role) -> wire::Access {
+    match role {
+        Role::Editor => wire::Access::Editor,
+        Role::Viewer => wire::Access::Viewer,
+        Role::Device => wire::Access::Device,
+    }
+}
+
+fn version_to_wire(v: &VersionInfo) -> wire::VersionInfo {
+    wire::VersionInfo {
+        version: v.number,
+        time_ms: v.time_ms.max(0) as u64,
+        author: v.author.clone(),
+        message: v.message.clone(),
+    }
+}
+
+fn presence_to_wire(p: &[Presence]) -> Vec<wire::PresenceEntry> {
+    p.iter()
+        .map(|p| wire::PresenceEntry {
+            client: p.client.id,
+            name: p.client.name.clone(),
+            access: access(p.client.role),
+            holding: p.holding,
+            pointer: p.pointer,
+        })
+        .collect()
+}
+
+/// Decodes one client message after the hello. On failure returns the
+/// request number (when it could be read) with the error.
+pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireError)> {
+    let env = wire::parse_client(text).map_err(|e| (req_of(text), WireError::from(e)))?;
+    let req = env.req;
+    use ClientMessage as M;
+    let edit = |e: Edit| Inbound::Command(Command::Edit(e));
+    let inbound = match env.msg {
+        M::Hello { .. } => Inbound::Hello,
+        M::Ping => Inbound::Ping,
+        M::ListDesigns => Inbound::ListDesigns,
+        M::CreateDesign { name } => Inbound::CreateDesign { name },
+        M::DeleteDesign { design } => Inbound::DeleteDesign { design },
+        M::ListVersions => Inbound::ListVersions,
+        M::CreateIcon { spec } => edit(Edit::AddIcon {
+            anchor: anchor_from_wire(&spec.anchor),
+            role: role_from_wire(spec.role),
+            state: state_from_wire(spec.state),
+            target: spec.target,
+        }),
+        M::EditIcon { icon, anchor } => edit(Edit::SetAnchor {
+            id: icon,
+            anchor: anchor_from_wire(&anchor),
+        }),
+        M::MoveIcon { icon, xyz } => edit(Edit::MoveIcon { id: icon, xyz }),
+        M::DeleteIcon { icon } => edit(Edit::DeleteIcon { id: icon }),
+        M::SetRole { icon, role } => edit(Edit::SetRole {
+            id: icon,
+            role: role_from_wire(role),
+        }),
+        M::SetState { icon, state } => edit(Edit::SetState {
+            id: icon,
+            state: state_from_wire(state),
+        }),
+        M::BindSensor { icon, sensor } => edit(Edit::BindSensor { id: icon, sensor }),
+        M::UnbindSensor { icon, sensor } => edit(Edit::UnbindSensor { id: icon, sensor }),
+        M::SetMaterial { material } => edit(Edit::SetMaterial(material_from_wire(&material))),
+        M::DragStart { icon } => Inbound::Command(Command::Grab { icon }),
+        M::Drag { icon, xyz } => Inbound::Command(Command::Drag {
+            icon,
+            xyz: DVec3::from(xyz),
+        }),
+        M::DragEnd { icon } => Inbound::Command(Command::Release { icon }),
+        M::Commit { message } => Inbound::Command(Command::Commit { message }),
+        M::Revert => Inbound::Command(Command::Revert),
+        M::Undo => Inbound::Command(Command::Undo),
+        M::Redo => Inbound::Command(Command::Redo),
+        M::RestoreVersion { version } => Inbound::Command(Command::Restore { version }),
+        M::Presence { pointer } => Inbound::Pointer(pointer.map(DVec3::from)),
+        M::DeviceSample {
+            sensor, position, ..
+        } => Inbound::DeviceSample {
+            sensor,
+            position: DVec3::from(position),
+        },
+        M::DeviceStatus {
+            device,
+            condition,
+            message,
+        } => Inbound::DeviceStatus {
+            device,
+            condition: format!("{condition:?}").to_lowercase(),
+            message,
+        },
+    };
+    Ok((req, inbound))
+}
+
+fn text(m: &ServerMessage) -> Utf8Bytes {
+    // Server messages hold finite floats and plain data: serialising them
+    // cannot fail.
+    serde_json::to_string(m).unwrap_or_default().into()
+}
+
+/// `welcome`.
+pub fn welcome(client: u64, design: DesignId, role: Role) -> Utf8Bytes {
+    text(&ServerMessage::Welcome {
+        client_id: client,
+        access: access(role),
+        design,
+        protocol: wire::PROTOCOL_VERSION,
+    })
+}
+
+/// `error` (echoing `req`).
+pub fn error(req: Option<u64>, e: &WireError) -> Utf8Bytes {
+    text(&ServerMessage::Error {
+        req,
+        code: e.code,
+        message: e.message.clone(),
+    })
+}
+
+/// `ack` for a request with a number; nothing for one without.
+pub fn ack(req: Option<u64>, _ack: &Ack) -> Option<Utf8Bytes> {
+    req.map(|req| text(&ServerMessage::Ack { req }))
+}
+
+/// `pong`.
+pub fn pong() -> Utf8Bytes {
+    text(&ServerMessage::Pong)
+}
+
+/// `designs`.
+pub fn design_list(designs: &[(DesignId, String, u64)]) -> Utf8Bytes {
+    text(&ServerMessage::Designs {
+        designs: designs
+            .iter()
+            .map(|(id, name, versions)| wire::DesignInfo {
+                id: *id,
+                name: name.clone(),
+                versions: *versions,
+            })
+            .collect(),
+    })
+}
+
+/// `designs` listing one newly created design (its tokens go only in the
+/// REST answer and the server's banner).
+pub fn design_created(rec: &DesignRecord) -> Utf8Bytes {
+    design_list(&[(rec.id, rec.name.clone(), 1)])
+}
+
+/// `versions`.
+pub fn versions(v: &[VersionInfo]) -> Utf8Bytes {
+    text(&ServerMessage::Versions {
+        versions: v.iter().map(version_to_wire).collect(),
+    })
+}
+
+/// The wire surface of a document.
+pub fn surface_to_wire(doc: &DesignDoc) -> wire::SurfaceData {
+    let s = &doc.surface;
+    wire::SurfaceData {
+        u: wire::Knots {
+            degree: s.u_degree as u32,
+            knots: s.u_knots.clone(),
+        },
+        v: wire::Knots {
+            degree: s.v_degree as u32,
+            knots: s.v_knots.clone(),
+        },
+        nu: s.nu as u32,
+        nv: s.nv as u32,
+        points: s.points.clone(),
+    }
+}
+
+fn holders(presence: &[Presence]) -> BTreeMap<u64, u64> {
+    presence
+        .iter()
+        .filter_map(|p| p.holding.map(|icon| (icon, p.client.id)))
+        .collect()
+}
+
+/// `snapshot`: the full state.
+pub fn snapshot(v: &SnapshotView) -> Utf8Bytes {
+    let holders = holders(&v.presence);
+    text(&ServerMessage::Snapshot {
+        design: wire::DesignInfo {
+            id: v.design,
+            name: v.doc.name.clone(),
+            versions: v.versions.len() as u64,
+        },
+        revision: v.revision,
+        surface: surface_to_wire(&v.doc),
+        material: material_to_wire(&v.doc.material),
+        icons: v
+            .doc
+            .icons
+            .iter()
+            .map(|i| icon_to_wire(i, holders.get(&i.id).copied()))
+            .collect(),
+        versions: v.versions.iter().map(version_to_wire).collect(),
+        presence: presence_to_wire(&v.presence),
+        can_undo: v.can_undo,
+        can_redo: v.can_redo,
+    })
+}
+
+/// The message of an event (`None` for events with no wire form).
+pub fn event(e: &DesignEvent) -> Option<Utf8Bytes> {
+    Some(match e {
+        DesignEvent::Snapshot(v) => snapshot(v),
+        DesignEvent::IconCreated(i, holder) => text(&ServerMessage::IconCreated {
+            icon: icon_to_wire(i, *holder),
+        }),
+        DesignEvent::IconUpdated(i, holder) => text(&ServerMessage::IconUpdated {
+            icon: icon_to_wire(i, *holder),
+        }),
+        DesignEvent::IconDeleted(id) => text(&ServerMessage::IconDeleted { icon: *id }),
+        DesignEvent::MaterialChanged(m) => text(&ServerMessage::MaterialChanged {
+            material: material_to_wire(m),
+        }),
+        DesignEvent::Committed(v) => text(&ServerMessage::Committed {
+            version: version_to_wire(v),
+        }),
+        DesignEvent::Presence(p) => text(&ServerMessage::Presence {
+            clients: presence_to_wire(p),
+        }),
+        DesignEvent::History { can_undo, can_redo } => text(&ServerMessage::History {
+            can_undo: *can_undo,
+            can_redo: *can_redo,
+        }),
+        DesignEvent::Deleted(design) => text(&ServerMessage::Error {
+            req: None,
+            code: ErrorCode::UnknownDesign,
+            message: format!("design {design} was deleted"),
+        }),
+    })
+}
+
+/// `icon_feedback` for the dragging client.
+pub fn feedback(f: &Feedback) -> Utf8Bytes {
+    text(&ServerMessage::IconFeedback {
+        icon: f.icon,
+        requested: f.requested.to_array(),
+        actual: f.actual.to_array(),
+        revision: f.revision,
+    })
+}
+
+/// The binary geometry frame of a design: knots, control points (f32) and
+/// icon positions.
+pub fn geometry_frame(
+    design: DesignId,
+    revision: u64,
+    drag: bool,
+    doc: &DesignDoc,
+    points: &[DVec3],
+    icons: &[(u64, DVec3)],
+) -> Bytes {
+    let s = &doc.surface;
+    let frame = wire::GeometryFrame {
+        design,
+        revision,
+        flags: if drag { wire::frame::FLAG_DRAG } else { 0 },
+        degree_u: s.u_degree as u8,
+        degree_v: s.v_degree as u8,
+        nu: s.nu as u32,
+        nv: s.nv as u32,
+        knots_u: s.u_knots.clone(),
+        knots_v: s.v_knots.clone(),
+        points: points
+            .iter()
+            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+            .collect(),
+        icons: icons
+            .iter()
+            .map(|(id, p)| wire::FrameIcon {
+                id: *id,
+                xyz: [p.x as f32, p.y as f32, p.z as f32],
+            })
+            .collect(),
+    };
+    match frame.encode() {
+        Ok(b) => Bytes::from(b),
+        Err(e) => {
+            // Only non-finite numbers or absurd sizes fail; the engine
+            // never publishes either, so this is a bug worth a loud log.
+            tracing::error!(design, "cannot encode geometry frame: {e}");
+            Bytes::new()
+        }
+    }
+}
