@@ -49,6 +49,7 @@ impl Wire for JsonWire {
             icons: vec![IconView {
                 id: 1,
                 position: DVec3::ZERO,
+                target: DVec3::ZERO,
                 role: IconRole::Constraint,
                 kind: IconKind::Position,
                 state: IconState::Passive,
@@ -106,6 +107,7 @@ fn per_sample(c: &mut Criterion) {
     interaction.set_icons([IconView {
         id: 1,
         position: DVec3::ZERO,
+        target: DVec3::ZERO,
         role: IconRole::Constraint,
         kind: IconKind::Position,
         state: IconState::Passive,

@@ -8,7 +8,7 @@ use crate::config::{Config, DeviceKind, build_driver};
 use crate::device::Sample;
 use crate::device::SourceId;
 use crate::device::runner::{DeviceRunner, DeviceStatus, RunOptions};
-use crate::interaction::{Command, Interaction};
+use crate::interaction::{Command, DeviceCondition, Interaction};
 use crate::link::{Link, LinkOptions, ServerEvent, Wire};
 use crate::recording::{Recorder, RecordingError, Replayer};
 use std::future::Future;
@@ -53,7 +53,7 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
                 l.clear();
             }
         }
-        ServerEvent::Disconnected => {}
+        ServerEvent::Disconnected | ServerEvent::Welcome => {}
         ServerEvent::Icons { icons, area } => {
             if let Some(a) = area {
                 interaction.set_surface_area(a);
@@ -66,6 +66,7 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
         }
         ServerEvent::Icon(icon) => interaction.update_icon(icon),
         ServerEvent::IconRemoved(id) => interaction.remove_icon(id),
+        ServerEvent::Feedback { icon, actual } => interaction.feedback(icon, actual),
         ServerEvent::Error(e) => tracing::warn!(error = %e, "server refused a command"),
     }
 }
@@ -100,11 +101,21 @@ pub async fn drive(
                                 interaction.handle(s, &mut cmds);
                             }
                         }
-                        Input::Status(source, DeviceStatus::Lost(e)) => {
-                            tracing::debug!(device = source.0, error = %e, "releasing what the device held");
-                            interaction.device_lost(source, &mut cmds);
+                        Input::Status(source, status) => {
+                            let device = config
+                                .devices
+                                .get(usize::from(source.0))
+                                .map_or_else(|| source.0.to_string(), |d| d.name.clone());
+                            let (condition, message) = match status {
+                                DeviceStatus::Open => (DeviceCondition::Connected, String::new()),
+                                DeviceStatus::Unavailable(e) => (DeviceCondition::Disconnected, e),
+                                DeviceStatus::Lost(e) => {
+                                    interaction.device_lost(source, &mut cmds);
+                                    (DeviceCondition::Disconnected, e)
+                                }
+                            };
+                            cmds.push(Command::DeviceStatus { device, condition, message });
                         }
-                        Input::Status(..) => {}
                     }
                     if !cmds.is_empty() {
                         match &link {

@@ -183,6 +183,11 @@ impl GestureDetector {
         self.state
     }
 
+    /// The calibration in use.
+    pub fn calibration(&self) -> &GloveCalibration {
+        &self.calibration
+    }
+
     fn mean(&self, v: &GloveValues, joints: &[Joint]) -> Option<f64> {
         let mut s = 0.0;
         for j in joints {
@@ -242,6 +247,7 @@ pub struct Hand {
     calibration: Calibration,
     gestures: GestureDetector,
     pose: Option<HandPose>,
+    glove: Option<GloveValues>,
 }
 
 impl Hand {
@@ -251,6 +257,7 @@ impl Hand {
             calibration,
             gestures: GestureDetector::new(glove, GestureThresholds::default()),
             pose: None,
+            glove: None,
         }
     }
 
@@ -272,7 +279,24 @@ impl Hand {
 
     /// Takes a glove reading; returns the new gesture when it changed.
     pub fn update_glove(&mut self, values: &GloveValues) -> Option<Gesture> {
+        self.glove = Some(*values);
         self.gestures.update(values)
+    }
+
+    /// Flexion of every glove sensor in radians (empty before the first glove reading).
+    pub fn flexion_rad(&self) -> Vec<f64> {
+        let Some(v) = &self.glove else {
+            return Vec::new();
+        };
+        (0..v.len())
+            .map(|i| {
+                self.gestures
+                    .calibration()
+                    .angle_deg(v, i)
+                    .unwrap_or(0.0)
+                    .to_radians()
+            })
+            .collect()
     }
 
     /// The latest scene pose.

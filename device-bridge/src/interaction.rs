@@ -12,11 +12,11 @@
 //!   `f = k Δx` ([`DragSpring`]). Opening the hand releases it: unbound, passive.
 //! * Load springs adapt from the icon displacement Δy the server reports.
 
-use crate::config::{Config, DeviceKind, MenuConfig};
+use crate::config::{Config, MenuConfig};
 use crate::device::{Reading, Sample, SourceId, Timestamp};
 use crate::hand::{Gesture, Hand};
 use crate::spring::DragSpring;
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -62,8 +62,11 @@ pub enum IconState {
 pub struct IconView {
     /// Id.
     pub id: IconId,
-    /// Current position in scene units.
+    /// Current position on the surface, in scene units.
     pub position: DVec3,
+    /// Its target (a position constraint's handle; for other roles the bridge
+    /// drags from `position`).
+    pub target: DVec3,
     /// Constraint or load.
     pub role: IconRole,
     /// Position, tangent or normal.
@@ -109,34 +112,40 @@ pub enum MenuAction {
     SelectNextIcon,
 }
 
+/// A device's availability as reported to the server.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DeviceCondition {
+    /// Open and delivering.
+    Connected,
+    /// Gone; being reopened.
+    Disconnected,
+}
+
 /// An instruction for the server.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Command {
-    /// Bind `icon` to `sensor` (it becomes driving).
-    Bind {
+    /// Take `icon` with `sensor`: bind the sensor and start dragging (driving).
+    Grab {
         /// Icon.
         icon: IconId,
-        /// Sensor name, `device:sensor`.
+        /// Sensor name (the hand's name, or the 3D mouse's device name).
         sensor: String,
     },
-    /// Unbind `icon` from its sensor.
-    Unbind {
+    /// Let go of `icon`: end the drag (it becomes passive, the shape is kept) and unbind.
+    Release {
         /// Icon.
         icon: IconId,
+        /// Sensor name.
+        sensor: String,
     },
-    /// Move a constraint icon's target to `target`.
+    /// Move a held icon's target: a constraint's displaced target, or a load's
+    /// pulled-to point (the spring model's force expressed as a point, see
+    /// [`DragSpring::pull_point`]).
     Drag {
         /// Icon.
         icon: IconId,
         /// Target in scene units.
         target: DVec3,
-    },
-    /// Apply `force` at a load icon.
-    Load {
-        /// Icon.
-        icon: IconId,
-        /// Force (spring model).
-        force: DVec3,
     },
     /// Set an icon's state.
     SetState {
@@ -145,39 +154,74 @@ pub enum Command {
         /// New state.
         state: IconState,
     },
-    /// Set an icon's role.
+    /// Make an icon a constraint or a load.
     SetRole {
         /// Icon.
         icon: IconId,
         /// New role.
         role: IconRole,
     },
-    /// Set a constraint icon's kind.
+    /// Make an icon a position, tangent or normal constraint.
     SetKind {
         /// Icon.
         icon: IconId,
         /// New kind.
         kind: IconKind,
     },
+    /// Where a hand is (for other clients to draw it); the newest wins.
+    HandSample {
+        /// Sensor name (the hand's name).
+        sensor: String,
+        /// Scene position.
+        position: DVec3,
+        /// Scene orientation.
+        orientation: DQuat,
+        /// Finger joint flexion in radians, per glove sensor (empty without a glove).
+        flexion: Vec<f64>,
+        /// When the tracker record arrived.
+        time: Timestamp,
+    },
+    /// A device's availability changed.
+    DeviceStatus {
+        /// The device's configured name.
+        device: String,
+        /// Its condition.
+        condition: DeviceCondition,
+        /// Details.
+        message: String,
+    },
+}
+
+/// What a pending command is about, for coalescing.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Subject {
+    /// An icon.
+    Icon(IconId),
+    /// A sensor.
+    Sensor(String),
+    /// A device.
+    Device(String),
 }
 
 impl Command {
-    /// The icon the command is about.
-    pub fn icon(&self) -> IconId {
+    /// What the command is about.
+    pub fn subject(&self) -> Subject {
         match self {
-            Command::Bind { icon, .. }
-            | Command::Unbind { icon }
+            Command::Grab { icon, .. }
+            | Command::Release { icon, .. }
             | Command::Drag { icon, .. }
-            | Command::Load { icon, .. }
             | Command::SetState { icon, .. }
             | Command::SetRole { icon, .. }
-            | Command::SetKind { icon, .. } => *icon,
+            | Command::SetKind { icon, .. } => Subject::Icon(*icon),
+            Command::HandSample { sensor, .. } => Subject::Sensor(sensor.clone()),
+            Command::DeviceStatus { device, .. } => Subject::Device(device.clone()),
         }
     }
 
-    /// True for the continuous commands (drag, load), which may be coalesced to the newest.
+    /// True for the continuous commands (drags, hand samples), which may be
+    /// coalesced to the newest.
     pub fn is_continuous(&self) -> bool {
-        matches!(self, Command::Drag { .. } | Command::Load { .. })
+        matches!(self, Command::Drag { .. } | Command::HandSample { .. })
     }
 }
 
@@ -185,20 +229,43 @@ impl Command {
 #[derive(Clone, Debug)]
 struct Hold {
     icon: IconId,
+    /// The sensor holding it.
+    sensor: String,
     /// Where the hand (or virtual hand) was when the drag began.
     origin: DVec3,
-    /// Where the icon was when the drag began.
+    /// Where the dragged point was when the drag began (a constraint's target, a load's position).
     icon_origin: DVec3,
     /// Current displacement Δx.
     offset: DVec3,
+    /// The spring of a load drag.
     spring: Option<DragSpring>,
+}
+
+impl Hold {
+    fn drag(&self) -> Command {
+        let target = match &self.spring {
+            Some(s) => s.pull_point(self.icon_origin, self.offset),
+            None => self.icon_origin + self.offset,
+        };
+        Command::Drag {
+            icon: self.icon,
+            target,
+        }
+    }
+
+    fn release(&self, out: &mut Vec<Command>) {
+        out.push(Command::Release {
+            icon: self.icon,
+            sensor: self.sensor.clone(),
+        });
+    }
 }
 
 struct HandSlot {
     tracker: SourceId,
     sensor: u16,
     glove: Option<SourceId>,
-    sensor_name: String,
+    name: String,
     reach: f64,
     hand: Hand,
     hold: Option<Hold>,
@@ -209,6 +276,7 @@ pub struct Interaction {
     hands: Vec<HandSlot>,
     icons: BTreeMap<IconId, IconView>,
     menu_device: Option<SourceId>,
+    menu_sensor: String,
     menu: MenuConfig,
     entry: usize,
     selected: Option<IconId>,
@@ -224,27 +292,28 @@ impl Interaction {
             .hands
             .iter()
             .filter_map(|h| {
-                let (tracker, td) = config.device(&h.tracker)?;
+                let (tracker, _) = config.device(&h.tracker)?;
                 let glove = h.glove.as_ref().and_then(|g| config.device(g)).map(|g| g.0);
-                debug_assert!(matches!(
-                    td.kind,
-                    DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Vrpn
-                ));
                 Some(HandSlot {
                     tracker,
                     sensor: h.sensor,
                     glove,
-                    sensor_name: format!("{}:{}", h.tracker, h.sensor),
+                    name: h.name.clone(),
                     reach: h.reach,
                     hand: Hand::new(config.calibration, h.calibration.clone()),
                     hold: None,
                 })
             })
             .collect();
+        let menu_device = config.menu_device();
+        let menu_sensor = menu_device
+            .and_then(|d| config.devices.get(usize::from(d.0)))
+            .map_or_else(|| "3d-mouse".to_owned(), |d| d.name.clone());
         Self {
             hands,
             icons: BTreeMap::new(),
-            menu_device: config.menu_device(),
+            menu_device,
+            menu_sensor,
             menu: config.menu.clone(),
             entry: 0,
             selected: None,
@@ -271,31 +340,27 @@ impl Interaction {
         self.selected
     }
 
-    /// Icons held by hands, with the sensor each is bound to.
-    pub fn bindings(&self) -> Vec<(IconId, String)> {
+    fn holds(&self) -> impl Iterator<Item = &Hold> {
         self.hands
             .iter()
-            .filter_map(|h| h.hold.as_ref().map(|g| (g.icon, h.sensor_name.clone())))
-            .collect()
+            .filter_map(|h| h.hold.as_ref())
+            .chain(self.mouse_hold.as_ref())
     }
 
-    /// Commands that re-establish every binding and held drag (after a reconnect).
+    /// Held icons with the sensor holding each.
+    pub fn bindings(&self) -> Vec<(IconId, String)> {
+        self.holds().map(|g| (g.icon, g.sensor.clone())).collect()
+    }
+
+    /// Commands that re-establish every held drag (after a reconnect).
     pub fn restore(&self) -> Vec<Command> {
         let mut out = Vec::new();
-        for h in &self.hands {
-            if let Some(g) = &h.hold {
-                out.push(Command::Bind {
-                    icon: g.icon,
-                    sensor: h.sensor_name.clone(),
-                });
-                out.push(Command::SetState {
-                    icon: g.icon,
-                    state: IconState::Driving,
-                });
-                if let Some(icon) = self.icons.get(&g.icon) {
-                    out.push(drag_command(icon, g));
-                }
-            }
+        for g in self.holds() {
+            out.push(Command::Grab {
+                icon: g.icon,
+                sensor: g.sensor.clone(),
+            });
+            out.push(g.drag());
         }
         out
     }
@@ -309,15 +374,15 @@ impl Interaction {
     /// vanished are dropped.
     pub fn set_icons(&mut self, icons: impl IntoIterator<Item = IconView>) {
         self.icons = icons.into_iter().map(|i| (i.id, i)).collect();
-        let alive = |g: &Option<Hold>, icons: &BTreeMap<IconId, IconView>| {
-            g.as_ref().is_none_or(|g| icons.contains_key(&g.icon))
+        let gone = |g: &Option<Hold>, icons: &BTreeMap<IconId, IconView>| {
+            g.as_ref().is_some_and(|g| !icons.contains_key(&g.icon))
         };
         for h in &mut self.hands {
-            if !alive(&h.hold, &self.icons) {
+            if gone(&h.hold, &self.icons) {
                 h.hold = None;
             }
         }
-        if !alive(&self.mouse_hold, &self.icons) {
+        if gone(&self.mouse_hold, &self.icons) {
             self.mouse_hold = None;
         }
         if self.selected.is_some_and(|s| !self.icons.contains_key(&s)) {
@@ -325,18 +390,28 @@ impl Interaction {
         }
     }
 
-    /// Updates one icon as the server reports it; adapts the spring of a held load
-    /// icon from its displacement Δy against the drag Δx.
+    /// Updates one icon as the server reports it.
     pub fn update_icon(&mut self, icon: IconView) {
         self.icons.insert(icon.id, icon);
+    }
+
+    /// The server solved a drag of `icon`: it now sits at `actual`. Adapts the
+    /// spring of a held load from Δy = actual − start against the drag Δx.
+    pub fn feedback(&mut self, icon: IconId, actual: DVec3) {
+        if !actual.is_finite() {
+            return;
+        }
+        if let Some(v) = self.icons.get_mut(&icon) {
+            v.position = actual;
+        }
         let holds = self
             .hands
             .iter_mut()
             .filter_map(|h| h.hold.as_mut())
             .chain(self.mouse_hold.as_mut());
-        for g in holds.filter(|g| g.icon == icon.id) {
+        for g in holds.filter(|g| g.icon == icon) {
             if let Some(s) = &mut g.spring {
-                s.observe(g.offset, icon.position - g.icon_origin);
+                s.observe(g.offset, actual - g.icon_origin);
             }
         }
     }
@@ -352,22 +427,24 @@ impl Interaction {
         self.set_icons(rest);
     }
 
-    fn start_hold(&self, icon: &IconView, origin: DVec3) -> Hold {
+    fn start_hold(&self, icon: &IconView, sensor: String, origin: DVec3) -> Hold {
+        let load = icon.role == IconRole::Load;
         Hold {
             icon: icon.id,
+            sensor,
             origin,
-            icon_origin: icon.position,
+            icon_origin: if load || icon.kind != IconKind::Position {
+                icon.position
+            } else {
+                icon.target
+            },
             offset: DVec3::ZERO,
-            spring: (icon.role == IconRole::Load).then(|| DragSpring::new(self.surface_area)),
+            spring: load.then(|| DragSpring::new(self.surface_area)),
         }
     }
 
     fn nearest_free_icon(&self, at: DVec3, reach: f64) -> Option<IconView> {
-        let held: Vec<IconId> = self
-            .hands
-            .iter()
-            .filter_map(|h| h.hold.as_ref().map(|g| g.icon))
-            .collect();
+        let held: Vec<IconId> = self.holds().map(|g| g.icon).collect();
         self.icons
             .values()
             .filter(|i| i.state != IconState::Sleeping && !held.contains(&i.id))
@@ -385,17 +462,21 @@ impl Interaction {
                 position,
                 orientation,
             } => {
-                for i in 0..self.hands.len() {
-                    let h = &mut self.hands[i];
+                for h in &mut self.hands {
                     if h.tracker != sample.source || h.sensor != sensor {
                         continue;
                     }
                     let pose = h.hand.update_pose(position, orientation, sample.time);
+                    out.push(Command::HandSample {
+                        sensor: h.name.clone(),
+                        position: pose.position,
+                        orientation: pose.orientation,
+                        flexion: h.hand.flexion_rad(),
+                        time: sample.time,
+                    });
                     if let Some(g) = &mut h.hold {
                         g.offset = pose.position - g.origin;
-                        if let Some(icon) = self.icons.get(&g.icon) {
-                            out.push(drag_command(icon, g));
-                        }
+                        out.push(g.drag());
                     }
                 }
             }
@@ -427,7 +508,7 @@ impl Interaction {
     }
 
     /// A device failed: hands using it let go of what they hold (a drag must not
-    /// continue from a stale hand), and a mouse drag by it stops.
+    /// continue from a stale hand), and a mouse drag by it ends.
     pub fn device_lost(&mut self, source: SourceId, out: &mut Vec<Command>) {
         for i in 0..self.hands.len() {
             let h = &self.hands[i];
@@ -436,7 +517,9 @@ impl Interaction {
             }
         }
         if self.menu_device == Some(source) {
-            self.mouse_hold = None;
+            if let Some(g) = self.mouse_hold.take() {
+                g.release(out);
+            }
             self.mouse_time = None;
         }
     }
@@ -450,45 +533,42 @@ impl Interaction {
                 let Some(pose) = self.hands[i].hand.pose() else {
                     return;
                 };
+                // A mouse drag of the icon the hand reaches for yields to the hand.
+                if let Some(icon) = self.nearest_any(pose.position, self.hands[i].reach)
+                    && self.mouse_hold.as_ref().is_some_and(|m| m.icon == icon)
+                    && let Some(m) = self.mouse_hold.take()
+                {
+                    m.release(out);
+                }
                 let Some(icon) = self.nearest_free_icon(pose.position, self.hands[i].reach) else {
                     return;
                 };
-                let hold = self.start_hold(&icon, pose.position);
-                let h = &mut self.hands[i];
-                tracing::info!(icon = icon.id, sensor = %h.sensor_name, "grab");
-                out.push(Command::Bind {
+                let hold = self.start_hold(&icon, self.hands[i].name.clone(), pose.position);
+                tracing::info!(icon = icon.id, hand = %hold.sensor, "grab");
+                out.push(Command::Grab {
                     icon: icon.id,
-                    sensor: h.sensor_name.clone(),
+                    sensor: hold.sensor.clone(),
                 });
-                out.push(Command::SetState {
-                    icon: icon.id,
-                    state: IconState::Driving,
-                });
-                h.hold = Some(hold);
+                self.hands[i].hold = Some(hold);
                 self.selected = Some(icon.id);
-                // A mouse drag of the same icon yields to the hand.
-                if self.mouse_hold.as_ref().is_some_and(|m| m.icon == icon.id) {
-                    self.mouse_hold = None;
-                }
             }
             Gesture::Open | Gesture::Point => {
                 if let Some(g) = self.hands[i].hold.take() {
-                    tracing::info!(icon = g.icon, "release");
-                    if g.spring.is_some() {
-                        // A released load stops pulling.
-                        out.push(Command::Load {
-                            icon: g.icon,
-                            force: DVec3::ZERO,
-                        });
-                    }
-                    out.push(Command::Unbind { icon: g.icon });
-                    out.push(Command::SetState {
-                        icon: g.icon,
-                        state: IconState::Passive,
-                    });
+                    tracing::info!(icon = g.icon, hand = %g.sensor, "release");
+                    g.release(out);
                 }
             }
         }
+    }
+
+    fn nearest_any(&self, at: DVec3, reach: f64) -> Option<IconId> {
+        self.icons
+            .values()
+            .filter(|i| i.state != IconState::Sleeping)
+            .map(|i| (i.position.distance(at), i.id))
+            .filter(|(d, _)| *d <= reach)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, id)| id)
     }
 
     fn menu_action(&mut self, action: MenuAction, out: &mut Vec<Command>) {
@@ -496,7 +576,9 @@ impl Interaction {
             MenuAction::NextEntry => self.entry = (self.entry + 1) % MENU.len(),
             MenuAction::PreviousEntry => self.entry = (self.entry + MENU.len() - 1) % MENU.len(),
             MenuAction::SelectNextIcon => {
-                self.mouse_hold = None;
+                if let Some(g) = self.mouse_hold.take() {
+                    g.release(out);
+                }
                 let next = match self.selected {
                     Some(s) => self
                         .icons
@@ -516,7 +598,7 @@ impl Interaction {
                     MenuEntry::Role(role) if role != icon.role => {
                         out.push(Command::SetRole { icon: id, role });
                     }
-                    MenuEntry::Kind(kind) if kind != icon.kind => {
+                    MenuEntry::Kind(kind) if kind != icon.kind || icon.role == IconRole::Load => {
                         out.push(Command::SetKind { icon: id, kind });
                     }
                     MenuEntry::State(state) if state != icon.state => {
@@ -534,11 +616,15 @@ impl Interaction {
             .map_or(0.0, |p| time.since(p).as_secs_f64().min(0.1));
         self.mouse_time = Some(time);
         let dz = self.menu.deadzone;
-        let t = DVec3::new(
-            if t.x.abs() < dz { 0.0 } else { t.x },
-            if t.y.abs() < dz { 0.0 } else { t.y },
-            if t.z.abs() < dz { 0.0 } else { t.z },
-        );
+        let cut = |v: f64| if v.abs() < dz { 0.0 } else { v };
+        let t = DVec3::new(cut(t.x), cut(t.y), cut(t.z));
+        if t == DVec3::ZERO {
+            // The cap is back at rest: the mouse drag ends, the shape is kept.
+            if let Some(g) = self.mouse_hold.take() {
+                g.release(out);
+            }
+            return;
+        }
         let Some(icon) = self.selected.and_then(|s| self.icons.get(&s)).copied() else {
             return;
         };
@@ -549,37 +635,29 @@ impl Interaction {
         {
             return; // a hand holds it
         }
-        if t == DVec3::ZERO && self.mouse_hold.is_none() {
-            return;
-        }
         if self.mouse_hold.as_ref().is_none_or(|g| g.icon != icon.id) {
-            self.mouse_hold = Some(self.start_hold(&icon, DVec3::ZERO));
+            if let Some(g) = self.mouse_hold.take() {
+                g.release(out);
+            }
+            let hold = self.start_hold(&icon, self.menu_sensor.clone(), DVec3::ZERO);
+            out.push(Command::Grab {
+                icon: icon.id,
+                sensor: hold.sensor.clone(),
+            });
+            self.mouse_hold = Some(hold);
         }
         let speed = self.menu.speed;
         if let Some(g) = &mut self.mouse_hold {
             g.offset += t * speed * dt;
-            out.push(drag_command(&icon, g));
+            out.push(g.drag());
         }
-    }
-}
-
-fn drag_command(icon: &IconView, g: &Hold) -> Command {
-    match (&g.spring, icon.role) {
-        (Some(s), IconRole::Load) => Command::Load {
-            icon: icon.id,
-            force: s.force(g.offset),
-        },
-        _ => Command::Drag {
-            icon: icon.id,
-            target: g.icon_origin + g.offset,
-        },
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{DeviceConfig, HandConfig};
+    use crate::config::{DeviceConfig, DeviceKind, HandConfig};
     use crate::device::GloveValues;
     use crate::hand::{GloveCalibration, glove_shape};
 
@@ -609,6 +687,7 @@ mod tests {
         IconView {
             id,
             position: p,
+            target: p,
             role,
             kind: IconKind::Position,
             state: IconState::Passive,
@@ -622,7 +701,7 @@ mod tests {
             reading: Reading::Pose {
                 sensor: 0,
                 position: p,
-                orientation: glam::DQuat::IDENTITY,
+                orientation: DQuat::IDENTITY,
             },
         }
     }
@@ -635,12 +714,28 @@ mod tests {
         }
     }
 
+    /// Runs samples, dropping the hand samples (tested separately).
     fn run(i: &mut Interaction, samples: &[Sample]) -> Vec<Command> {
         let mut out = Vec::new();
         for s in samples {
             i.handle(s, &mut out);
         }
+        out.retain(|c| !matches!(c, Command::HandSample { .. }));
         out
+    }
+
+    fn grab(icon: IconId) -> Command {
+        Command::Grab {
+            icon,
+            sensor: "right".into(),
+        }
+    }
+
+    fn release(icon: IconId) -> Command {
+        Command::Release {
+            icon,
+            sensor: "right".into(),
+        }
     }
 
     #[test]
@@ -652,20 +747,8 @@ mod tests {
             icon(3, DVec3::new(0.5, 0.0, 0.0), IconRole::Constraint),
         ]);
         let out = run(&mut i, &[pose(DVec3::new(0.04, 0.0, 0.0)), hand(1.0, 1.0)]);
-        assert_eq!(
-            out,
-            vec![
-                Command::Bind {
-                    icon: 2,
-                    sensor: "tracker:0".into()
-                },
-                Command::SetState {
-                    icon: 2,
-                    state: IconState::Driving
-                }
-            ]
-        );
-        assert_eq!(i.bindings(), vec![(2, "tracker:0".to_string())]);
+        assert_eq!(out, vec![grab(2)]);
+        assert_eq!(i.bindings(), vec![(2, "right".to_string())]);
         let out = run(&mut i, &[pose(DVec3::new(0.04, 0.1, 0.0))]);
         assert_eq!(
             out,
@@ -675,18 +758,35 @@ mod tests {
             }]
         );
         let out = run(&mut i, &[hand(0.0, 0.0)]);
-        assert_eq!(
-            out,
-            vec![
-                Command::Unbind { icon: 2 },
-                Command::SetState {
-                    icon: 2,
-                    state: IconState::Passive
-                }
-            ]
-        );
+        assert_eq!(out, vec![release(2)]);
         // moving an open hand drags nothing
         assert!(run(&mut i, &[pose(DVec3::ZERO)]).is_empty());
+    }
+
+    #[test]
+    fn hand_samples_carry_pose_and_flexion() {
+        let mut i = Interaction::new(&config());
+        let mut out = Vec::new();
+        i.handle(&hand(1.0, 0.0), &mut out);
+        i.handle(&pose(DVec3::new(0.1, 0.2, 0.3)), &mut out);
+        match &out[..] {
+            [
+                Command::HandSample {
+                    sensor,
+                    position,
+                    flexion,
+                    ..
+                },
+            ] => {
+                assert_eq!(sensor, "right");
+                assert_eq!(*position, DVec3::new(0.1, 0.2, 0.3));
+                assert_eq!(flexion.len(), 22);
+                // index MPJ fully bent: 90°; middle MPJ open: 0°
+                assert!((flexion[4] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+                assert_eq!(flexion[7], 0.0);
+            }
+            o => panic!("{o:?}"),
+        }
     }
 
     #[test]
@@ -703,37 +803,33 @@ mod tests {
     }
 
     #[test]
-    fn load_icons_get_spring_forces_that_adapt() {
+    fn load_icons_are_pulled_through_the_adapting_spring() {
         let mut c = config();
         c.hands[0].reach = 1.0;
         let mut i = Interaction::new(&c);
         i.set_surface_area(2.0);
         i.set_icons([icon(7, DVec3::ZERO, IconRole::Load)]);
         run(&mut i, &[pose(DVec3::ZERO), hand(1.0, 1.0)]);
+        // at κ0 the pulled-to point is the hand displacement itself
         let out = run(&mut i, &[pose(DVec3::new(0.0, 0.0, 0.1))]);
         assert_eq!(
             out,
-            vec![Command::Load {
+            vec![Command::Drag {
                 icon: 7,
-                force: DVec3::new(0.0, 0.0, 0.2)
+                target: DVec3::new(0.0, 0.0, 0.1)
             }]
         );
         // the server reports the icon moved only 0.02 (ratio 0.2): the spring stiffens
-        i.update_icon(icon(7, DVec3::new(0.0, 0.0, 0.02), IconRole::Load));
+        // (κ doubles, the most per step) and the pull point goes twice as far
+        i.feedback(7, DVec3::new(0.0, 0.0, 0.02));
         let out = run(&mut i, &[pose(DVec3::new(0.0, 0.0, 0.1))]);
         match &out[0] {
-            Command::Load { force, .. } => assert!((force.z - 0.4).abs() < 1e-12, "{force}"),
+            Command::Drag { target, .. } => assert!((target.z - 0.2).abs() < 1e-12, "{target}"),
             c => panic!("{c:?}"),
         }
-        // release zeroes the load
+        // a constraint's feedback never changes its target
         let out = run(&mut i, &[hand(0.0, 0.0)]);
-        assert_eq!(
-            out[0],
-            Command::Load {
-                icon: 7,
-                force: DVec3::ZERO
-            }
-        );
+        assert_eq!(out, vec![release(7)]);
     }
 
     #[test]
@@ -774,18 +870,31 @@ mod tests {
             },
         };
         let out = run(&mut i, &[motion(0, 1.0), motion(100_000, 1.0)]);
-        assert_eq!(out.len(), 2);
-        match out[1] {
-            Command::Drag { icon, target } => {
-                assert_eq!(icon, 4);
-                assert!((target - DVec3::new(0.02, 0.0, 0.0)).length() < 1e-12);
+        let mouse_grab = Command::Grab {
+            icon: 4,
+            sensor: "mouse".into(),
+        };
+        assert_eq!(out[0], mouse_grab);
+        match out.last() {
+            Some(Command::Drag { icon, target }) => {
+                assert_eq!(*icon, 4);
+                assert!((*target - DVec3::new(0.02, 0.0, 0.0)).length() < 1e-12);
             }
-            ref c => panic!("{c:?}"),
+            c => panic!("{c:?}"),
         }
+        // the cap back at rest ends the mouse drag
+        let out = run(&mut i, &[motion(200_000, 0.0)]);
+        assert_eq!(
+            out,
+            vec![Command::Release {
+                icon: 4,
+                sensor: "mouse".into()
+            }]
+        );
     }
 
     #[test]
-    fn restore_rebinds_held_icons_and_vanished_icons_drop_holds() {
+    fn restore_regrabs_held_icons_and_lost_devices_release() {
         let mut i = Interaction::new(&config());
         i.set_icons([icon(5, DVec3::ZERO, IconRole::Constraint)]);
         run(
@@ -794,25 +903,22 @@ mod tests {
         );
         let r = i.restore();
         assert_eq!(
-            r[0],
-            Command::Bind {
-                icon: 5,
-                sensor: "tracker:0".into()
-            }
-        );
-        assert_eq!(
-            r[2],
-            Command::Drag {
-                icon: 5,
-                target: DVec3::X * 0.01
-            }
+            r,
+            vec![
+                grab(5),
+                Command::Drag {
+                    icon: 5,
+                    target: DVec3::X * 0.01
+                }
+            ]
         );
         // the glove failing releases the icon
         let mut out = Vec::new();
         i.device_lost(SourceId(1), &mut out);
-        assert_eq!(out[0], Command::Unbind { icon: 5 });
+        assert_eq!(out, vec![release(5)]);
         run(&mut i, &[hand(0.0, 0.0), hand(1.0, 1.0)]);
         assert_eq!(i.bindings().len(), 1);
+        // an icon deleted on the server drops the hold
         i.remove_icon(5);
         assert!(i.bindings().is_empty());
         assert!(i.restore().is_empty());

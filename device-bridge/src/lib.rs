@@ -8,6 +8,7 @@
 //! * [`config`] — the TOML configuration and the driver factory.
 //! * [`hand`] — tracker + glove → hand pose and gesture.
 //! * [`spring`] — the adaptive spring of a load drag.
+//! * [`wire`] — the mapping onto the vsculpt protocol.
 //! * [`interaction`] — grab / drag / release and the 3D-mouse menu, as a pure state machine.
 //! * [`link`] — the WebSocket link: hello, reconnect with backoff, latest-wins sending.
 //! * [`listing`] — `--list`: HID devices, serial ports, spacenavd, VRPN sources.
@@ -26,3 +27,4 @@ pub mod outbox;
 pub mod recording;
 pub mod sim;
 pub mod spring;
+pub mod wire;

@@ -21,6 +21,9 @@ use tokio_tungstenite::tungstenite::Message;
 /// What the server told the bridge.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ServerEvent {
+    /// The server accepted the hello (the wire's own event; the link then reports
+    /// [`ServerEvent::Connected`]).
+    Welcome,
     /// A connection was (re)established and accepted.
     Connected,
     /// The connection is gone; a reconnect is under way.
@@ -36,6 +39,13 @@ pub enum ServerEvent {
     Icon(IconView),
     /// An icon was deleted.
     IconRemoved(u64),
+    /// After a solved drag frame: where the dragged icon actually is (Δy for the spring).
+    Feedback {
+        /// The icon.
+        icon: u64,
+        /// Its position on the solved surface.
+        actual: glam::DVec3,
+    },
     /// The server refused something; the text says what.
     Error(String),
 }

@@ -2,17 +2,18 @@
 //! commands (bind, state changes), latest-wins for continuous ones (drag, load),
 //! so a slow link skips stale drag targets instead of falling behind.
 //!
+//! Continuous commands are coalesced per subject (an icon's drag, a hand's sample).
 //! Order is kept where it matters: a discrete command about an icon first flushes
 //! that icon's pending drag, so "drag then release" never arrives reversed.
 
-use crate::interaction::{Command, IconId};
+use crate::interaction::{Command, Subject};
 use std::collections::{BTreeMap, VecDeque};
 
 /// Pending commands.
 #[derive(Debug, Default)]
 pub struct Outbox {
     ordered: VecDeque<Command>,
-    latest: BTreeMap<IconId, Command>,
+    latest: BTreeMap<Subject, Command>,
     coalesced: u64,
 }
 
@@ -24,13 +25,13 @@ impl Outbox {
 
     /// Queues `cmd`.
     pub fn push(&mut self, cmd: Command) {
-        let icon = cmd.icon();
+        let subject = cmd.subject();
         if cmd.is_continuous() {
-            if self.latest.insert(icon, cmd).is_some() {
+            if self.latest.insert(subject, cmd).is_some() {
                 self.coalesced += 1;
             }
         } else {
-            if let Some(pending) = self.latest.remove(&icon) {
+            if let Some(pending) = self.latest.remove(&subject) {
                 self.ordered.push_back(pending);
             }
             self.ordered.push_back(cmd);
@@ -64,7 +65,7 @@ impl Outbox {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interaction::IconState;
+    use crate::interaction::{IconId, IconState};
     use glam::DVec3;
 
     fn drag(icon: IconId, x: f64) -> Command {
@@ -82,13 +83,14 @@ mod tests {
         o.push(drag(1, 2.0));
         o.push(drag(1, 3.0));
         assert_eq!(o.coalesced(), 2);
-        o.push(Command::Unbind { icon: 1 });
+        let release = Command::Release {
+            icon: 1,
+            sensor: "right".into(),
+        };
+        o.push(release.clone());
         o.push(drag(2, 5.0));
         let v = o.drain();
-        assert_eq!(
-            v,
-            vec![drag(1, 3.0), Command::Unbind { icon: 1 }, drag(2, 5.0)]
-        );
+        assert_eq!(v, vec![drag(1, 3.0), release, drag(2, 5.0)]);
         assert!(o.is_empty());
         o.push(Command::SetState {
             icon: 3,

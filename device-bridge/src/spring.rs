@@ -51,6 +51,19 @@ impl DragSpring {
         dx * self.stiffness()
     }
 
+    /// The initial stiffness k0 = κ0 S.
+    pub fn initial_stiffness(&self) -> f64 {
+        KAPPA0 * self.area
+    }
+
+    /// The force for `dx` expressed as the point a load icon at `origin` is pulled
+    /// to: the server applies the spring with its initial stiffness k0 = κ0 S to the
+    /// pulled-to point (`move`/`drag` of a load icon, protocol `Role::Load`), so the
+    /// point `origin + f / k0` yields exactly the force f = k Δx of the adapted spring.
+    pub fn pull_point(&self, origin: DVec3, dx: DVec3) -> DVec3 {
+        origin + self.force(dx) / self.initial_stiffness()
+    }
+
     /// Adapts κ from the icon's displacement `dy` under the drag `dx`. The ratio is
     /// the component of Δy along Δx over |Δx|; outside [0.8, 1.2] κ is scaled by
     /// 1/ratio (exact when the response is linear), by at most a factor 2 per step.
