@@ -437,8 +437,10 @@ impl Actor {
                             pointer: None,
                         },
                     );
+                    // Subscribe first so the newcomer hears the presence too.
+                    let joined = self.joined(id);
                     self.broadcast_presence();
-                    let _ = reply.send(self.joined(id));
+                    let _ = reply.send(joined);
                 }
                 Request::Resync { client, reply } => {
                     let _ = reply.send(self.joined(client));
@@ -687,10 +689,20 @@ impl Actor {
             self.role(client)
                 .ok_or_else(|| CommandError::new(ErrorKind::Forbidden, "not joined"))?
         };
-        let allowed = if command.edits() {
-            role.can_edit()
-        } else {
-            role.can_manage()
+        let allowed = match role {
+            Role::Editor => true,
+            Role::Viewer => false,
+            // A device bridge drags icons and binds its sensors, nothing else.
+            Role::Device => matches!(
+                command,
+                Command::Grab { .. }
+                    | Command::Drag { .. }
+                    | Command::Release { .. }
+                    | Command::Edit(
+                        super::model::Edit::BindSensor { .. }
+                            | super::model::Edit::UnbindSensor { .. }
+                    )
+            ),
         };
         if !allowed {
             return Err(CommandError::new(

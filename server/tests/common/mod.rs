@@ -98,7 +98,9 @@ impl TestServer {
         let mut config = Config::new(data, web);
         config.persist_delay = std::time::Duration::from_millis(100);
         let shutdown = Shutdown::new();
-        let server = Server::start(listener, config, shutdown.clone()).await.unwrap();
+        let server = Server::start(listener, config, shutdown.clone())
+            .await
+            .unwrap();
         let (addr, designs) = parse_banner(&server.links().unwrap());
         assert_eq!(addr, server.local_addr());
         let admin = server.admin_token().to_string();
@@ -161,7 +163,10 @@ impl ChildServer {
         let mut banner = String::new();
         for _ in 0..2 + 3 * designs {
             let mut line = String::new();
-            assert!(reader.read_line(&mut line).unwrap() > 0, "banner ended early: {banner}");
+            assert!(
+                reader.read_line(&mut line).unwrap() > 0,
+                "banner ended early: {banner}"
+            );
             banner.push_str(&line);
         }
         // Keep draining stdout so the child never blocks on a full pipe.
@@ -188,7 +193,10 @@ impl ChildServer {
             if let Some(status) = self.child.try_wait().unwrap() {
                 return status;
             }
-            assert!(start.elapsed().as_secs() < 15, "server did not exit on SIGTERM");
+            assert!(
+                start.elapsed().as_secs() < 15,
+                "server did not exit on SIGTERM"
+            );
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
     }

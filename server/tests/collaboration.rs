@@ -1,0 +1,239 @@
+//! Live collaboration on the real server (in-process, ephemeral port,
+//! tokio-tungstenite clients): two editors and a viewer see the same state,
+//! a drag by one editor reaches the others as geometry frames, presence
+//! shows who holds what, events arrive in order at everyone, and a viewer's
+//! edits are refused without changing anything.
+
+mod common;
+
+use common::TestServer;
+use common::http;
+use common::ws::Client;
+use serde_json::{Value, json};
+
+fn icon_of_role(snapshot: &Value, kind: &str) -> Value {
+    snapshot["icons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["role"]["kind"] == kind)
+        .cloned()
+        .unwrap_or_else(|| panic!("no {kind} icon in {snapshot}"))
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_editors_and_a_viewer_share_state_and_drags() {
+    let server = TestServer::start(common::data_dir("collab")).await;
+    let d = server.demo().clone();
+    assert_eq!(d.name, "demo");
+    let mut a = Client::connect(server.addr, d.id, &d.editor, "ann").await;
+    let mut b = Client::connect(server.addr, d.id, &d.editor, "bob").await;
+    let mut v = Client::connect(server.addr, d.id, &d.viewer, "vic").await;
+    assert_eq!(a.welcome["access"], "editor");
+    assert_eq!(b.welcome["access"], "editor");
+    assert_eq!(v.welcome["access"], "viewer");
+
+    // The same state everywhere: surface, icons, material.
+    for c in [&b, &v] {
+        for key in ["surface", "icons", "material", "versions"] {
+            assert_eq!(c.snapshot[key], a.snapshot[key], "{key} differs");
+        }
+    }
+    assert_eq!(a.snapshot["surface"]["nu"], 16);
+    assert_eq!(a.snapshot["surface"]["nv"], 12);
+    assert_eq!(a.snapshot["icons"].as_array().unwrap().len(), 4);
+
+    // Every client gets the current geometry on joining.
+    let fa = a.frame().await;
+    let fb = b.frame().await;
+    let fv = v.frame().await;
+    assert_eq!(fa.points, fb.points);
+    assert_eq!(fa.points, fv.points);
+    assert_eq!((fa.nu, fa.nv), (16, 12));
+    let snap_points = a.snapshot["surface"]["points"].as_array().unwrap();
+    for (k, p) in fa.points.iter().enumerate() {
+        for c in 0..3 {
+            assert_eq!(p[c], snap_points[k][c].as_f64().unwrap() as f32);
+        }
+    }
+
+    // Presence: the viewer sees three clients.
+    let presence = loop {
+        let p = v.wait_for("presence").await;
+        if p["clients"].as_array().unwrap().len() == 3 {
+            break p;
+        }
+    };
+    let names: Vec<&str> = presence["clients"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, vec!["ann", "bob", "vic"]);
+
+    // Ann drags the load icon up by 10.
+    let load = icon_of_role(&a.snapshot, "load");
+    let id = load["id"].as_u64().unwrap();
+    let start: Vec<f64> = load["xyz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    a.ok(json!({"type": "drag_start", "icon": id})).await;
+    let held = loop {
+        let p = b.wait_for("presence").await;
+        if let Some(c) = p["clients"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == "ann")
+            && c["holding"] == json!(id)
+        {
+            break c.clone();
+        }
+    };
+    assert_eq!(held["access"], "editor");
+    for step in 1..=5 {
+        let z = start[2] + 2.0 * step as f64;
+        a.send(json!({"type": "drag", "icon": id, "xyz": [start[0], start[1], z]}))
+            .await;
+    }
+    let target = start[2] + 10.0;
+    let icon_z = |f: &vsculpt_protocol::GeometryFrame| {
+        f.icons.iter().find(|i| i.id == id).unwrap().xyz[2] as f64
+    };
+    for (c, f0) in [(&mut b, &fb), (&mut v, &fv)] {
+        let mut last = c.frame_after(f0.revision).await;
+        while icon_z(&last) < start[2] + 9.0 {
+            last = c.frame_after(last.revision).await;
+        }
+        assert!(icon_z(&last) <= target + 1e-3);
+        assert_ne!(
+            last.points, f0.points,
+            "the drag must change the control points"
+        );
+        assert_eq!(
+            last.flags & vsculpt_protocol::frame::FLAG_DRAG,
+            vsculpt_protocol::frame::FLAG_DRAG
+        );
+    }
+    // Ann hears where the icon went (for the spring model).
+    let fb_msg = a.wait_for("icon_feedback").await;
+    assert_eq!(fb_msg["icon"], json!(id));
+
+    // Bob cannot grab what Ann holds.
+    b.refused(json!({"type": "drag_start", "icon": id}), "conflict")
+        .await;
+    a.ok(json!({"type": "drag_end", "icon": id})).await;
+
+    // The viewer can change nothing.
+    let before = http::get(
+        server.addr,
+        &format!("/api/designs/{}", d.id),
+        Some(&d.viewer),
+    )
+    .await
+    .json();
+    v.refused(
+        json!({"type": "move_icon", "icon": 1, "xyz": [0.0, 0.0, 0.0]}),
+        "forbidden",
+    )
+    .await;
+    v.refused(
+        json!({"type": "drag", "icon": id, "xyz": [0.0, 0.0, 50.0]}),
+        "forbidden",
+    )
+    .await;
+    v.refused(json!({"type": "drag_start", "icon": id}), "forbidden")
+        .await;
+    v.refused(json!({"type": "delete_icon", "icon": 1}), "forbidden")
+        .await;
+    v.refused(json!({"type": "commit", "message": "mine"}), "forbidden")
+        .await;
+    v.refused(json!({"type": "undo"}), "forbidden").await;
+    v.refused(json!({"type": "set_material", "material": {"alpha11": 1.0, "alpha12": 0.0, "alpha22": 1.0, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0}}), "forbidden").await;
+    v.send(json!({"type": "drag", "icon": id, "xyz": [0.0, 0.0, 80.0]}))
+        .await;
+    assert_eq!(v.wait_for("error").await["code"], "forbidden");
+    let after = http::get(
+        server.addr,
+        &format!("/api/designs/{}", d.id),
+        Some(&d.viewer),
+    )
+    .await
+    .json();
+    assert_eq!(before["design"], after["design"]);
+    v.ping().await;
+
+    // Bob creates an icon: everyone hears of it, in order, with the commit after.
+    let r = b
+        .request(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.2}, "role": {"kind": "position"}}}))
+        .await;
+    assert_eq!(r["type"], "ack");
+    b.ok(json!({"type": "commit", "message": "pinned the side"}))
+        .await;
+    for c in [&mut a, &mut v] {
+        let created = c.wait_for("icon_created").await;
+        assert_eq!(
+            created["icon"]["anchor"],
+            json!({"kind": "point", "u": 0.5, "v": 0.2})
+        );
+        let committed = c.wait_for("committed").await;
+        assert_eq!(committed["version"]["message"], "pinned the side");
+        assert_eq!(committed["version"]["author"], "bob");
+        assert_eq!(committed["version"]["version"], 2);
+    }
+
+    // Undo and redo go to everyone as snapshots.
+    a.ok(json!({"type": "undo"})).await;
+    let s = v.wait_for("snapshot").await;
+    assert_eq!(s["icons"].as_array().unwrap().len(), 4);
+    a.ok(json!({"type": "redo"})).await;
+    let s = v.wait_for("snapshot").await;
+    assert_eq!(s["icons"].as_array().unwrap().len(), 5);
+
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_device_drags_but_cannot_edit_or_commit() {
+    let server = TestServer::start(common::data_dir("device")).await;
+    let d = server.demo().clone();
+    let mut dev = Client::connect(server.addr, d.id, &d.device, "bridge").await;
+    assert_eq!(dev.welcome["access"], "device");
+    let load = icon_of_role(&dev.snapshot, "load");
+    let id = load["id"].as_u64().unwrap();
+    dev.ok(json!({"type": "bind_sensor", "icon": id, "sensor": "right-hand"}))
+        .await;
+    dev.ok(json!({"type": "drag_start", "icon": id})).await;
+    dev.ok(json!({"type": "drag", "icon": id, "xyz": [0.0, 0.0, 60.0]}))
+        .await;
+    dev.ok(json!({"type": "drag_end", "icon": id})).await;
+    dev.ok(json!({"type": "device_sample", "sensor": "right-hand", "position": [1.0, 2.0, 3.0], "orientation": [1.0, 0.0, 0.0, 0.0], "time_us": 5})).await;
+    dev.ok(json!({"type": "device_status", "device": "glove", "condition": "connected"}))
+        .await;
+    dev.refused(json!({"type": "commit", "message": "x"}), "forbidden")
+        .await;
+    dev.refused(json!({"type": "delete_icon", "icon": 1}), "forbidden")
+        .await;
+    dev.refused(json!({"type": "create_design", "name": "x"}), "forbidden")
+        .await;
+    let state = http::get(
+        server.addr,
+        &format!("/api/designs/{}", d.id),
+        Some(&d.editor),
+    )
+    .await
+    .json();
+    let icon = state["design"]["icons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["id"] == json!(id))
+        .unwrap()
+        .clone();
+    assert_eq!(icon["sensors"], json!(["right-hand"]));
+    server.stop().await;
+}

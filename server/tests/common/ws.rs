@@ -1,0 +1,194 @@
+//! A WebSocket test client (tokio-tungstenite 0.29, the same tungstenite
+//! as axum) speaking protocol v1: hello, requests with `req` numbers,
+//! waiting for a given message type, decoding geometry frames.
+
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{Value, json};
+use std::net::SocketAddr;
+use std::time::Duration;
+use tokio_tungstenite::tungstenite::Message;
+use vsculpt_protocol::GeometryFrame;
+
+pub type Stream =
+    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
+
+/// What arrived.
+#[derive(Debug)]
+pub enum Got {
+    Text(Value),
+    Frame(GeometryFrame),
+    Closed,
+}
+
+pub struct Client {
+    pub ws: Stream,
+    pub welcome: Value,
+    pub snapshot: Value,
+    next_req: u64,
+}
+
+pub const WAIT: Duration = Duration::from_secs(10);
+
+/// Opens a raw socket to `/ws`.
+pub async fn raw(addr: SocketAddr) -> Stream {
+    tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
+        .await
+        .unwrap()
+        .0
+}
+
+pub fn hello(design: u64, token: &str, name: &str) -> Value {
+    json!({
+        "type": "hello",
+        "protocol": vsculpt_protocol::PROTOCOL_VERSION,
+        "token": token,
+        "design": design,
+        "client_name": name,
+        "client_kind": "tool"
+    })
+}
+
+/// Reads the next message (text parsed as JSON, binary decoded as a frame).
+pub async fn next(ws: &mut Stream) -> Got {
+    loop {
+        let m = tokio::time::timeout(WAIT, ws.next())
+            .await
+            .expect("no message within 10 s");
+        match m {
+            None | Some(Err(_)) => return Got::Closed,
+            Some(Ok(Message::Text(t))) => {
+                return Got::Text(serde_json::from_str(t.as_str()).unwrap());
+            }
+            Some(Ok(Message::Binary(b))) => {
+                return Got::Frame(GeometryFrame::decode(&b).expect("bad geometry frame"));
+            }
+            Some(Ok(Message::Close(_))) => return Got::Closed,
+            Some(Ok(_)) => continue,
+        }
+    }
+}
+
+impl Client {
+    /// Connects and says hello; panics unless welcomed.
+    pub async fn connect(addr: SocketAddr, design: u64, token: &str, name: &str) -> Self {
+        match Self::try_connect(addr, design, token, name).await {
+            Ok(c) => c,
+            Err(e) => panic!("not welcomed: {e}"),
+        }
+    }
+
+    /// Connects and says hello; the error message if refused.
+    pub async fn try_connect(
+        addr: SocketAddr,
+        design: u64,
+        token: &str,
+        name: &str,
+    ) -> Result<Self, Value> {
+        let mut ws = raw(addr).await;
+        ws.send(Message::text(hello(design, token, name).to_string()))
+            .await
+            .unwrap();
+        let welcome = match next(&mut ws).await {
+            Got::Text(v) if v["type"] == "welcome" => v,
+            Got::Text(v) => return Err(v),
+            other => panic!("unexpected {other:?}"),
+        };
+        let snapshot = match next(&mut ws).await {
+            Got::Text(v) if v["type"] == "snapshot" => v,
+            other => panic!("expected a snapshot, got {other:?}"),
+        };
+        Ok(Self {
+            ws,
+            welcome,
+            snapshot,
+            next_req: 1,
+        })
+    }
+
+    pub fn client_id(&self) -> u64 {
+        self.welcome["client_id"].as_u64().unwrap()
+    }
+
+    pub async fn send(&mut self, v: Value) {
+        self.ws.send(Message::text(v.to_string())).await.unwrap();
+    }
+
+    pub async fn send_text(&mut self, s: &str) {
+        self.ws.send(Message::text(s.to_string())).await.unwrap();
+    }
+
+    pub async fn next(&mut self) -> Got {
+        next(&mut self.ws).await
+    }
+
+    /// The next text message of type `ty`, skipping others.
+    pub async fn wait_for(&mut self, ty: &str) -> Value {
+        loop {
+            match self.next().await {
+                Got::Text(v) if v["type"] == ty => return v,
+                Got::Closed => panic!("closed while waiting for {ty}"),
+                _ => {}
+            }
+        }
+    }
+
+    /// The next geometry frame, skipping text.
+    pub async fn frame(&mut self) -> GeometryFrame {
+        loop {
+            match self.next().await {
+                Got::Frame(f) => return f,
+                Got::Closed => panic!("closed while waiting for a frame"),
+                _ => {}
+            }
+        }
+    }
+
+    /// The next frame with revision > `after`.
+    pub async fn frame_after(&mut self, after: u64) -> GeometryFrame {
+        loop {
+            let f = self.frame().await;
+            if f.revision > after {
+                return f;
+            }
+        }
+    }
+
+    /// Sends `msg` with a fresh `req` and returns the `ack` or `error`
+    /// carrying it (other messages are skipped).
+    pub async fn request(&mut self, mut msg: Value) -> Value {
+        let req = self.next_req;
+        self.next_req += 1;
+        msg["req"] = json!(req);
+        self.send(msg).await;
+        loop {
+            match self.next().await {
+                Got::Text(v)
+                    if (v["type"] == "ack" || v["type"] == "error") && v["req"] == json!(req) =>
+                {
+                    return v;
+                }
+                Got::Closed => panic!("closed while waiting for reply to {req}"),
+                _ => {}
+            }
+        }
+    }
+
+    /// `request` that must be acked.
+    pub async fn ok(&mut self, msg: Value) {
+        let r = self.request(msg.clone()).await;
+        assert_eq!(r["type"], "ack", "{msg} → {r}");
+    }
+
+    /// `request` that must fail with `code`.
+    pub async fn refused(&mut self, msg: Value, code: &str) {
+        let r = self.request(msg.clone()).await;
+        assert_eq!(r["type"], "error", "{msg} → {r}");
+        assert_eq!(r["code"], code, "{msg} → {r}");
+    }
+
+    /// Round trip proving the connection and server are alive.
+    pub async fn ping(&mut self) {
+        self.send(json!({"type": "ping"})).await;
+        self.wait_for("pong").await;
+    }
+}
