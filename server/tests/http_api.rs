@@ -1,0 +1,309 @@
+//! The HTTP surface of the real server: health, metrics and token checks,
+//! the static client and its missing-client page, the REST API (designs,
+//! versions), mesh exports that parse as valid OBJ / STL / glTF, and IGES
+//! export → import giving back the same control points.
+
+mod common;
+
+use base64::Engine;
+use common::TestServer;
+use common::http::{self, get};
+use serde_json::json;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn health_metrics_and_tokens() {
+    let server = TestServer::start(common::data_dir("http-tokens")).await;
+    let d = server.demo().clone();
+    let h = get(server.addr, "/healthz", None).await;
+    assert_eq!((h.status, h.json()), (200, json!({"status": "ok"})));
+    // Without a valid token only the static client and /healthz answer.
+    for path in [
+        "/metrics",
+        "/api/designs",
+        "/api/designs/1",
+        "/api/designs/1/versions",
+        "/api/designs/1/export.obj",
+    ] {
+        assert_eq!(get(server.addr, path, None).await.status, 401, "{path}");
+        assert_eq!(
+            get(server.addr, path, Some("nope")).await.status,
+            401,
+            "{path}"
+        );
+    }
+    // ?token= works as well as the header.
+    let r = get(
+        server.addr,
+        &format!("/api/designs/1?token={}", d.viewer),
+        None,
+    )
+    .await;
+    assert_eq!(r.status, 200);
+    let m = get(server.addr, "/metrics", Some(&d.editor)).await;
+    assert_eq!(m.status, 200);
+    let text = m.text();
+    for name in [
+        "vsculpt_designs_open",
+        "vsculpt_clients",
+        "vsculpt_solves_total",
+        "vsculpt_solve_seconds_mean",
+        "vsculpt_frames_per_second",
+        "vsculpt_frames_sent_total",
+    ] {
+        assert!(text.contains(&format!("# TYPE {name} ")), "{name} missing");
+    }
+    assert_eq!(
+        get(server.addr, "/metrics", Some(&d.viewer)).await.status,
+        401
+    );
+    assert_eq!(
+        get(server.addr, "/metrics", Some(&server.admin))
+            .await
+            .status,
+        200
+    );
+    // Listings: a design token sees its design, the admin sees all.
+    let l = get(server.addr, "/api/designs", Some(&d.viewer))
+        .await
+        .json();
+    assert_eq!(l["designs"].as_array().unwrap().len(), 1);
+    assert_eq!(l["designs"][0]["role"], "viewer");
+    // Creating needs an editor or the admin.
+    let body = br#"{"name": "lid", "nu": 8, "nv": 6}"#;
+    assert_eq!(
+        http::request(server.addr, "POST", "/api/designs", Some(&d.viewer), body)
+            .await
+            .status,
+        401
+    );
+    let c = http::request(server.addr, "POST", "/api/designs", Some(&d.editor), body).await;
+    assert_eq!(c.status, 201);
+    let created = c.json();
+    let id = created["id"].as_u64().unwrap();
+    let s = get(
+        server.addr,
+        &format!("/api/designs/{id}"),
+        Some(created["tokens"]["viewer"].as_str().unwrap()),
+    )
+    .await
+    .json();
+    assert_eq!(s["design"]["surface"]["nu"], 8);
+    assert_eq!(s["design"]["surface"]["nv"], 6);
+    // The demo's tokens do not open the new design.
+    assert_eq!(
+        get(server.addr, &format!("/api/designs/{id}"), Some(&d.editor))
+            .await
+            .status,
+        401
+    );
+    let all = get(server.addr, "/api/designs", Some(&server.admin))
+        .await
+        .json();
+    assert_eq!(all["designs"].as_array().unwrap().len(), 2);
+    // Bad bodies.
+    let bad = http::request(
+        server.addr,
+        "POST",
+        "/api/designs",
+        Some(&d.editor),
+        b"{nope",
+    )
+    .await;
+    assert_eq!(
+        (bad.status, bad.json()["error"]["code"].as_str()),
+        (400, Some("malformed"))
+    );
+    let bad = http::request(
+        server.addr,
+        "POST",
+        "/api/designs",
+        Some(&d.editor),
+        br#"{"name": "x", "nu": 10000}"#,
+    )
+    .await;
+    assert_eq!(bad.status, 400);
+    // Versions: creation is version 1.
+    let v = get(server.addr, "/api/designs/1/versions", Some(&d.viewer))
+        .await
+        .json();
+    assert_eq!(v["versions"][0]["number"], 1);
+    let v1 = get(server.addr, "/api/designs/1/versions/1", Some(&d.viewer))
+        .await
+        .json();
+    assert_eq!(v1["design"]["name"], "demo");
+    assert_eq!(
+        get(server.addr, "/api/designs/1/versions/9", Some(&d.viewer))
+            .await
+            .status,
+        404
+    );
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn static_client_and_missing_client_page() {
+    let data = common::data_dir("http-static");
+    // No client installed: `/` says how to install it.
+    let server = TestServer::start(data.clone()).await;
+    let r = get(server.addr, "/", None).await;
+    assert_eq!(r.status, 503);
+    assert!(r.text().contains("scripts/run.sh"));
+    assert!(r.text().contains("npm ci"));
+    server.stop().await;
+    // A client folder with its packages.
+    let web = data.join("web");
+    std::fs::create_dir_all(web.join("src")).unwrap();
+    std::fs::create_dir_all(web.join("node_modules/three/build")).unwrap();
+    std::fs::create_dir_all(web.join("node_modules/iwer")).unwrap();
+    std::fs::write(
+        web.join("index.html"),
+        "<!doctype html><title>vsculpt</title>",
+    )
+    .unwrap();
+    std::fs::write(web.join("src/main.js"), "export const x = 1;").unwrap();
+    std::fs::write(
+        web.join("node_modules/three/build/three.module.js"),
+        "export {};",
+    )
+    .unwrap();
+    std::fs::write(web.join("node_modules/iwer/index.js"), "export {};").unwrap();
+    let server = TestServer::start_with(data.clone(), web).await;
+    let r = get(server.addr, "/", None).await;
+    assert_eq!(r.status, 200);
+    assert!(r.text().contains("<title>vsculpt</title>"));
+    assert!(r.header("content-type").unwrap().starts_with("text/html"));
+    let js = get(server.addr, "/src/main.js", None).await;
+    assert_eq!(js.status, 200);
+    assert!(js.header("content-type").unwrap().contains("javascript"));
+    assert_eq!(
+        get(server.addr, "/vendor/three/build/three.module.js", None)
+            .await
+            .status,
+        200
+    );
+    assert_eq!(
+        get(server.addr, "/vendor/iwer/index.js", None).await.status,
+        200
+    );
+    assert_eq!(get(server.addr, "/src/missing.js", None).await.status, 404);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn mesh_exports_are_valid_files() {
+    let server = TestServer::start(common::data_dir("http-mesh")).await;
+    let d = server.demo().clone();
+    let path = |ext: &str| format!("/api/designs/{}/export.{ext}", d.id);
+
+    // OBJ: vertices, normals, faces with indices in range.
+    let obj = get(server.addr, &path("obj"), Some(&d.viewer)).await;
+    assert_eq!(obj.status, 200);
+    let text = obj.text();
+    let v = text.lines().filter(|l| l.starts_with("v ")).count();
+    let vn = text.lines().filter(|l| l.starts_with("vn ")).count();
+    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
+    assert!(v > 100);
+    assert_eq!(v, vn);
+    for f in &faces {
+        let idx: Vec<usize> = f[2..]
+            .split_whitespace()
+            .map(|c| c.split("//").next().unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(idx.len(), 3);
+        assert!(idx.iter().all(|&i| i >= 1 && i <= v));
+    }
+
+    // STL: 84 + 50 n bytes, finite unit facet normals.
+    let stl = get(server.addr, &path("stl"), Some(&d.viewer)).await.body;
+    let n = u32::from_le_bytes(stl[80..84].try_into().unwrap()) as usize;
+    assert_eq!(n, faces.len());
+    assert_eq!(stl.len(), 84 + 50 * n);
+    for t in 0..n {
+        let o = 84 + 50 * t;
+        let f = |k: usize| f32::from_le_bytes(stl[o + 4 * k..o + 4 * k + 4].try_into().unwrap());
+        let len = (f(0) * f(0) + f(1) * f(1) + f(2) * f(2)).sqrt();
+        assert!(len == 0.0 || (len - 1.0).abs() < 1e-3);
+        assert!((0..12).all(|k| f(k).is_finite()));
+    }
+
+    // glTF: JSON with a buffer whose length matches, accessors in bounds,
+    // indices in range.
+    let g = get(server.addr, &path("gltf"), Some(&d.viewer)).await;
+    assert!(g.header("content-type").unwrap().contains("gltf"));
+    let doc = g.json();
+    assert_eq!(doc["asset"]["version"], "2.0");
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap();
+    let buf = base64::engine::general_purpose::STANDARD
+        .decode(uri.split_once(",").unwrap().1)
+        .unwrap();
+    assert_eq!(
+        doc["buffers"][0]["byteLength"].as_u64().unwrap() as usize,
+        buf.len()
+    );
+    let count = |k: usize| doc["accessors"][k]["count"].as_u64().unwrap() as usize;
+    assert_eq!(count(0), v);
+    assert_eq!(count(1), v);
+    assert_eq!(count(2), 3 * n);
+    let view = &doc["bufferViews"][2];
+    let off = view["byteOffset"].as_u64().unwrap() as usize;
+    assert_eq!(view["byteLength"].as_u64().unwrap() as usize, 4 * count(2));
+    for k in 0..count(2) {
+        let i = u32::from_le_bytes(buf[off + 4 * k..off + 4 * k + 4].try_into().unwrap()) as usize;
+        assert!(i < v);
+    }
+    assert_eq!(
+        get(server.addr, &path("dwg"), Some(&d.viewer)).await.status,
+        404
+    );
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn iges_export_import_round_trip() {
+    let server = TestServer::start(common::data_dir("http-iges")).await;
+    let d = server.demo().clone();
+    let state = get(server.addr, "/api/designs/1", Some(&d.editor))
+        .await
+        .json();
+    let igs = get(server.addr, "/api/designs/1/export.igs", Some(&d.viewer)).await;
+    assert_eq!(igs.status, 200);
+    let text = igs.text();
+    assert!(text.lines().all(|l| l.len() == 80));
+    // The exported file parses on its own to the same control points.
+    let parsed = vsculpt_server::cad::read_iges(&text).unwrap();
+    let points: Vec<[f64; 3]> = parsed[0].points.iter().map(|p| p.to_array()).collect();
+    let original: Vec<[f64; 3]> =
+        serde_json::from_value(state["design"]["surface"]["points"].clone()).unwrap();
+    assert_eq!(points, original);
+
+    // Into a new design: the same surface comes back through import.
+    let c = http::request(
+        server.addr,
+        "POST",
+        "/api/designs",
+        Some(&server.admin),
+        br#"{"name": "copy"}"#,
+    )
+    .await
+    .json();
+    let id = c["id"].as_u64().unwrap();
+    let editor = c["tokens"]["editor"].as_str().unwrap();
+    let viewer = c["tokens"]["viewer"].as_str().unwrap();
+    let p = format!("/api/designs/{id}/import");
+    // Viewers may not import; broken files are refused; nothing changes.
+    assert_eq!(
+        http::request(server.addr, "POST", &p, Some(viewer), text.as_bytes())
+            .await
+            .status,
+        403
+    );
+    let bad = http::request(server.addr, "POST", &p, Some(editor), b"not an iges file").await;
+    assert_eq!(bad.status, 400);
+    let r = http::request(server.addr, "POST", &p, Some(editor), text.as_bytes()).await;
+    assert_eq!(r.status, 200, "{}", r.text());
+    let copy = get(server.addr, &format!("/api/designs/{id}"), Some(viewer))
+        .await
+        .json();
+    assert_eq!(copy["design"]["surface"], state["design"]["surface"]);
+    server.stop().await;
+}
