@@ -19,6 +19,8 @@ use tokio::sync::mpsc;
 
 /// How long a finished replay waits for its last commands to leave.
 const DRAIN_GRACE: Duration = Duration::from_millis(500);
+/// How long a replay waits for the server before playing anyway.
+const REPLAY_WAIT: Duration = Duration::from_secs(10);
 
 /// What the devices (or a replay) hand to the interaction.
 #[derive(Clone, Debug, PartialEq)]
@@ -76,8 +78,20 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
 pub async fn drive(
     config: &Config,
     wire: Arc<dyn Wire>,
+    inputs: mpsc::UnboundedReceiver<Input>,
+    shutdown: impl Future<Output = ()>,
+) {
+    drive_until_ready(config, wire, inputs, shutdown, None).await
+}
+
+/// [`drive`], telling `ready` once the server's icons are known (the first
+/// snapshot after connecting), so a replay can wait before it starts playing.
+pub async fn drive_until_ready(
+    config: &Config,
+    wire: Arc<dyn Wire>,
     mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
+    mut ready: Option<std::sync::mpsc::Sender<()>>,
 ) {
     let mut interaction = Interaction::new(config);
     let (ev_tx, mut events) = mpsc::unbounded_channel();
@@ -127,7 +141,11 @@ pub async fn drive(
                 None => samples_open = false,
             },
             ev = events.recv() => if let Some(ev) = ev {
+                let snapshot = matches!(ev, ServerEvent::Icons { .. });
                 apply_event(&mut interaction, ev, link.as_ref());
+                if snapshot && let Some(r) = ready.take() {
+                    let _ = r.send(());
+                }
             },
             _ = tokio::time::sleep(DRAIN_GRACE), if !samples_open => break,
             _ = &mut shutdown => break,
@@ -201,10 +219,17 @@ pub async fn run_replay(
         ));
     }
     let (tx, rx) = mpsc::unbounded_channel::<Input>();
+    // With a server, play only once its icons are known (or after a timeout), so
+    // the recorded grabs find what they grabbed live.
+    let (ready_tx, ready_rx) = std::sync::mpsc::channel::<()>();
+    let wait = !config.server.url.is_empty();
     let player = tokio::task::spawn_blocking(move || {
+        if wait {
+            let _ = ready_rx.recv_timeout(REPLAY_WAIT);
+        }
         replayer.play(speed, |s| tx.send(Input::Samples(s.to_vec())).is_ok())
     });
-    drive(&config, wire, rx, shutdown).await;
+    drive_until_ready(&config, wire, rx, shutdown, Some(ready_tx)).await;
     player
         .await
         .map_err(|e| RecordingError::Format(e.to_string()))?

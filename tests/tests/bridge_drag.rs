@@ -1,0 +1,136 @@
+//! End to end: the real server, the bridge, a Flock of Birds tracker and a
+//! CyberGlove simulated on pseudo-terminals. The hand closes on a position icon
+//! of the demo design (it becomes driving, bound to the hand), lifts it by 20 mm
+//! and opens: the icon — and the surface through it — has moved by exactly that
+//! on the server, and it ends passive and unbound. The session is recorded; replaying the recording against a fresh
+//! server produces the same shape change.
+
+mod bridge_support;
+
+use bridge_support::*;
+use glam::DVec3;
+use std::sync::Arc;
+use std::time::Duration;
+use vsculpt_bridge::bridge::{run_live, run_replay};
+use vsculpt_bridge::wire::ProtocolWire;
+use vsculpt_protocol::IconState;
+
+const LIFT: f64 = 20.0;
+
+/// Grabs icon `id` (at `p`) with the studio's hand, lifts it by LIFT mm in z, releases.
+async fn grab_lift_release(server: &RunningServer, studio: &Studio, id: u64, p: DVec3) {
+    let (addr, token) = (server.addr, server.viewer_token.clone());
+    // the bridge is connected and sees the hand: close it
+    tokio::time::sleep(Duration::from_millis(800)).await;
+    studio.close_hand(true);
+    let held = eventually(10, || {
+        let t = token.clone();
+        async move {
+            let i = icon_now(addr, &t, id).await;
+            (i.sensors.contains(&"right-hand".to_string()) && i.holder.is_some()).then_some(i)
+        }
+    })
+    .await
+    .expect("the closed hand grabs the icon");
+    assert_eq!(held.state, IconState::Driving);
+    for k in 1..=20 {
+        studio.move_to(p + DVec3::new(0.0, 0.0, 1.0 + LIFT * k as f64 / 20.0));
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    // the server keeps a drag's shape in its solver until the release; hold still, then let go
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    studio.close_hand(false);
+    let released = eventually(10, || {
+        let t = token.clone();
+        async move {
+            let i = icon_now(addr, &t, id).await;
+            (i.holder.is_none() && i.sensors.is_empty()).then_some(i)
+        }
+    })
+    .await
+    .expect("the opened hand releases the icon");
+    assert_eq!(released.state, IconState::Passive);
+    assert!(
+        (released.xyz[2] - p.z - LIFT).abs() < 0.5,
+        "icon at {:?}, expected z = {}",
+        released.xyz,
+        p.z + LIFT
+    );
+    assert!(
+        (released.xyz[0] - p.x).abs() < 0.5 && (released.xyz[1] - p.y).abs() < 0.5,
+        "{:?}",
+        released.xyz
+    );
+}
+
+fn max_shift(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (DVec3::from_array(*p) - DVec3::from_array(*q)).length())
+        .fold(0.0, f64::max)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn hand_drags_an_icon_and_replay_repeats_it() {
+    init_logs();
+    let dir = temp_dir("bridge-drag");
+    let server = RunningServer::start(&dir.join("data"), None).await;
+    let icon = position_icon(&snapshot_icons(server.addr, &server.viewer_token).await);
+    let p = DVec3::from_array(icon.xyz);
+    let before = snapshot_points(server.addr, &server.viewer_token).await;
+
+    // live session, recorded
+    let studio = Studio::start(&dir, p + DVec3::new(0.0, 0.0, 1.0));
+    let config = bridge_config(&dir, &server.device_url);
+    let recording = dir.join("session.vsbrec");
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let (cfg, rec) = (config.clone(), recording.clone());
+    let bridge = tokio::spawn(async move {
+        run_live(cfg, Arc::new(ProtocolWire), Some(&rec), async {
+            let _ = stopped.await;
+        })
+        .await
+    });
+    grab_lift_release(&server, &studio, icon.id, p).await;
+    let after = snapshot_points(server.addr, &server.viewer_token).await;
+    assert!(
+        max_shift(&before, &after) > 5.0,
+        "the surface moved with the icon"
+    );
+    stop.send(()).unwrap();
+    bridge.await.unwrap().unwrap();
+    server.stop().await;
+    drop(studio);
+
+    // replay into a fresh server: the same drag happens again
+    let server2 = RunningServer::start(&dir.join("data2"), None).await;
+    let icon2 = position_icon(&snapshot_icons(server2.addr, &server2.viewer_token).await);
+    assert_eq!(icon2.id, icon.id);
+    assert_eq!(icon2.xyz, icon.xyz);
+    let mut cfg2 = config.clone();
+    cfg2.server.url = server2.device_url.clone();
+    let n = run_replay(
+        cfg2,
+        Arc::new(ProtocolWire),
+        &recording,
+        4.0,
+        std::future::pending(),
+    )
+    .await
+    .unwrap();
+    assert!(n > 100, "replayed {n} samples");
+    let replayed = icon_now(server2.addr, &server2.viewer_token, icon.id).await;
+    assert!(
+        (replayed.xyz[2] - p.z - LIFT).abs() < 0.5,
+        "replayed icon at {:?}",
+        replayed.xyz
+    );
+    assert_eq!(replayed.state, IconState::Passive);
+    assert!(replayed.sensors.is_empty());
+    let after2 = snapshot_points(server2.addr, &server2.viewer_token).await;
+    assert!(
+        max_shift(&after, &after2) < 0.5,
+        "live and replay give the same shape"
+    );
+    server2.stop().await;
+}
