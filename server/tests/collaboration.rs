@@ -237,3 +237,49 @@ async fn a_device_drags_but_cannot_edit_or_commit() {
     assert_eq!(icon["sensors"], json!(["right-hand"]));
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_that_stops_reading_resyncs_instead_of_queueing() {
+    use common::ws::Got;
+    let server = TestServer::start(common::data_dir("lag")).await;
+    let d = server.demo().clone();
+    let mut slow = Client::connect(server.addr, d.id, &d.viewer, "slow").await;
+    let mut fast = Client::connect(server.addr, d.id, &d.editor, "fast").await;
+    // Far more events than the event channel holds (256) and than the
+    // socket buffers absorb, while the slow client reads nothing.
+    let n = 40_000;
+    for k in 0..n {
+        fast.send(json!({"type": "presence", "pointer": [k as f64, 0.0, 0.0]}))
+            .await;
+    }
+    fast.ping().await;
+    // The slow client now reads: somewhere in its stream there is a fresh
+    // snapshot (the resync), and it ends up with the final presence.
+    let mut resyncs = 0;
+    let mut presences = 0;
+    loop {
+        match slow.next().await {
+            Got::Text(v) if v["type"] == "snapshot" || v["type"] == "presence" => {
+                let list = if v["type"] == "snapshot" {
+                    resyncs += 1;
+                    &v["presence"]
+                } else {
+                    presences += 1;
+                    &v["clients"]
+                };
+                let done = list.as_array().unwrap().iter().any(|c| {
+                    c["name"] == "fast" && c["pointer"] == json!([(n - 1) as f64, 0.0, 0.0])
+                });
+                if done {
+                    break;
+                }
+            }
+            Got::Closed => panic!("the slow client was dropped"),
+            _ => {}
+        }
+    }
+    assert!(resyncs >= 1, "no resync after {presences} presence events");
+    assert!(presences < n, "every event was queued: {presences}");
+    slow.ping().await;
+    server.stop().await;
+}

@@ -379,7 +379,7 @@ impl Actor {
 
     /// Marks drag frames that a later frame of the same client and icon
     /// supersedes before any other request of that client.
-    fn superseded(batch: &[Request]) -> Vec<bool> {
+    pub(crate) fn superseded(batch: &[Request]) -> Vec<bool> {
         let n = batch.len();
         let mut skip = vec![false; n];
         for k in 0..n {
@@ -888,5 +888,49 @@ impl Actor {
                 })
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drag(client: u64, icon: u64, z: f64) -> Request {
+        Request::Command {
+            client,
+            command: Command::Drag {
+                icon,
+                xyz: DVec3::new(0.0, 0.0, z),
+            },
+            reply: None,
+        }
+    }
+
+    #[test]
+    fn only_the_newest_drag_frame_per_client_and_icon_runs() {
+        let batch = vec![
+            drag(1, 7, 1.0),
+            drag(2, 7, 1.0),
+            drag(1, 7, 2.0),
+            drag(1, 8, 1.0),
+            drag(1, 8, 2.0),
+            Request::Command {
+                client: 2,
+                command: Command::Release { icon: 7 },
+                reply: None,
+            },
+            drag(2, 7, 3.0),
+            drag(1, 8, 3.0),
+        ];
+        let skip = Actor::superseded(&batch);
+        // Client 1: icon 7's first frame is superseded by its second; the
+        // second is kept because a frame for another icon (8) follows; icon
+        // 8's frames 3 and 4 are superseded by frame 7 (other clients'
+        // requests in between do not matter). Client 2's frame before its own
+        // release is kept: ordering with other commands holds.
+        assert_eq!(
+            skip,
+            vec![true, false, false, true, true, false, false, false]
+        );
     }
 }
