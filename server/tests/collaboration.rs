@@ -283,3 +283,43 @@ async fn a_client_that_stops_reading_resyncs_instead_of_queueing() {
     slow.ping().await;
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn designs_and_versions_over_the_websocket() {
+    let server = TestServer::start(common::data_dir("ws-designs")).await;
+    let d = server.demo().clone();
+    let mut e = Client::connect(server.addr, d.id, &d.editor, "ed").await;
+    let mut v = Client::connect(server.addr, d.id, &d.viewer, "vi").await;
+    e.send(json!({"type": "list_designs", "req": 1})).await;
+    let l = e.wait_for("designs").await;
+    assert_eq!(
+        l["designs"],
+        json!([{"id": d.id, "name": "demo", "versions": 1}])
+    );
+    e.send(json!({"type": "create_design", "req": 2, "name": "kettle"}))
+        .await;
+    let c = e.wait_for("designs").await;
+    assert_eq!(c["designs"][0]["name"], "kettle");
+    let admin = http::get(server.addr, "/api/designs", Some(&server.admin))
+        .await
+        .json();
+    assert_eq!(admin["designs"].as_array().unwrap().len(), 2);
+    v.refused(
+        json!({"type": "create_design", "name": "mine"}),
+        "forbidden",
+    )
+    .await;
+    e.ok(json!({"type": "commit", "message": "first"})).await;
+    v.send(json!({"type": "list_versions"})).await;
+    let vs = v.wait_for("versions").await;
+    let msgs: Vec<&str> = vs["versions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(msgs, vec!["created", "first"]);
+    e.ok(json!({"type": "restore_version", "version": 1})).await;
+    v.wait_for("snapshot").await;
+    server.stop().await;
+}

@@ -305,34 +305,34 @@ impl Session {
     }
 
     async fn list(&self, id: Option<u64>) {
-        let caller = self.state.caller(&self.token).await.ok().flatten();
+        let admin = matches!(
+            self.state.caller(&self.token).await.ok().flatten(),
+            Some(Caller::Admin)
+        );
         let store = self.state.store.clone();
-        let designs = match tokio::task::spawn_blocking(move || store.designs()).await {
-            Ok(Ok(d)) => d,
+        let token = self.token.clone();
+        let listed =
+            tokio::task::spawn_blocking(move || -> Result<Vec<_>, crate::store::StoreError> {
+                let mut out = Vec::new();
+                for d in store.designs()? {
+                    if admin || d.tokens.role_of(&token).is_some() {
+                        let n = store.versions(d.id)?.len() as u64;
+                        out.push((d.id, d.name, n));
+                    }
+                }
+                Ok(out)
+            })
+            .await;
+        match listed {
+            Ok(Ok(visible)) => self.reply(convert::design_list(&visible)).await,
             _ => {
-                return self
-                    .error(
-                        id,
-                        WireError::from(CommandError::new(
-                            ErrorKind::Storage,
-                            "cannot list designs",
-                        )),
-                    )
-                    .await;
+                self.error(
+                    id,
+                    WireError::from(CommandError::new(ErrorKind::Storage, "cannot list designs")),
+                )
+                .await
             }
-        };
-        let store = self.state.store.clone();
-        let visible: Vec<_> = designs
-            .into_iter()
-            .filter(|d| {
-                matches!(caller, Some(Caller::Admin)) || d.tokens.role_of(&self.token).is_some()
-            })
-            .map(|d| {
-                let n = store.versions(d.id).map(|v| v.len() as u64).unwrap_or(0);
-                (d.id, d.name, n)
-            })
-            .collect();
-        self.reply(convert::design_list(&visible)).await;
+        }
     }
 
     async fn create(&self, id: Option<u64>, name: String) {
