@@ -64,8 +64,8 @@ pub struct IconView {
     pub id: IconId,
     /// Current position on the surface, in scene units.
     pub position: DVec3,
-    /// Its target (a position constraint's handle; for other roles the bridge
-    /// drags from `position`).
+    /// Its target (a position, derivative vector or normal direction); drags
+    /// start from `position`, where the icon is on the surface.
     pub target: DVec3,
     /// Constraint or load.
     pub role: IconRole,
@@ -233,7 +233,7 @@ struct Hold {
     sensor: String,
     /// Where the hand (or virtual hand) was when the drag began.
     origin: DVec3,
-    /// Where the dragged point was when the drag began (a constraint's target, a load's position).
+    /// Where the icon was on the surface when the drag began.
     icon_origin: DVec3,
     /// Current displacement Δx.
     offset: DVec3,
@@ -433,11 +433,8 @@ impl Interaction {
             icon: icon.id,
             sensor,
             origin,
-            icon_origin: if load || icon.kind != IconKind::Position {
-                icon.position
-            } else {
-                icon.target
-            },
+            // Drags start from where the icon visibly is on the surface.
+            icon_origin: icon.position,
             offset: DVec3::ZERO,
             spring: load.then(|| DragSpring::new(self.surface_area)),
         }

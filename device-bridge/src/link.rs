@@ -313,6 +313,7 @@ async fn session(
                 let cmds = outbox.lock().unwrap_or_else(|e| e.into_inner()).drain();
                 for c in &cmds {
                     for text in wire.encode(c) {
+                        tracing::trace!(%text, "to server");
                         tx.send(Message::text(text)).await.map_err(|e| e.to_string())?;
                         stats.send_modify(|s| s.sent += 1);
                     }

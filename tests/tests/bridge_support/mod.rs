@@ -18,7 +18,8 @@ use vsculpt_bridge::sim::cyberglove::CyberGloveSim;
 use vsculpt_bridge::sim::flock::FlockSim;
 use vsculpt_bridge::sim::pty::PtySim;
 use vsculpt_protocol::{
-    ClientEnvelope, ClientKind, ClientMessage, Icon, PROTOCOL_VERSION, Role, ServerMessage,
+    ClientEnvelope, ClientKind, ClientMessage, GeometryFrame, Icon, PROTOCOL_VERSION, Role,
+    ServerMessage,
 };
 use vsculpt_server::server::Server;
 use vsculpt_server::shutdown::Shutdown;
@@ -141,6 +142,40 @@ pub async fn join(
         }
     });
     (tx, mrx)
+}
+
+/// Every binary geometry frame design 1 sends to a client with `token`, decoded.
+pub async fn watch_frames(addr: SocketAddr, token: &str) -> mpsc::UnboundedReceiver<GeometryFrame> {
+    let (ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
+        .await
+        .unwrap();
+    let (mut tx, mut rx) = ws.split();
+    let hello = ClientEnvelope {
+        req: None,
+        msg: ClientMessage::Hello {
+            protocol: PROTOCOL_VERSION,
+            token: token.into(),
+            design: 1,
+            client_name: "e2e-frames".into(),
+            client_kind: ClientKind::Tool,
+        },
+    };
+    tx.send(Message::text(serde_json::to_string(&hello).unwrap()))
+        .await
+        .unwrap();
+    let (ftx, frx) = mpsc::unbounded_channel();
+    tokio::spawn(async move {
+        let _keep = tx;
+        while let Some(Ok(m)) = rx.next().await {
+            if let Message::Binary(b) = m
+                && let Ok(f) = GeometryFrame::decode(&b)
+                && ftx.send(f).is_err()
+            {
+                return;
+            }
+        }
+    });
+    frx
 }
 
 /// The icons of design 1 as a new client sees them (its join snapshot).
