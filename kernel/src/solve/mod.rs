@@ -1,6 +1,13 @@
-//! The constrained solve: the linear problem icons produce ([`Problem`]) and
-//! the solver that answers it.
+//! The constrained solve: the linear problem icons produce ([`Problem`]), the
+//! sparse factorisation of the stiffness and the solver that answers full
+//! solves and drag frames.
 
+mod error;
+mod factor;
 mod problem;
+mod solver;
 
+pub use error::SolveError;
+pub use factor::Factor;
 pub use problem::{Equation, Group, GroupKey, Load, Problem, ScalarRow};
+pub use solver::{SolveReport, Solver};
