@@ -1,0 +1,364 @@
+//! The energy and the constrained solver against analytic truth.
+
+use glam::DVec3;
+use vsculpt_kernel::bspline::{BSplineSurface, KnotVector, greville};
+use vsculpt_kernel::energy::{Stiffness, SurfaceMaterial};
+use vsculpt_kernel::icon::surface_row;
+use vsculpt_kernel::solve::{Equation, Group, Load, Problem, SolveError, Solver};
+
+fn material(alpha: f64, beta: f64, rest: f64) -> SurfaceMaterial {
+    SurfaceMaterial {
+        alpha11: alpha,
+        alpha12: 0.0,
+        alpha22: alpha,
+        beta11: beta,
+        beta12: beta,
+        beta22: beta,
+        rest,
+    }
+}
+
+#[test]
+fn energy_of_polynomial_fields_is_exact() {
+    let kv = KnotVector::new(3, vec![0., 0., 0., 0., 0.2, 0.45, 0.7, 1., 1., 1., 1.]).unwrap();
+    let m = SurfaceMaterial {
+        alpha11: 0.3,
+        alpha12: 0.1,
+        alpha22: 0.7,
+        beta11: 1.3,
+        beta12: 0.9,
+        beta22: 2.1,
+        rest: 0.01,
+    };
+    let k = Stiffness::surface(&kv, &kv, &m).unwrap();
+    let n = kv.num_ctrl();
+    let g = greville(&kv);
+    let kn = kv.knots();
+    // Marsden: control values of t² for a cubic are symmetric products of its interior knots.
+    let sq: Vec<f64> = (0..n)
+        .map(|i| {
+            let (a, b, c) = (kn[i + 1], kn[i + 2], kn[i + 3]);
+            (a * b + a * c + b * c) / 3.0
+        })
+        .collect();
+    let field = |f: &dyn Fn(usize, usize) -> f64| -> Vec<f64> {
+        (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| f(i, j))
+            .collect()
+    };
+    // Constant 1: only the rest term, ∫∫1 = 1.
+    let one = field(&|_, _| 1.0);
+    // Round-off of the cancelling α and β terms is ~1e-12 here.
+    assert!((k.energy(&one) - m.rest).abs() < 1e-10);
+    // w = u: α11 ∫∫1 + rest ∫∫u² = α11 + rest/3; bending vanishes.
+    let u = field(&|i, _| g[i]);
+    assert!((k.energy(&u) - (m.alpha11 + m.rest / 3.0)).abs() < 1e-10);
+    // w = u + v: α11 + 2α12 + α22 + rest ∫∫(u+v)² = … + rest·7/6.
+    let uv = field(&|i, j| g[i] + g[j]);
+    let want = m.alpha11 + 2.0 * m.alpha12 + m.alpha22 + m.rest * 7.0 / 6.0;
+    assert!((k.energy(&uv) - want).abs() < 1e-10);
+    // w = u²: α11 ∫4u² + β11 ∫4 + rest ∫u⁴ = 4α11/3 + 4β11 + rest/5.
+    let u2 = field(&|i, _| sq[i]);
+    assert!((k.energy(&u2) - (4.0 * m.alpha11 / 3.0 + 4.0 * m.beta11 + m.rest / 5.0)).abs() < 1e-9);
+    // w = u·v: w_u = v, w_v = u, w_uv = 1: α11/3 + 2α12/4 + α22/3 + 2β12 + rest/9.
+    let prod = field(&|i, j| g[i] * g[j]);
+    let want = m.alpha11 / 3.0 + m.alpha12 / 2.0 + m.alpha22 / 3.0 + 2.0 * m.beta12 + m.rest / 9.0;
+    assert!((k.energy(&prod) - want).abs() < 1e-9);
+}
+
+fn plate(n: usize) -> BSplineSurface {
+    BSplineSurface::plane(1.0, 1.0, n, n, 3).unwrap()
+}
+
+fn solver_for(s: &BSplineSurface, m: &SurfaceMaterial) -> Solver {
+    Solver::new(Stiffness::surface(s.u_knots(), s.v_knots(), m).unwrap()).unwrap()
+}
+
+fn position(s: &BSplineSurface, key: u64, u: f64, v: f64, target: DVec3) -> Group {
+    Group {
+        key,
+        equations: vec![Equation::Vector {
+            row: surface_row(s, u, v, 0, 0),
+            target,
+        }],
+        loads: vec![],
+    }
+}
+
+#[test]
+fn constraints_hold_and_redundancy_is_harmless() {
+    let s = plate(12);
+    let mut solver = solver_for(&s, &material(0.1, 1.0, 1e-3));
+    let t1 = DVec3::new(0.3, 0.4, 0.25);
+    let mut dup = position(&s, 2, 0.3, 0.4, t1);
+    dup.equations.push(dup.equations[0].clone());
+    let deriv = Group {
+        key: 3,
+        equations: vec![Equation::Vector {
+            row: surface_row(&s, 0.7, 0.2, 1, 0),
+            target: DVec3::new(1.0, 0.0, 0.5),
+        }],
+        loads: vec![],
+    };
+    let normal = DVec3::new(0.2, -0.1, 1.0).normalize();
+    let norm = Group {
+        key: 4,
+        equations: vec![
+            Equation::Projected {
+                row: surface_row(&s, 0.6, 0.7, 1, 0),
+                direction: normal,
+                target: 0.0,
+            },
+            Equation::Projected {
+                row: surface_row(&s, 0.6, 0.7, 0, 1),
+                direction: normal,
+                target: 0.0,
+            },
+        ],
+        loads: vec![],
+    };
+    solver
+        .set_problem(Problem {
+            groups: vec![position(&s, 1, 0.3, 0.4, t1), dup, deriv, norm],
+        })
+        .unwrap();
+    let mut out = vec![DVec3::ZERO; s.points().len()];
+    let report = solver.solve(s.points(), &mut out).unwrap();
+    assert!(
+        report.rank_deficiency >= 6,
+        "duplicates are redundant: {report:?}"
+    );
+    assert!(report.constraint_residual < 1e-9, "{report:?}");
+    let mut solved = s.clone();
+    solved.set_points(out).unwrap();
+    assert!((solved.point(0.3, 0.4) - t1).length() < 1e-9);
+    assert!((solved.derivs(0.7, 0.2).u - DVec3::new(1.0, 0.0, 0.5)).length() < 1e-9);
+    let d = solved.derivs(0.6, 0.7);
+    assert!(d.u.dot(normal).abs() < 1e-9 && d.v.dot(normal).abs() < 1e-9);
+    // The surface's normal there is ±normal.
+    assert!(solved.normal(0.6, 0.7).dot(normal).abs() > 1.0 - 1e-9);
+}
+
+#[test]
+fn contradictory_constraints_give_a_finite_least_squares_answer() {
+    let s = plate(8);
+    let mut solver = solver_for(&s, &material(0.1, 1.0, 1e-3));
+    let a = DVec3::new(0.5, 0.5, 1.0);
+    let b = DVec3::new(0.5, 0.5, -1.0);
+    solver
+        .set_problem(Problem {
+            groups: vec![position(&s, 1, 0.5, 0.5, a), position(&s, 2, 0.5, 0.5, b)],
+        })
+        .unwrap();
+    let mut out = vec![DVec3::ZERO; s.points().len()];
+    let report = solver.solve(s.points(), &mut out).unwrap();
+    assert!(out.iter().all(|p| p.is_finite()));
+    assert!(report.rank_deficiency >= 1);
+    assert!(
+        (report.constraint_residual - 1.0).abs() < 1e-6,
+        "halfway: {report:?}"
+    );
+    let mut solved = s.clone();
+    solved.set_points(out).unwrap();
+    assert!(solved.point(0.5, 0.5).z.abs() < 1e-6);
+}
+
+#[test]
+fn drag_frames_equal_full_solves() {
+    let s = plate(15);
+    let mut solver = solver_for(&s, &material(0.05, 1.0, 1e-3));
+    let normal = DVec3::new(0.0, 0.3, 1.0).normalize();
+    let groups = |shift: DVec3, gain: f64| {
+        vec![
+            position(&s, 1, 0.1, 0.1, DVec3::new(0.1, 0.1, 0.0)),
+            position(&s, 2, 0.9, 0.8, DVec3::new(0.9, 0.8, 0.1) + shift),
+            Group {
+                key: 3,
+                equations: vec![
+                    Equation::Projected {
+                        row: surface_row(&s, 0.3, 0.7, 1, 0),
+                        direction: normal,
+                        target: 0.0,
+                    },
+                    Equation::Projected {
+                        row: surface_row(&s, 0.3, 0.7, 0, 1),
+                        direction: normal,
+                        target: 0.0,
+                    },
+                ],
+                loads: vec![],
+            },
+            Group {
+                key: 4,
+                equations: vec![],
+                loads: vec![Load {
+                    row: surface_row(&s, 0.5, 0.5, 0, 0),
+                    force: DVec3::new(0.0, 0.0, 2.0) + shift * gain,
+                    drag_gain: gain,
+                }],
+            },
+        ]
+    };
+    solver
+        .set_problem(Problem {
+            groups: groups(DVec3::ZERO, 3.0),
+        })
+        .unwrap();
+    let n = s.points().len();
+    let (mut fast, mut full) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+    let t = DVec3::new(0.05, -0.02, 0.3);
+    // Group 2 (constraint) then group 4 (load), each against a fresh full solve.
+    for key in [2u64, 4, 2] {
+        solver.drag(key, t, s.points(), &mut fast).unwrap();
+        let mut reference = solver_for(&s, &material(0.05, 1.0, 1e-3));
+        let mut g = groups(DVec3::ZERO, 3.0);
+        let shifted = groups(t, 3.0);
+        let idx = g.iter().position(|x| x.key == key).unwrap();
+        g[idx] = shifted[idx].clone();
+        reference.set_problem(Problem { groups: g }).unwrap();
+        reference.solve(s.points(), &mut full).unwrap();
+        let err = fast
+            .iter()
+            .zip(&full)
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-9, "key {key}: {err}");
+    }
+    // The drag moved something: a load of more force moves the surface more.
+    let mut base = vec![DVec3::ZERO; n];
+    solver.solve(s.points(), &mut base).unwrap();
+    let moved = fast
+        .iter()
+        .zip(&base)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-3);
+}
+
+#[test]
+fn bad_input_is_refused_and_changes_nothing() {
+    let s = plate(6);
+    let mut solver = solver_for(&s, &material(0.1, 1.0, 1e-3));
+    let good = Problem {
+        groups: vec![position(&s, 1, 0.5, 0.5, DVec3::new(0.5, 0.5, 0.2))],
+    };
+    solver.set_problem(good.clone()).unwrap();
+    let bad = Problem {
+        groups: vec![position(&s, 1, 0.5, 0.5, DVec3::new(f64::NAN, 0.5, 0.2))],
+    };
+    assert!(matches!(
+        solver.set_problem(bad),
+        Err(SolveError::NotFinite(_))
+    ));
+    let mut far = position(&s, 1, 0.5, 0.5, DVec3::ZERO);
+    if let Equation::Vector { row, .. } = &mut far.equations[0] {
+        row.indices[0] = 10_000;
+    }
+    assert!(matches!(
+        solver.set_problem(Problem { groups: vec![far] }),
+        Err(SolveError::IndexOutOfRange { .. })
+    ));
+    assert_eq!(solver.problem(), &good);
+    let mut out = vec![DVec3::ZERO; 36];
+    assert!(matches!(
+        solver.drag(99, DVec3::X, s.points(), &mut out),
+        Err(SolveError::UnknownGroup(99))
+    ));
+    assert!(
+        solver
+            .drag(1, DVec3::splat(f64::INFINITY), s.points(), &mut out)
+            .is_err()
+    );
+    assert!(solver.solve(&s.points()[..5], &mut out).is_err());
+    solver.solve(s.points(), &mut out).unwrap();
+    let mut solved = s.clone();
+    solved.set_points(out).unwrap();
+    assert!((solved.point(0.5, 0.5) - DVec3::new(0.5, 0.5, 0.2)).length() < 1e-9);
+}
+
+/// Central deflection of a clamped unit plate, D = 1, P = 1, with `spans`
+/// cubic spans per side.
+fn clamped_plate_deflection(spans: usize, load: f64) -> (f64, BSplineSurface) {
+    let n = spans + 3;
+    let s = plate(n);
+    // α = 0, β = 1: E = ∫∫(w_uu² + 2w_uv² + w_vv²) − 2 w·f. For a clamped plate
+    // ∫∫(w_uu² + 2w_uv² + w_vv²) = ∫∫(Δw)², so E/2 = ½∫∫(Δw)² − P·w(c): the
+    // Kirchhoff plate energy with D = β = 1. The mass term rest·∫∫w² stiffens
+    // it by about rest/λ_min, λ_min ≈ 1300 the lowest eigenvalue of the clamped
+    // plate: 1e-3 biases w by under 1e-6 relative. (Much smaller values make
+    // K⁻¹b huge in the constant mode and lose digits in δ0 − Yλ.)
+    let mut solver = solver_for(&s, &material(0.0, 1.0, 1e-3));
+    let mut eqs = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let ring = i < 2 || j < 2 || i >= n - 2 || j >= n - 2;
+            if ring {
+                // Fixing the two outer rows of control points in z gives w = 0 and ∂w/∂n = 0 on the edge.
+                let row = vsculpt_kernel::solve::ScalarRow {
+                    indices: vec![s.index(i, j)],
+                    weights: vec![1.0],
+                };
+                eqs.push(Equation::Projected {
+                    row,
+                    direction: DVec3::Z,
+                    target: 0.0,
+                });
+            }
+        }
+    }
+    let groups = vec![
+        Group {
+            key: 1,
+            equations: eqs,
+            loads: vec![],
+        },
+        Group {
+            key: 2,
+            equations: vec![],
+            loads: vec![Load {
+                row: surface_row(&s, 0.5, 0.5, 0, 0),
+                force: DVec3::new(0.0, 0.0, load),
+                drag_gain: 0.0,
+            }],
+        },
+    ];
+    solver.set_problem(Problem { groups }).unwrap();
+    let mut out = vec![DVec3::ZERO; n * n];
+    solver.solve(s.points(), &mut out).unwrap();
+    let mut solved = s.clone();
+    solved.set_points(out).unwrap();
+    (solved.point(0.5, 0.5).z, solved)
+}
+
+#[test]
+fn clamped_plate_under_central_load_converges_to_kirchhoff() {
+    // Timoshenko & Woinowsky-Krieger, Theory of Plates and Shells (2nd ed.,
+    // 1959), §44, Table 35: clamped square plate, central load P:
+    // w_max = 0.00560 · P a² / D.
+    let exact = 0.00560;
+    let mut errors = Vec::new();
+    for spans in [8, 16, 32, 64] {
+        let (w, _) = clamped_plate_deflection(spans, 1.0);
+        errors.push(((w - exact) / exact).abs());
+        println!(
+            "{spans} spans: w = {w:.6}, relative error {:.4}",
+            errors.last().unwrap()
+        );
+    }
+    assert!(errors[3] < 0.02, "{errors:?}");
+    assert!(errors[3] < errors[0]);
+    // Linear in the load, and symmetric under the square's symmetries.
+    let (w1, s) = clamped_plate_deflection(16, 1.0);
+    let (w3, _) = clamped_plate_deflection(16, 3.0);
+    assert!((w3 - 3.0 * w1).abs() < 1e-9 * w3.abs());
+    for &(u, v) in &[(0.3, 0.4), (0.2, 0.65), (0.45, 0.1)] {
+        let z = s.point(u, v).z;
+        for (a, b) in [(1.0 - u, v), (u, 1.0 - v), (v, u), (1.0 - v, 1.0 - u)] {
+            assert!(
+                (s.point(a, b).z - z).abs() < 1e-10,
+                "({u},{v}) vs ({a},{b})"
+            );
+        }
+    }
+}
