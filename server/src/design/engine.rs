@@ -3,15 +3,17 @@
 //!
 //! This engine uses the kernel's `bspline` layer only. A drag moves the
 //! surface point under the dragged icon exactly to the requested position
-//! with the smallest change of control points (the minimum-norm solution
-//! of `w(u,v) = xyz`, i.e. `ΔP_k = N_k(u,v) Δ / Σ N_k²` over the
-//! (p+1)(q+1) control points whose basis functions are non-zero there),
-//! relative to the shape at the start of the drag. The kernel's
+//! with the smallest change of control points, while every active point
+//! position constraint keeps its surface point where it is: the
+//! minimum-norm solution of `A ΔP = b` (one row of basis values
+//! `N_i(u) M_j(v)` per point; `b` = the drag's displacement for the dragged
+//! icon, 0 for each pin), `ΔP = Aᵀ (A Aᵀ)⁻¹ b`, relative to the shape at
+//! the start of the drag. The kernel's
 //! `design::Design` (thin-plate energy, every icon constraint held during
 //! the drag) replaces this once it is available; the actor, the document and
 //! the wire do not change with it.
 
-use super::doc::{AnchorDoc, DerivativeDoc, DesignDoc, IconRoleDoc};
+use super::doc::{AnchorDoc, DerivativeDoc, DesignDoc, IconRoleDoc, IconStateDoc};
 use super::edit::SurfaceQuery;
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
@@ -23,6 +25,8 @@ use vsculpt_kernel::bspline::{BSplineSurface, KnotVector, basis_derivs};
 pub struct Engine {
     surface: BSplineSurface,
     anchors: BTreeMap<u64, AnchorDoc>,
+    /// Active point position constraints: icon id and (u, v).
+    pins: Vec<(u64, [f64; 2])>,
     /// The control points when the current drag started.
     reference: Option<(u64, Vec<DVec3>)>,
 }
@@ -43,9 +47,19 @@ impl Engine {
         let u = KnotVector::new(s.u_degree, s.u_knots.clone()).map_err(geometry)?;
         let v = KnotVector::new(s.v_degree, s.v_knots.clone()).map_err(geometry)?;
         let surface = BSplineSurface::new(u, v, s.dpoints()).map_err(geometry)?;
+        let pins = doc
+            .icons
+            .iter()
+            .filter(|i| i.role == IconRoleDoc::Position && i.state != IconStateDoc::Sleeping)
+            .filter_map(|i| match i.anchor {
+                AnchorDoc::Point { u, v } => Some((i.id, [u, v])),
+                _ => None,
+            })
+            .collect();
         Ok(Self {
             surface,
             anchors: doc.icons.iter().map(|i| (i.id, i.anchor.clone())).collect(),
+            pins,
             reference: None,
         })
     }
@@ -73,41 +87,64 @@ impl Engine {
         Ok(())
     }
 
+    /// The sparse row of basis values of w(u, v): control-point indices
+    /// and weights.
+    fn row(&self, u: f64, v: f64) -> (Vec<usize>, Vec<f64>) {
+        let bu = basis_derivs(self.surface.u_knots(), u, 0);
+        let bv = basis_derivs(self.surface.v_knots(), v, 0);
+        let nv = self.surface.nv();
+        let mut idx = Vec::new();
+        let mut w = Vec::new();
+        for (a, &wa) in bu.row(0).iter().enumerate() {
+            for (b, &wb) in bv.row(0).iter().enumerate() {
+                idx.push((bu.first + a) * nv + bv.first + b);
+                w.push(wa * wb);
+            }
+        }
+        (idx, w)
+    }
+
     /// Moves the surface so icon `icon` is at `xyz`; returns where it is.
     pub fn drag(&mut self, icon: u64, xyz: DVec3) -> Result<DVec3, CommandError> {
         if self.reference.as_ref().map(|r| r.0) != Some(icon) {
             self.grab(icon)?;
         }
         let [u, v] = self.anchors[&icon].centre();
-        let bu = basis_derivs(self.surface.u_knots(), u, 0);
-        let bv = basis_derivs(self.surface.v_knots(), v, 0);
-        let (ru, rv) = (bu.row(0), bv.row(0));
-        let nv = self.surface.nv();
-        let reference = &self
+        let reference = self
             .reference
             .as_ref()
-            .map(|r| &r.1)
+            .map(|r| r.1.clone())
             .ok_or_else(|| CommandError::new(ErrorKind::Conflict, "no drag in progress"))?;
-        let mut start = DVec3::ZERO;
-        let mut norm = 0.0;
-        for (a, &wa) in ru.iter().enumerate() {
-            for (b, &wb) in rv.iter().enumerate() {
-                let w = wa * wb;
-                start += reference[(bu.first + a) * nv + bv.first + b] * w;
-                norm += w * w;
+        // Rows: the dragged point, then every pin that shares a control
+        // point with it (others are unaffected by the minimum-norm change).
+        let mut rows = vec![self.row(u, v)];
+        let start: DVec3 = rows[0]
+            .0
+            .iter()
+            .zip(&rows[0].1)
+            .map(|(&k, &w)| reference[k] * w)
+            .sum();
+        let mut rhs = vec![xyz - start];
+        for &(id, [pu, pv]) in &self.pins {
+            if id == icon {
+                continue;
+            }
+            let r = self.row(pu, pv);
+            if r.0.iter().any(|k| rows[0].0.contains(k)) {
+                rows.push(r);
+                rhs.push(DVec3::ZERO);
             }
         }
-        if norm <= 0.0 {
-            return Err(CommandError::new(
+        let lambda = solve_gram(&rows, &rhs).ok_or_else(|| {
+            CommandError::new(
                 ErrorKind::Solver,
-                "no control point moves this icon",
-            ));
-        }
-        let delta = (xyz - start) / norm;
-        let mut points = reference.to_vec();
-        for (a, &wa) in ru.iter().enumerate() {
-            for (b, &wb) in rv.iter().enumerate() {
-                points[(bu.first + a) * nv + bv.first + b] += delta * (wa * wb);
+                "the drag contradicts a position constraint at the same point",
+            )
+        })?;
+        let mut points = reference;
+        for ((idx, w), l) in rows.iter().zip(&lambda) {
+            for (&k, &wk) in idx.iter().zip(w) {
+                points[k] += *l * wk;
             }
         }
         if !points.iter().all(|p| p.is_finite()) {
@@ -162,6 +199,52 @@ impl Engine {
     }
 }
 
+/// Solves `(A Aᵀ) λ = b` for sparse rows `A` (Gauss elimination with
+/// partial pivoting on the small Gram matrix); `None` when singular.
+fn solve_gram(rows: &[(Vec<usize>, Vec<f64>)], rhs: &[DVec3]) -> Option<Vec<DVec3>> {
+    let m = rows.len();
+    let dot = |a: &(Vec<usize>, Vec<f64>), b: &(Vec<usize>, Vec<f64>)| -> f64 {
+        let mut s = 0.0;
+        for (i, &k) in a.0.iter().enumerate() {
+            if let Some(j) = b.0.iter().position(|&q| q == k) {
+                s += a.1[i] * b.1[j];
+            }
+        }
+        s
+    };
+    let mut g: Vec<Vec<f64>> = (0..m)
+        .map(|i| (0..m).map(|j| dot(&rows[i], &rows[j])).collect())
+        .collect();
+    let mut b = rhs.to_vec();
+    let scale = (0..m).map(|i| g[i][i]).fold(0.0, f64::max);
+    for c in 0..m {
+        let p = (c..m).max_by(|&x, &y| g[x][c].abs().total_cmp(&g[y][c].abs()))?;
+        if g[p][c].abs() <= 1e-12 * scale {
+            return None;
+        }
+        g.swap(c, p);
+        b.swap(c, p);
+        for r in c + 1..m {
+            let f = g[r][c] / g[c][c];
+            let pivot = g[c].clone();
+            for (gk, pk) in g[r].iter_mut().zip(&pivot).skip(c) {
+                *gk -= f * pk;
+            }
+            let bc = b[c];
+            b[r] -= bc * f;
+        }
+    }
+    let mut x = vec![DVec3::ZERO; m];
+    for r in (0..m).rev() {
+        let mut acc = b[r];
+        for k in r + 1..m {
+            acc -= x[k] * g[r][k];
+        }
+        x[r] = acc / g[r][r];
+    }
+    Some(x)
+}
+
 impl SurfaceQuery for Engine {
     fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3] {
         let [u, v] = anchor.centre();
@@ -183,5 +266,65 @@ impl SurfaceQuery for Engine {
             },
         }
         .to_array()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::design::doc::IconDoc;
+
+    fn icon(id: u64, u: f64, v: f64, role: IconRoleDoc) -> IconDoc {
+        IconDoc {
+            id,
+            anchor: AnchorDoc::Point { u, v },
+            role,
+            state: IconStateDoc::Passive,
+            xyz: [0.0; 3],
+            target: [0.0; 3],
+            sensors: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_drag_reaches_its_target_and_keeps_nearby_pins() {
+        let mut doc = crate::design::demo::plate("t", 16, 12).unwrap();
+        doc.icons = vec![
+            icon(1, 0.5, 0.5, IconRoleDoc::Position),
+            icon(2, 0.53, 0.52, IconRoleDoc::Load),
+            icon(3, 0.1, 0.1, IconRoleDoc::Position),
+        ];
+        let mut e = Engine::build(&doc).unwrap();
+        let pin = e.icon_xyz(1).unwrap();
+        let far = e.icon_xyz(3).unwrap();
+        let start = e.icon_xyz(2).unwrap();
+        let target = start + DVec3::new(1.0, -2.0, 10.0);
+        let got = e.drag(2, target).unwrap();
+        assert!((got - target).length() < 1e-9, "{got} vs {target}");
+        assert!((e.icon_xyz(1).unwrap() - pin).length() < 1e-9);
+        assert!((e.icon_xyz(3).unwrap() - far).length() < 1e-12);
+        // Frames are relative to the grab: a second frame replaces the first.
+        let got = e.drag(2, start).unwrap();
+        assert!((got - start).length() < 1e-9);
+        assert!(
+            e.points()
+                .iter()
+                .zip(doc.surface.dpoints())
+                .all(|(a, b)| (*a - b).length() < 1e-9)
+        );
+    }
+
+    #[test]
+    fn dragging_onto_a_pin_is_refused() {
+        let mut doc = crate::design::demo::plate("t", 8, 8).unwrap();
+        doc.icons = vec![
+            icon(1, 0.5, 0.5, IconRoleDoc::Position),
+            icon(2, 0.5, 0.5, IconRoleDoc::Load),
+        ];
+        let mut e = Engine::build(&doc).unwrap();
+        let before = e.points().to_vec();
+        let err = e.drag(2, DVec3::new(0.0, 0.0, 5.0)).unwrap_err();
+        assert_eq!(err.kind, ErrorKind::Solver);
+        assert_eq!(e.points(), &before[..]);
     }
 }
