@@ -264,5 +264,116 @@ fn session_cpu(c: &mut Criterion) {
     drop(sim);
 }
 
-criterion_group!(benches, per_sample, session_cpu);
+/// Latency: a Flock record written on the pty master until the drag it causes
+/// arrives, as a WebSocket message, at a server on loopback.
+fn record_to_server(c: &mut Criterion) {
+    use std::io::Write;
+    let (mut master, slave) = serialport::TTYPort::pair().expect("pty");
+    let port = serialport::SerialPort::name(&slave).expect("pty name");
+    let (arrived_tx, arrived) = std::sync::mpsc::channel::<std::time::Instant>();
+    let sink_rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .thread_name("sink")
+        .enable_all()
+        .build()
+        .expect("sink runtime");
+    let listener = sink_rt
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .expect("bind");
+    let addr = listener.local_addr().expect("addr");
+    sink_rt.spawn(async move {
+        while let Ok((tcp, _)) = listener.accept().await {
+            let arrived_tx = arrived_tx.clone();
+            tokio::spawn(async move {
+                use futures_util::SinkExt;
+                let Ok(ws) = tokio_tungstenite::accept_async(tcp).await else {
+                    return;
+                };
+                let (mut tx, mut rx) = ws.split();
+                let _ = rx.next().await;
+                let _ = tx
+                    .send(tokio_tungstenite::tungstenite::Message::text("{}"))
+                    .await;
+                while let Some(Ok(m)) = rx.next().await {
+                    if m.to_text().is_ok_and(|t| t.contains("\"drag\"")) {
+                        let _ = arrived_tx.send(std::time::Instant::now());
+                    }
+                }
+            });
+        }
+    });
+    let mut cfg = config(&port);
+    cfg.server.url = format!("ws://{addr}/ws?token=t");
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .enable_all()
+        .build()
+        .expect("bridge runtime");
+    let (tx, rx) = mpsc::unbounded_channel::<Input>();
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let cfg2 = cfg.clone();
+    let engine = rt.spawn(async move {
+        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(JsonWire), rx, async {
+            let _ = stop_rx.await;
+        })
+        .await
+    });
+    // the driver without its set-up script: the bench plays the tracker itself
+    let driver = vsculpt_bridge::device::Driver::new(
+        "tracker",
+        SourceId(0),
+        Box::new(vsculpt_bridge::device::transport::SerialTransport::new(
+            port.clone(),
+            115_200,
+        )),
+        build_decoder(SourceId(0), &cfg.devices[0]),
+        Default::default(),
+    );
+    let tx2 = tx.clone();
+    let mut runner = DeviceRunner::spawn(
+        Box::new(driver),
+        RunOptions {
+            silence: None,
+            ..Default::default()
+        },
+        move |s| tx2.send(Input::Samples(s.to_vec())).is_ok(),
+    );
+    let s = FlockSettings::default();
+    let record = |x: f64| {
+        encode_record(
+            &pose_words(&s, DVec3::new(x, 0.0, 0.0), DQuat::IDENTITY),
+            None,
+            None,
+        )
+    };
+    std::thread::sleep(Duration::from_millis(500));
+    master.write_all(&record(0.0)).expect("write");
+    std::thread::sleep(Duration::from_millis(100));
+    tx.send(Input::Samples(vec![grab()])).expect("grab");
+    std::thread::sleep(Duration::from_millis(200));
+    while arrived.try_recv().is_ok() {}
+    let mut i = 0u32;
+    c.bench_function("latency/record_on_pty_to_server_message", |b| {
+        b.iter_custom(|iters| {
+            let mut total = Duration::ZERO;
+            for _ in 0..iters {
+                i = i.wrapping_add(1);
+                let rec = record(f64::from(i % 500) * 1e-4);
+                let t = std::time::Instant::now();
+                master.write_all(&rec).expect("write");
+                let at = arrived
+                    .recv_timeout(Duration::from_secs(2))
+                    .expect("the drag reached the server");
+                total += at.saturating_duration_since(t);
+            }
+            total
+        })
+    });
+    runner.stop();
+    let _ = stop_tx.send(());
+    let _ = rt.block_on(engine);
+    drop(slave);
+}
+
+criterion_group!(benches, per_sample, record_to_server, session_cpu);
 criterion_main!(benches);
