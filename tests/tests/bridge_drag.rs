@@ -134,3 +134,62 @@ async fn hand_drags_an_icon_and_replay_repeats_it() {
     );
     server2.stop().await;
 }
+
+/// A load icon is pulled through the spring model: whatever the server's
+/// stiffness, the bridge adapts κ from the displacement the server reports
+/// until the icon follows the hand within paper 003's band 0.8 ≤ Δy/Δx ≤ 1.2.
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn hand_pulls_a_load_icon_within_the_spring_band() {
+    init_logs();
+    let dir = temp_dir("bridge-load");
+    let server = RunningServer::start(&dir.join("data"), None).await;
+    let icons = snapshot_icons(server.addr, &server.viewer_token).await;
+    let load = icons
+        .iter()
+        .find(|i| i.role == vsculpt_protocol::Role::Load)
+        .cloned()
+        .expect("the demo has a load icon");
+    let p = DVec3::from_array(load.xyz);
+    let studio = Studio::start(&dir, p);
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let cfg = bridge_config(&dir, &server.device_url);
+    let bridge = tokio::spawn(async move {
+        run_live(cfg, Arc::new(ProtocolWire), None, async {
+            let _ = stopped.await;
+        })
+        .await
+    });
+    tokio::time::sleep(Duration::from_millis(800)).await;
+    studio.close_hand(true);
+    let (addr, token) = (server.addr, server.viewer_token.clone());
+    eventually(10, || {
+        let t = token.clone();
+        async move { icon_now(addr, &t, load.id).await.holder.map(|_| ()) }
+    })
+    .await
+    .expect("the hand takes the load icon");
+    let dx = 10.0;
+    for k in 1..=20 {
+        studio.move_to(p + DVec3::new(0.0, 0.0, dx * k as f64 / 20.0));
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    studio.close_hand(false);
+    let done = eventually(10, || {
+        let t = token.clone();
+        async move {
+            let i = icon_now(addr, &t, load.id).await;
+            i.holder.is_none().then_some(i)
+        }
+    })
+    .await
+    .expect("released");
+    let dy = done.xyz[2] - p.z;
+    assert!(
+        (0.8 * dx..=1.2 * dx).contains(&dy),
+        "Δy = {dy} for Δx = {dx}"
+    );
+    stop.send(()).unwrap();
+    bridge.await.unwrap().unwrap();
+    server.stop().await;
+}
