@@ -413,3 +413,42 @@ fn cyberglove_with_the_wrong_sensor_count_is_refused() {
         "{e}"
     );
 }
+
+#[test]
+fn vrpn_server_dropping_the_client_is_ridden_out_by_the_runner() {
+    let server = FakeVrpnServer::start("Tracker0", 1, Duration::from_millis(5)).unwrap();
+    server.set_pose(0, DVec3::new(0.5, 0.0, 0.0), DQuat::IDENTITY);
+    let mut cfg = DeviceConfig::new("studio", DeviceKind::Vrpn);
+    cfg.address = Some(server.addr().to_string());
+    let (tx, rx) = mpsc::channel::<Sample>();
+    let options = RunOptions {
+        silence: None,
+        ..Default::default()
+    };
+    let runner = DeviceRunner::spawn(
+        Box::new(build_driver(SourceId(0), &cfg)),
+        options,
+        move |s| s.iter().all(|s| tx.send(*s).is_ok()),
+    );
+    assert!(rx.recv_timeout(Duration::from_secs(5)).is_ok());
+    server.drop_clients();
+    server.set_pose(0, DVec3::new(0.7, 0.0, 0.0), DQuat::IDENTITY);
+    let end = Instant::now() + Duration::from_secs(10);
+    let mut back = false;
+    while Instant::now() < end {
+        if let Ok(s) = rx.recv_timeout(Duration::from_millis(100))
+            && (pose_of(&s).1.x - 0.7).abs() < 1e-9
+        {
+            back = true;
+            break;
+        }
+    }
+    assert!(back, "no pose after the server dropped the client");
+    assert!(
+        runner
+            .stats()
+            .opens
+            .load(std::sync::atomic::Ordering::Relaxed)
+            >= 2
+    );
+}
