@@ -86,6 +86,7 @@ async fn commit_stop_restart_brings_everything_back() {
     let reverted = get(server.addr, "/api/designs/1", Some(&d.viewer))
         .await
         .json();
+    assert_eq!(reverted["design"]["icons"], committed["design"]["icons"]);
     assert_eq!(reverted["design"], committed["design"]);
     drop(c);
     assert!(server.terminate().success());
