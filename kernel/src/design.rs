@@ -1,1 +1,759 @@
-//! A design (surface, icons, material) as a value: edit, solve, snapshot, restore.
+//! A design — surface, icons, material — as a value you edit, solve,
+//! snapshot and restore.
+//!
+//! The energy is that of the displacement from a *reference shape*, so a
+//! surface with no loads stays as it is and the solver only ever moves it
+//! where an icon asks. Sculpting is plastic: while a load is driven, its
+//! spring pulls the surface elastically; when it is released the current
+//! shape becomes the new reference and the load carries no more force. A
+//! released constraint keeps its new target.
+//!
+//! The solver (a factored stiffness and the icons' cached columns) lives in
+//! the design but is not part of its value: it is rebuilt lazily — numeric
+//! refactor on a material change, new columns on an icon change, nothing on
+//! a drag frame.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+use thiserror::Error;
+
+use crate::bspline::{BSplineSurface, GeometryError};
+use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
+use crate::icon::{
+    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, centroid, icon_group,
+    samples,
+};
+use crate::solve::{Problem, SolveError, SolveReport, Solver};
+use crate::spring::{Adaptation, Spring};
+
+/// Why an edit was refused. A refused edit changes nothing.
+#[derive(Clone, Debug, Error, PartialEq)]
+pub enum DesignError {
+    /// No icon with that id.
+    #[error("no icon {0:?}")]
+    UnknownIcon(IconId),
+    /// A (u,v) outside the surface's domain.
+    #[error("({0}, {1}) is outside the surface's domain")]
+    OutOfDomain(f64, f64),
+    /// A NaN or infinite value.
+    #[error("{0} is not finite")]
+    NotFinite(&'static str),
+    /// The anchor has no length or area.
+    #[error("degenerate anchor: {0}")]
+    Degenerate(&'static str),
+    /// The role does not fit the anchor (derivative and normal constraints
+    /// need a point), or the edit does not fit the icon.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
+    /// The surface data is invalid.
+    #[error(transparent)]
+    Geometry(#[from] GeometryError),
+    /// The material is invalid.
+    #[error(transparent)]
+    Material(#[from] MaterialError),
+    /// The solver failed.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+impl From<AnchorError> for DesignError {
+    fn from(e: AnchorError) -> Self {
+        match e {
+            AnchorError::OutOfDomain(u, v) => DesignError::OutOfDomain(u, v),
+            AnchorError::Degenerate(what) => DesignError::Degenerate(what),
+        }
+    }
+}
+
+impl From<StiffnessError> for DesignError {
+    fn from(e: StiffnessError) -> Self {
+        match e {
+            StiffnessError::Material(m) => DesignError::Material(m),
+            other => DesignError::Solve(SolveError::Stiffness(other)),
+        }
+    }
+}
+
+/// A design as a value: everything that makes it, nothing cached.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DesignSnapshot {
+    /// The current surface.
+    pub surface: BSplineSurface,
+    /// The reference shape (control points) the energy is measured from.
+    pub reference: Vec<DVec3>,
+    /// The material.
+    pub material: SurfaceMaterial,
+    /// The icons, by id.
+    pub icons: Vec<Icon>,
+    /// The next icon id.
+    pub next_id: u64,
+    /// The spring coefficient κ.
+    pub kappa: f64,
+}
+
+/// The result of a drag frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DragReport {
+    /// The solver's report.
+    pub report: SolveReport,
+    /// Where the pointer asked the icon to go.
+    pub requested: DVec3,
+    /// Where the icon is on the solved surface.
+    pub actual: DVec3,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct ActiveDrag {
+    id: IconId,
+    origin: DVec3,
+    t: DVec3,
+    /// The icon's surface position when grabbed (for the spring ratio).
+    grabbed_at: DVec3,
+}
+
+/// A sculptable design.
+#[derive(Debug)]
+pub struct Design {
+    surface: BSplineSurface,
+    reference: Vec<DVec3>,
+    material: SurfaceMaterial,
+    icons: BTreeMap<IconId, Icon>,
+    next_id: u64,
+    spring: Spring,
+    adaptive: bool,
+    solver: Option<Solver>,
+    problem_dirty: bool,
+    drag: Option<ActiveDrag>,
+    revision: u64,
+}
+
+impl Design {
+    /// A design of `surface` with `material`, no icons; the surface is its
+    /// own reference shape.
+    pub fn new(surface: BSplineSurface, material: SurfaceMaterial) -> Result<Self, DesignError> {
+        material.validate()?;
+        let area = surface.area();
+        let spring = Spring::new(10.0, if area > 0.0 { area } else { 1.0 })
+            .map_err(|e| DesignError::Unsupported(e.0))?;
+        Ok(Self {
+            reference: surface.points().to_vec(),
+            surface,
+            material,
+            icons: BTreeMap::new(),
+            next_id: 1,
+            spring,
+            adaptive: true,
+            solver: None,
+            problem_dirty: true,
+            drag: None,
+            revision: 0,
+        })
+    }
+
+    /// A design from a snapshot (icons' samples are recomputed; icons that
+    /// no longer fit the surface are an error).
+    pub fn from_snapshot(s: &DesignSnapshot) -> Result<Self, DesignError> {
+        let mut d = Self::new(s.surface.clone(), s.material)?;
+        if s.reference.len() != s.surface.points().len()
+            || s.reference.iter().any(|p| !p.is_finite())
+        {
+            return Err(DesignError::NotFinite("reference shape"));
+        }
+        d.reference = s.reference.clone();
+        d.next_id = s.next_id;
+        d.spring =
+            Spring::new(s.kappa, d.spring.size()).map_err(|e| DesignError::Unsupported(e.0))?;
+        for icon in &s.icons {
+            let mut icon = icon.clone();
+            icon.samples = samples(&icon.anchor, &d.surface)?;
+            if icon.shape.len() != icon.samples.len() {
+                return Err(DesignError::Unsupported(format!(
+                    "icon {:?}: shape does not match its anchor",
+                    icon.id
+                )));
+            }
+            d.next_id = d.next_id.max(icon.id.0 + 1);
+            d.icons.insert(icon.id, icon);
+        }
+        Ok(d)
+    }
+
+    /// The design as a value.
+    pub fn snapshot(&self) -> DesignSnapshot {
+        DesignSnapshot {
+            surface: self.surface.clone(),
+            reference: self.reference.clone(),
+            material: self.material,
+            icons: self.icons.values().cloned().collect(),
+            next_id: self.next_id,
+            kappa: self.spring.kappa(),
+        }
+    }
+
+    /// Replaces the design by `snapshot` (undo, redo, revert, restore). The
+    /// factorisation is kept when knots and material are unchanged.
+    pub fn restore(&mut self, snapshot: &DesignSnapshot) -> Result<(), DesignError> {
+        let mut next = Self::from_snapshot(snapshot)?;
+        let same_layout = next.surface.u_knots() == self.surface.u_knots()
+            && next.surface.v_knots() == self.surface.v_knots()
+            && next.material == self.material;
+        if same_layout {
+            next.solver = self.solver.take();
+        }
+        next.revision = self.revision + 1;
+        next.adaptive = self.adaptive;
+        *self = next;
+        Ok(())
+    }
+
+    /// The current surface.
+    pub fn surface(&self) -> &BSplineSurface {
+        &self.surface
+    }
+
+    /// The reference shape's control points.
+    pub fn reference(&self) -> &[DVec3] {
+        &self.reference
+    }
+
+    /// The material.
+    pub fn material(&self) -> SurfaceMaterial {
+        self.material
+    }
+
+    /// The spring model.
+    pub fn spring(&self) -> &Spring {
+        &self.spring
+    }
+
+    /// Whether drags adapt the spring's κ (on by default).
+    pub fn set_adaptive_spring(&mut self, on: bool) {
+        self.adaptive = on;
+    }
+
+    /// Sets κ directly.
+    pub fn set_kappa(&mut self, kappa: f64) -> Result<(), DesignError> {
+        self.spring =
+            Spring::new(kappa, self.spring.size()).map_err(|e| DesignError::Unsupported(e.0))?;
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// Increases with every change of shape.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Every icon, by id.
+    pub fn icons(&self) -> impl Iterator<Item = &Icon> {
+        self.icons.values()
+    }
+
+    /// One icon.
+    pub fn icon(&self, id: IconId) -> Option<&Icon> {
+        self.icons.get(&id)
+    }
+
+    /// The icon being dragged, if any.
+    pub fn dragging(&self) -> Option<IconId> {
+        self.drag.map(|d| d.id)
+    }
+
+    fn icon_mut(&mut self, id: IconId) -> Result<&mut Icon, DesignError> {
+        self.icons.get_mut(&id).ok_or(DesignError::UnknownIcon(id))
+    }
+
+    fn check_role(anchor: &Anchor, role: Role) -> Result<(), DesignError> {
+        if matches!(role, Role::Derivative(_) | Role::Normal)
+            && !matches!(anchor, Anchor::Point { .. })
+        {
+            return Err(DesignError::Unsupported(
+                "derivative and normal constraints need a point anchor".into(),
+            ));
+        }
+        if let (Anchor::Region { inside: false, .. }, Role::Position) = (anchor, role) {
+            // Allowed: holds the region. Its target cannot move (see `set_target`).
+        }
+        Ok(())
+    }
+
+    /// The surface's current value of what `role` constrains at `icon`.
+    fn current_target(&self, role: Role, anchor_uv: (f64, f64), shape: &[DVec3]) -> DVec3 {
+        let d = self.surface.derivs(anchor_uv.0, anchor_uv.1);
+        match role {
+            Role::Load | Role::Position => centroid(shape),
+            Role::Normal => self.surface.normal(anchor_uv.0, anchor_uv.1),
+            Role::Derivative(k) => match k.orders() {
+                (1, 0) => d.u,
+                (0, 1) => d.v,
+                (2, 0) => d.uu,
+                (0, 2) => d.vv,
+                _ => d.uv,
+            },
+        }
+    }
+
+    /// Adds an icon; its target defaults to the surface's current value.
+    pub fn add_icon(&mut self, spec: IconSpec) -> Result<IconId, DesignError> {
+        Self::check_role(&spec.anchor, spec.role)?;
+        if let Some(t) = spec.target
+            && !t.is_finite()
+        {
+            return Err(DesignError::NotFinite("target"));
+        }
+        let samples = samples(&spec.anchor, &self.surface)?;
+        let shape: Vec<DVec3> = samples
+            .iter()
+            .map(|&(u, v)| self.surface.point(u, v))
+            .collect();
+        let id = IconId(self.next_id);
+        let mut icon = Icon {
+            id,
+            anchor: spec.anchor,
+            role: spec.role,
+            state: spec.state,
+            sensors: Vec::new(),
+            xyz: centroid(&shape),
+            target: DVec3::ZERO,
+            shape,
+            samples,
+        };
+        icon.target = match spec.target {
+            Some(t) => t,
+            None => self.current_target(icon.role, icon.handle_uv(), &icon.shape),
+        };
+        if icon.role == Role::Normal {
+            icon.target = icon
+                .target
+                .try_normalize()
+                .ok_or(DesignError::NotFinite("normal"))?;
+        }
+        self.next_id += 1;
+        self.icons.insert(id, icon);
+        self.problem_dirty = true;
+        Ok(id)
+    }
+
+    /// Deletes an icon (ending its drag).
+    pub fn remove_icon(&mut self, id: IconId) -> Result<Icon, DesignError> {
+        let icon = self.icons.remove(&id).ok_or(DesignError::UnknownIcon(id))?;
+        if self.dragging() == Some(id) {
+            self.drag = None;
+        }
+        self.problem_dirty = true;
+        Ok(icon)
+    }
+
+    /// Re-anchors an icon; it then holds (or pulls from) the surface as it is
+    /// along the new anchor.
+    pub fn set_anchor(&mut self, id: IconId, anchor: Anchor) -> Result<(), DesignError> {
+        let role = self
+            .icons
+            .get(&id)
+            .ok_or(DesignError::UnknownIcon(id))?
+            .role;
+        Self::check_role(&anchor, role)?;
+        let samples = samples(&anchor, &self.surface)?;
+        let shape: Vec<DVec3> = samples
+            .iter()
+            .map(|&(u, v)| self.surface.point(u, v))
+            .collect();
+        self.finish_drag_of(id);
+        let mut icon = self.icons[&id].clone();
+        icon.anchor = anchor;
+        icon.samples = samples;
+        icon.shape = shape;
+        icon.xyz = centroid(&icon.shape);
+        icon.target = self.current_target(role, icon.handle_uv(), &icon.shape);
+        self.icons.insert(id, icon);
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// Switches constraint ↔ load, position ↔ tangent ↔ normal in one call.
+    /// The new role starts from the surface as it is (no jump).
+    pub fn set_role(&mut self, id: IconId, role: Role) -> Result<(), DesignError> {
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        Self::check_role(&icon.anchor, role)?;
+        self.finish_drag_of(id);
+        self.rebase_shape(id);
+        let icon = &self.icons[&id];
+        let target = self.current_target(role, icon.handle_uv(), &icon.shape);
+        let icon = self.icon_mut(id)?;
+        icon.role = role;
+        icon.target = target;
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// Switches driving / passive / sleeping. A load leaving the driving
+    /// state is released (its deformation is kept).
+    pub fn set_state(&mut self, id: IconId, state: IconState) -> Result<(), DesignError> {
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        let was = icon.state;
+        if was == state {
+            return Ok(());
+        }
+        if was == IconState::Driving {
+            self.release(id)?;
+        }
+        if state == IconState::Sleeping || was == IconState::Sleeping {
+            // Waking up or going to sleep: hold the surface as it is now.
+            self.rebase_shape(id);
+            let icon = &self.icons[&id];
+            let target = self.current_target(icon.role, icon.handle_uv(), &icon.shape);
+            self.icon_mut(id)?.target = target;
+        }
+        self.icon_mut(id)?.state = state;
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// Sets an icon's target exactly (see [`Icon`] for what it means per role).
+    pub fn set_target(&mut self, id: IconId, target: DVec3) -> Result<(), DesignError> {
+        if !target.is_finite() {
+            return Err(DesignError::NotFinite("target"));
+        }
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        if let (Anchor::Region { inside: false, .. }, Role::Position) = (&icon.anchor, icon.role) {
+            return Err(DesignError::Unsupported(
+                "an outside region holds its patch; it cannot be moved".into(),
+            ));
+        }
+        let target = if icon.role == Role::Normal {
+            target
+                .try_normalize()
+                .ok_or(DesignError::NotFinite("normal"))?
+        } else {
+            target
+        };
+        self.finish_drag_of(id);
+        self.icon_mut(id)?.target = target;
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// What a pointer at `xyz` means for the icon's target: a position (or
+    /// a load's pull point) directly; for a derivative constraint the vector
+    /// from the icon to the pointer; for a normal constraint the direction
+    /// from the icon to the pointer.
+    fn pointer_target(&self, icon: &Icon, xyz: DVec3) -> DVec3 {
+        match icon.role {
+            Role::Position | Role::Load => xyz,
+            Role::Derivative(_) | Role::Normal => xyz - icon.xyz,
+        }
+    }
+
+    /// A discrete move of the pointer to `xyz`, solved: a constraint takes
+    /// the new target; a load pulls toward `xyz`, the shape is solved and kept
+    /// (plastic) and the load is passive again.
+    pub fn move_icon(&mut self, id: IconId, xyz: DVec3) -> Result<SolveReport, DesignError> {
+        if !xyz.is_finite() {
+            return Err(DesignError::NotFinite("xyz"));
+        }
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        let target = self.pointer_target(icon, xyz);
+        let before = self.snapshot();
+        self.set_target(id, target)?;
+        let result = self.solve();
+        match result {
+            Ok(report) => {
+                if self.icons[&id].role == Role::Load {
+                    self.bake();
+                    self.rebase_shape(id);
+                    let icon = self.icon_mut(id)?;
+                    icon.target = icon.shape_centroid();
+                    self.problem_dirty = true;
+                }
+                Ok(report)
+            }
+            Err(e) => {
+                self.restore(&before)?;
+                Err(e)
+            }
+        }
+    }
+
+    /// Binds a sensor; the icon becomes driving.
+    pub fn bind_sensor(&mut self, id: IconId, sensor: SensorId) -> Result<(), DesignError> {
+        let icon = self.icon_mut(id)?;
+        if !icon.sensors.contains(&sensor) {
+            icon.sensors.push(sensor);
+        }
+        if icon.state != IconState::Driving {
+            icon.state = IconState::Driving;
+            self.problem_dirty = true;
+        }
+        Ok(())
+    }
+
+    /// Unbinds a sensor; an icon left with none becomes passive (released).
+    pub fn unbind_sensor(&mut self, id: IconId, sensor: &SensorId) -> Result<(), DesignError> {
+        let icon = self.icon_mut(id)?;
+        icon.sensors.retain(|s| s != sensor);
+        if icon.sensors.is_empty() && icon.state == IconState::Driving {
+            self.release(id)?;
+        }
+        Ok(())
+    }
+
+    /// Sets the material; the next solve refactors (numerically).
+    pub fn set_material(&mut self, material: SurfaceMaterial) -> Result<(), DesignError> {
+        material.validate()?;
+        if let Some(solver) = &mut self.solver {
+            let k = Stiffness::surface(self.surface.u_knots(), self.surface.v_knots(), &material)?;
+            solver.refactor(k)?;
+        }
+        self.material = material;
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// Replaces the surface by a refined one of the same shape (knot
+    /// insertion), keeping icons; the reference shape is the refined surface.
+    pub fn replace_surface(&mut self, surface: BSplineSurface) -> Result<(), DesignError> {
+        let mut icons = BTreeMap::new();
+        for (id, icon) in &self.icons {
+            let mut icon = icon.clone();
+            icon.samples = samples(&icon.anchor, &surface)?;
+            icon.shape = icon
+                .samples
+                .iter()
+                .map(|&(u, v)| surface.point(u, v))
+                .collect();
+            icons.insert(*id, icon);
+        }
+        self.drag = None;
+        self.reference = surface.points().to_vec();
+        self.spring.set_size(surface.area());
+        self.surface = surface;
+        self.icons = icons;
+        self.solver = None;
+        self.problem_dirty = true;
+        self.revision += 1;
+        Ok(())
+    }
+
+    fn rebase_shape(&mut self, id: IconId) {
+        let surface = &self.surface;
+        if let Some(icon) = self.icons.get_mut(&id) {
+            icon.shape = icon
+                .samples
+                .iter()
+                .map(|&(u, v)| surface.point(u, v))
+                .collect();
+        }
+    }
+
+    /// The current shape becomes the reference shape (loads lose their pull).
+    fn bake(&mut self) {
+        self.reference = self.surface.points().to_vec();
+        self.problem_dirty = true;
+    }
+
+    fn ensure_solver(&mut self) -> Result<&mut Solver, DesignError> {
+        if self.solver.is_none() {
+            let k = Stiffness::surface(
+                self.surface.u_knots(),
+                self.surface.v_knots(),
+                &self.material,
+            )?;
+            self.solver = Some(Solver::new(k)?);
+            self.problem_dirty = true;
+        }
+        if self.problem_dirty {
+            let problem = self.problem();
+            if let Some(solver) = self.solver.as_mut() {
+                solver.set_problem(problem)?;
+            }
+            self.problem_dirty = false;
+        }
+        self.solver
+            .as_mut()
+            .ok_or(DesignError::Unsupported("no solver".into()))
+    }
+
+    /// The problem of every active icon (the dragged one at its drag origin).
+    pub fn problem(&self) -> Problem {
+        let k = self.spring.stiffness();
+        Problem {
+            groups: self
+                .icons
+                .values()
+                .filter_map(|icon| {
+                    let base = match self.drag {
+                        Some(d) if d.id == icon.id => d.origin,
+                        _ => icon.target,
+                    };
+                    icon_group(icon, base, &self.surface, k)
+                })
+                .collect(),
+        }
+    }
+
+    /// Solves for the shape under every active icon (including the current
+    /// drag) and re-places the icons on the surface.
+    pub fn solve(&mut self) -> Result<SolveReport, DesignError> {
+        let drag = self.drag;
+        let reference = std::mem::take(&mut self.reference);
+        let mut out = vec![DVec3::ZERO; reference.len()];
+        let result = self.ensure_solver().and_then(|solver| {
+            Ok(match drag {
+                Some(d) => solver.drag(d.id.0, d.t, &reference, &mut out)?,
+                None => solver.solve(&reference, &mut out)?,
+            })
+        });
+        self.reference = reference;
+        let report = result?;
+        self.accept(out)?;
+        Ok(report)
+    }
+
+    fn accept(&mut self, points: Vec<DVec3>) -> Result<(), DesignError> {
+        self.surface.set_points(points)?;
+        let surface = &self.surface;
+        for icon in self.icons.values_mut() {
+            let pts: Vec<DVec3> = icon
+                .samples
+                .iter()
+                .map(|&(u, v)| surface.point(u, v))
+                .collect();
+            icon.xyz = centroid(&pts);
+        }
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// Grabs an icon: it becomes driving; its drag starts from its current
+    /// target (for a load: from where its spring is attached).
+    pub fn drag_start(&mut self, id: IconId) -> Result<(), DesignError> {
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        if self.dragging() == Some(id) {
+            return Ok(());
+        }
+        if let (Anchor::Region { inside: false, .. }, Role::Position) = (&icon.anchor, icon.role) {
+            return Err(DesignError::Unsupported(
+                "an outside region holds its patch; it cannot be dragged".into(),
+            ));
+        }
+        if let Some(other) = self.dragging() {
+            self.finish_drag_of(other);
+        }
+        if self.icons[&id].role == Role::Load {
+            // Attach the spring where the surface is now: no jump at the grab.
+            self.rebase_shape(id);
+            let icon = self.icon_mut(id)?;
+            icon.target = icon.shape_centroid();
+        }
+        let origin = self.icons[&id].target;
+        let grabbed_at = self.icons[&id].xyz;
+        let icon = self.icon_mut(id)?;
+        icon.state = IconState::Driving;
+        self.drag = Some(ActiveDrag {
+            id,
+            origin,
+            t: DVec3::ZERO,
+            grabbed_at,
+        });
+        self.problem_dirty = true;
+        Ok(())
+    }
+
+    /// Folds a running drag of `id` into its target (the drag goes on from there).
+    fn finish_drag_of(&mut self, id: IconId) {
+        if let Some(d) = self.drag
+            && d.id == id
+        {
+            if let Some(icon) = self.icons.get_mut(&id) {
+                icon.target = d.origin + d.t;
+            }
+            self.drag = None;
+            self.problem_dirty = true;
+        }
+    }
+
+    /// A drag frame: the pointer holding `id` is at `xyz`. Answered from the
+    /// solver's precomputed columns (no factorisation, no sparse solve) unless
+    /// the icon is a normal constraint, whose direction enters S.
+    pub fn drag(&mut self, id: IconId, xyz: DVec3) -> Result<DragReport, DesignError> {
+        if !xyz.is_finite() {
+            return Err(DesignError::NotFinite("xyz"));
+        }
+        if self.dragging() != Some(id) {
+            self.drag_start(id)?;
+        }
+        let icon = &self.icons[&id];
+        let target = self.pointer_target(icon, xyz);
+        let Some(mut d) = self.drag else {
+            return Err(DesignError::Unsupported("no drag".into()));
+        };
+        if icon.role == Role::Normal {
+            self.finish_drag_of(id);
+            self.icon_mut(id)?.target = target
+                .try_normalize()
+                .ok_or(DesignError::NotFinite("normal"))?;
+            self.drag_start(id)?;
+            let report = self.solve()?;
+            let actual = self.icons[&id].xyz;
+            return Ok(DragReport {
+                report,
+                requested: xyz,
+                actual,
+            });
+        }
+        let previous = d.t;
+        d.t = target - d.origin;
+        self.drag = Some(d);
+        let report = match self.solve() {
+            Ok(r) => r,
+            Err(e) => {
+                d.t = previous;
+                self.drag = Some(d);
+                return Err(e);
+            }
+        };
+        self.icon_mut(id)?.target = target;
+        let actual = self.icons[&id].xyz;
+        if self.adaptive && self.icons[&id].role == Role::Load {
+            let dx = (xyz - d.grabbed_at).length();
+            let dy = (actual - d.grabbed_at).length();
+            if matches!(
+                self.spring.adapt(dx, dy),
+                Adaptation::Raised | Adaptation::Lowered
+            ) {
+                self.problem_dirty = true;
+            }
+        }
+        Ok(DragReport {
+            report,
+            requested: xyz,
+            actual,
+        })
+    }
+
+    /// Releases a driven icon: it becomes passive and the shape is kept — a
+    /// load's deformation is baked into the reference shape; a constraint
+    /// keeps its dragged target.
+    pub fn release(&mut self, id: IconId) -> Result<(), DesignError> {
+        let role = self
+            .icons
+            .get(&id)
+            .ok_or(DesignError::UnknownIcon(id))?
+            .role;
+        self.finish_drag_of(id);
+        if role == Role::Load {
+            self.bake();
+            self.rebase_shape(id);
+            let icon = self.icon_mut(id)?;
+            icon.target = icon.shape_centroid();
+        }
+        let icon = self.icon_mut(id)?;
+        if icon.state == IconState::Driving {
+            icon.state = IconState::Passive;
+        }
+        icon.sensors.clear();
+        self.problem_dirty = true;
+        Ok(())
+    }
+}

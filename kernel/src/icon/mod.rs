@@ -1,6 +1,20 @@
-//! Icon entities: constraints and loads attached to a surface or curve, and
-//! how each becomes constraint equations or loads of a [`crate::solve::Problem`].
+//! Icon entities (paper 003): constraints and loads attached to a surface —
+//! point, curve and region anchors × load, position, derivative (R, V, R2,
+//! V2, RV) and normal roles, in the states driving, passive and sleeping —
+//! and how each becomes equations or loads of a [`crate::solve::Problem`].
 
+mod entity;
+mod group;
+mod id;
+mod kind;
 mod rows;
+mod sampling;
+mod state;
 
+pub use entity::{Icon, IconSpec, centroid};
+pub use group::icon_group;
+pub use id::{IconId, SensorId};
+pub use kind::{Anchor, Derivative, Role};
 pub use rows::{curve_row, surface_row};
+pub use sampling::{AnchorError, samples};
+pub use state::IconState;

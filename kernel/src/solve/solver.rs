@@ -344,7 +344,7 @@ impl Solver {
             let zero = vec![0.0; self.eqs.len()];
             let r = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| {
                 let inputs = self.unit_inputs(group, e);
-                self.delta(&inputs, &zero)
+                self.refined_delta(&inputs, &zero)
             });
             self.response = Some(Response { group, r });
         }
@@ -433,12 +433,8 @@ impl Solver {
         }
     }
 
-    /// δ = Z w for the given targets/forces and C·P_ref.
-    fn delta(&self, inputs: &Inputs, cx: &[f64]) -> Vec<DVec3> {
-        self.delta_lambda(inputs, cx).0
-    }
-
-    /// δ and the Lagrange multipliers λ.
+    /// δ = Z w for the given targets/forces and C·P_ref, and the Lagrange
+    /// multipliers λ.
     fn delta_lambda(&self, inputs: &Inputs, cx: &[f64]) -> (Vec<DVec3>, Vec<f64>) {
         let nc = self.rows.len();
         let mut w = vec![DVec3::ZERO; nc];
