@@ -535,6 +535,23 @@ impl Design {
         Ok(())
     }
 
+    /// Halves every knot span (knot insertion): the same shape with four
+    /// times the control points, for more detail where it is sculpted next.
+    pub fn refine(&mut self) -> Result<(), DesignError> {
+        let refined = self.surface.refine_uniform()?;
+        self.replace_surface(refined)
+    }
+
+    /// Inserts one knot along u or v (the shape is unchanged).
+    pub fn insert_knot(&mut self, along_u: bool, t: f64) -> Result<(), DesignError> {
+        let refined = if along_u {
+            self.surface.insert_knot_u(t)?
+        } else {
+            self.surface.insert_knot_v(t)?
+        };
+        self.replace_surface(refined)
+    }
+
     fn rebase_shape(&mut self, id: IconId) {
         let surface = &self.surface;
         if let Some(icon) = self.icons.get_mut(&id) {

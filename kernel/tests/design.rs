@@ -395,3 +395,22 @@ fn the_spring_adapts_into_the_band_on_soft_and_stiff_surfaces() {
         assert!((0.8..=1.2).contains(&ratio), "β = {beta}: ratio {ratio}");
     }
 }
+
+#[test]
+fn refining_keeps_shape_and_icons() {
+    let mut d = design();
+    pin_corners(&mut d);
+    let id = d.add_icon(point(0.5, 0.5, Role::Position)).unwrap();
+    let t = d.icon(id).unwrap().target + DVec3::Z * 0.1;
+    d.move_icon(id, t).unwrap();
+    let before = d.surface().clone();
+    d.refine().unwrap();
+    assert_eq!(d.surface().nu(), before.nu() + 9);
+    for k in 0..=20 {
+        let (u, v) = (k as f64 / 20.0, 1.0 - k as f64 / 20.0);
+        assert!((d.surface().point(u, v) - before.point(u, v)).length() < 1e-12);
+    }
+    d.solve().unwrap();
+    assert!((d.surface().point(0.5, 0.5) - t).length() < 1e-9);
+    assert!(d.insert_knot(true, f64::NAN).is_err());
+}

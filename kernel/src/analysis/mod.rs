@@ -1,1 +1,10 @@
-//! Shape evaluation for clients and designers: curvature and tessellation.
+//! Shape evaluation for designers and clients: curvature (mean, Gaussian,
+//! principal) and tessellation with per-vertex normals and curvature.
+
+mod curvature;
+mod tessellate;
+
+pub use curvature::{Degenerate, SurfaceCurvature, curve_curvature, surface_curvature};
+pub use tessellate::{
+    CurveTessellation, Tessellation, Tessellator, samples_for, tessellate, tessellate_curve,
+};
