@@ -817,11 +817,18 @@ mod tests {
             }]
         );
         // the server reports the icon moved only 0.02 (ratio 0.2): the spring stiffens
-        // (κ doubles, the most per step) and the pull point goes twice as far
+        // as the kernel's spring model says, and the pull point goes further
         i.feedback(7, DVec3::new(0.0, 0.0, 0.02));
+        let mut expected = DragSpring::new(2.0);
+        expected.observe(DVec3::new(0.0, 0.0, 0.1), DVec3::new(0.0, 0.0, 0.02));
+        assert!(expected.kappa() > 1.0);
+        let want = expected.pull_point(DVec3::ZERO, DVec3::new(0.0, 0.0, 0.1));
         let out = run(&mut i, &[pose(DVec3::new(0.0, 0.0, 0.1))]);
         match &out[0] {
-            Command::Drag { target, .. } => assert!((target.z - 0.2).abs() < 1e-12, "{target}"),
+            Command::Drag { target, .. } => {
+                assert!((*target - want).length() < 1e-12, "{target} vs {want}");
+                assert!(target.z > 0.1);
+            }
             c => panic!("{c:?}"),
         }
         // a constraint's feedback never changes its target
