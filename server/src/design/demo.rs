@@ -52,6 +52,7 @@ pub fn plate(name: &str, nu: usize, nv: usize) -> Result<DesignDoc, CommandError
         material: MaterialDoc::default(),
         icons: Vec::new(),
         next_icon: 1,
+        kappa: None,
     })
 }
 
@@ -79,6 +80,7 @@ pub fn demo() -> Result<DesignDoc, CommandError> {
         material: MaterialDoc::default(),
         icons: Vec::new(),
         next_icon: 1,
+        kappa: None,
     };
     let engine = Engine::build_unsolved(&doc)?;
     let icons = [

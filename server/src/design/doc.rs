@@ -136,11 +136,12 @@ pub struct MaterialDoc {
 }
 
 impl Default for MaterialDoc {
+    /// The kernel's default: mostly bending, a little stretch.
     fn default() -> Self {
         Self {
-            alpha11: 0.1,
+            alpha11: 0.01,
             alpha12: 0.0,
-            alpha22: 0.1,
+            alpha22: 0.01,
             beta11: 1.0,
             beta12: 1.0,
             beta22: 1.0,
@@ -357,6 +358,9 @@ pub struct DesignDoc {
     pub icons: Vec<IconDoc>,
     /// The id the next icon gets.
     pub next_icon: u64,
+    /// The spring coefficient κ the drags calibrated (kernel default when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
 }
 
 impl DesignDoc {

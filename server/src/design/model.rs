@@ -39,10 +39,12 @@ pub struct DesignModel {
 }
 
 impl DesignModel {
-    /// Builds the model from a document (validated; the engine solves once).
+    /// Builds the model from a document (validated). The stored shape is
+    /// taken as it is — it was solved when it was stored — so a reload,
+    /// undo or restore gives back exactly the same control points.
     pub fn load(doc: &DesignDoc) -> Result<Self, CommandError> {
         doc.validate()?;
-        let engine = Engine::build(doc)?;
+        let engine = Engine::build_unsolved(doc)?;
         let mut m = Self {
             doc: doc.clone(),
             engine,
@@ -51,23 +53,36 @@ impl DesignModel {
         Ok(m)
     }
 
-    /// Copies solved points and re-placed icon positions into the document.
+    /// Copies the kernel's state into the document: solved points and, per
+    /// icon, position, target, state and sensors. A load's target is
+    /// normalised to where it sits (sculpting is plastic: once solved, a
+    /// load carries no further pull), so rebuilding from the document never
+    /// moves the shape.
     fn sync(&mut self) {
-        self.doc.surface.points = self.engine.points().iter().map(|p| p.to_array()).collect();
-        for icon in &mut self.doc.icons {
-            if let Some(p) = self.engine.icon_xyz(icon.id) {
-                icon.xyz = p.to_array();
-            }
-        }
+        self.doc = self.to_doc();
     }
 
     /// The current document (points as solved).
     pub fn to_doc(&self) -> DesignDoc {
         let mut d = self.doc.clone();
         d.surface.points = self.engine.points().iter().map(|p| p.to_array()).collect();
+        let kappa = self.engine.kappa();
+        d.kappa = kappa.is_finite().then_some(kappa);
         for icon in &mut d.icons {
-            if let Some(p) = self.engine.icon_xyz(icon.id) {
-                icon.xyz = p.to_array();
+            if let Some(r) = self.engine.readback(icon.id) {
+                icon.xyz = r.xyz.to_array();
+                // The kernel renormalises a normal's direction; keep the
+                // stored value when they agree to rounding, so a reload is
+                // bit for bit.
+                let stored = DVec3::from(icon.target);
+                if (r.target - stored).length() > 1e-12 * stored.length().max(1.0) {
+                    icon.target = r.target.to_array();
+                }
+                icon.state = r.state;
+                icon.sensors = r.sensors;
+                if icon.role == IconRoleDoc::Load {
+                    icon.target = icon.xyz;
+                }
             }
         }
         d
@@ -105,9 +120,7 @@ impl DesignModel {
     pub fn grab(&mut self, icon: u64) -> Result<(), CommandError> {
         self.check_icon(icon)?;
         self.engine.grab(icon)?;
-        if let Some(i) = self.doc.icons.iter_mut().find(|i| i.id == icon) {
-            i.state = IconStateDoc::Driving;
-        }
+        self.sync();
         Ok(())
     }
 
@@ -128,11 +141,6 @@ impl DesignModel {
     pub fn release(&mut self, icon: u64) -> Result<(), CommandError> {
         self.check_icon(icon)?;
         self.engine.release(icon)?;
-        if let Some(i) = self.doc.icons.iter_mut().find(|i| i.id == icon)
-            && i.state == IconStateDoc::Driving
-        {
-            i.state = IconStateDoc::Passive;
-        }
         self.sync();
         Ok(())
     }
