@@ -33,7 +33,7 @@ impl Wire for JsonWire {
     fn hello(&self, token: &str, _design: Option<u64>) -> String {
         serde_json::json!({ "type": "hello", "token": token }).to_string()
     }
-    fn encode(&self, cmd: &Command) -> Vec<String> {
+    fn encode(&self, cmd: &Command, _ordered: bool) -> Vec<String> {
         match cmd {
             Command::Drag { icon, target } => {
                 vec![serde_json::json!({ "type": "drag", "icon": icon, "target": target.to_array() }).to_string()]
@@ -136,7 +136,7 @@ fn per_sample(c: &mut Criterion) {
                 outbox.push(c);
             }
             for c in outbox.drain() {
-                std::hint::black_box(wire.encode(&c));
+                std::hint::black_box(wire.encode(&c.0, c.1));
             }
         })
     });

@@ -19,6 +19,8 @@ use tokio::sync::mpsc;
 
 /// How long a finished replay waits for its last commands to leave.
 const DRAIN_GRACE: Duration = Duration::from_millis(500);
+/// Distinct server refusals remembered for log-once.
+const MAX_REFUSALS: usize = 64;
 /// How long a replay waits for the server before playing anyway.
 const REPLAY_WAIT: Duration = Duration::from_secs(10);
 
@@ -69,7 +71,7 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
         ServerEvent::Icon(icon) => interaction.update_icon(icon),
         ServerEvent::IconRemoved(id) => interaction.remove_icon(id),
         ServerEvent::Feedback { icon, actual } => interaction.feedback(icon, actual),
-        ServerEvent::Error(e) => tracing::warn!(error = %e, "server refused a command"),
+        ServerEvent::Error(e) => tracing::debug!(error = %e, "server refused a command"),
     }
 }
 
@@ -104,6 +106,7 @@ pub async fn drive_until_ready(
     tokio::pin!(shutdown);
     let mut cmds: Vec<Command> = Vec::new();
     let mut samples_open = true;
+    let mut refusals = std::collections::HashSet::new();
     loop {
         tokio::select! {
             input = inputs.recv(), if samples_open => match input {
@@ -141,6 +144,14 @@ pub async fn drive_until_ready(
                 None => samples_open = false,
             },
             ev = events.recv() => if let Some(ev) = ev {
+                if let ServerEvent::Error(e) = &ev && refusals.insert(e.clone()) {
+                    // Each distinct refusal is logged once (a refused drag would repeat at
+                    // the device rate); the set is bounded.
+                    tracing::warn!(error = %e, "server refused a command");
+                    if refusals.len() > MAX_REFUSALS {
+                        refusals.clear();
+                    }
+                }
                 let snapshot = matches!(ev, ServerEvent::Icons { .. });
                 apply_event(&mut interaction, ev, link.as_ref());
                 if snapshot && let Some(r) = ready.take() {

@@ -54,8 +54,9 @@ pub enum ServerEvent {
 pub trait Wire: Send + Sync + 'static {
     /// The first message of a connection (version + token).
     fn hello(&self, token: &str, design: Option<u64>) -> String;
-    /// The message(s) for one command.
-    fn encode(&self, cmd: &Command) -> Vec<String>;
+    /// The message(s) for one command; `ordered` when it must be processed in
+    /// order with the commands around it (see [`Outbox::drain`]).
+    fn encode(&self, cmd: &Command, ordered: bool) -> Vec<String>;
     /// Events in one server text message; an `Err` closes the connection.
     fn decode(&self, text: &str) -> Result<Vec<ServerEvent>, String>;
     /// Events in one binary server message (geometry frames); the default ignores them.
@@ -311,8 +312,8 @@ async fn session(
             }
             _ = notify.notified(), if accepted => {
                 let cmds = outbox.lock().unwrap_or_else(|e| e.into_inner()).drain();
-                for c in &cmds {
-                    for text in wire.encode(c) {
+                for (c, ordered) in &cmds {
+                    for text in wire.encode(c, *ordered) {
                         tracing::trace!(%text, "to server");
                         tx.send(Message::text(text)).await.map_err(|e| e.to_string())?;
                         stats.send_modify(|s| s.sent += 1);

@@ -38,10 +38,16 @@ impl Outbox {
         }
     }
 
-    /// Takes everything due, in sending order.
-    pub fn drain(&mut self) -> Vec<Command> {
-        let mut v: Vec<Command> = self.ordered.drain(..).collect();
-        v.extend(std::mem::take(&mut self.latest).into_values());
+    /// Takes everything due, in sending order, each with `true` when it must stay
+    /// in order with its neighbours (discrete commands, and a drag flushed ahead
+    /// of a discrete command about the same icon) and `false` for coalesced ones.
+    pub fn drain(&mut self) -> Vec<(Command, bool)> {
+        let mut v: Vec<(Command, bool)> = self.ordered.drain(..).map(|c| (c, true)).collect();
+        v.extend(
+            std::mem::take(&mut self.latest)
+                .into_values()
+                .map(|c| (c, false)),
+        );
         v
     }
 
@@ -90,7 +96,10 @@ mod tests {
         o.push(release.clone());
         o.push(drag(2, 5.0));
         let v = o.drain();
-        assert_eq!(v, vec![drag(1, 3.0), release, drag(2, 5.0)]);
+        assert_eq!(
+            v,
+            vec![(drag(1, 3.0), true), (release, true), (drag(2, 5.0), false)]
+        );
         assert!(o.is_empty());
         o.push(Command::SetState {
             icon: 3,

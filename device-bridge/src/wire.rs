@@ -3,8 +3,9 @@
 //! messages become [`ServerEvent`]s. Everything from the server is validated
 //! here (finite numbers) before it reaches the interaction.
 //!
-//! * grab → `bind_sensor` + `drag_start`; release → `drag_end` + `unbind_sensor`;
+//! * grab → `bind_sensor` + `drag_start`; release → `unbind_sensor` + `drag_end`;
 //! * drag → `drag` (a constraint's displaced target or a load's pulled-to point);
+//!   a drag flushed ahead of a release carries a `req` so the server keeps it in order;
 //! * menu → `set_state` / `set_role` (tangent = derivative `R`);
 //! * hand → `device_sample` (orientation w, x, y, z; flexion in radians);
 //! * device availability → `device_status`;
@@ -14,6 +15,7 @@
 use crate::interaction::{Command, DeviceCondition, IconKind, IconRole, IconState, IconView};
 use crate::link::{ServerEvent, Wire};
 use glam::DVec3;
+use std::sync::atomic::{AtomicU64, Ordering};
 use vsculpt_protocol::{
     ClientEnvelope, ClientKind, ClientMessage, Derivative, Icon, PROTOCOL_VERSION, Role,
     ServerMessage, SurfaceData,
@@ -27,8 +29,15 @@ pub const CLIENT_NAME: &str = "vsculpt-bridge";
 pub struct ProtocolWire;
 
 fn text(msg: ClientMessage) -> String {
-    serde_json::to_string(&ClientEnvelope { req: None, msg }).unwrap_or_default()
+    envelope(None, msg)
 }
+
+fn envelope(req: Option<u64>, msg: ClientMessage) -> String {
+    serde_json::to_string(&ClientEnvelope { req, msg }).unwrap_or_default()
+}
+
+/// Request numbers for drags that must stay in order (process-wide, never reused).
+static NEXT_REQ: AtomicU64 = AtomicU64::new(1);
 
 fn state_to_wire(s: IconState) -> vsculpt_protocol::IconState {
     match s {
@@ -98,7 +107,20 @@ impl Wire for ProtocolWire {
         })
     }
 
-    fn encode(&self, cmd: &Command) -> Vec<String> {
+    fn encode(&self, cmd: &Command, ordered: bool) -> Vec<String> {
+        // A drag without a request number takes the server's coalesced drag path,
+        // which may overtake commands; one that precedes a release or a state change
+        // carries a number so that the server applies it in order.
+        if let (Command::Drag { icon, target }, true) = (cmd, ordered) {
+            let req = NEXT_REQ.fetch_add(1, Ordering::Relaxed);
+            return vec![envelope(
+                Some(req),
+                ClientMessage::Drag {
+                    icon: *icon,
+                    xyz: target.to_array(),
+                },
+            )];
+        }
         let msgs = match cmd {
             Command::Grab { icon, sensor } => vec![
                 ClientMessage::BindSensor {
@@ -108,11 +130,11 @@ impl Wire for ProtocolWire {
                 ClientMessage::DragStart { icon: *icon },
             ],
             Command::Release { icon, sensor } => vec![
-                ClientMessage::DragEnd { icon: *icon },
                 ClientMessage::UnbindSensor {
                     icon: *icon,
                     sensor: sensor.clone(),
                 },
+                ClientMessage::DragEnd { icon: *icon },
             ],
             Command::Drag { icon, target } => vec![ClientMessage::Drag {
                 icon: *icon,
@@ -266,7 +288,7 @@ mod tests {
         ];
         let parsed: Vec<ClientMessage> = cmds
             .iter()
-            .flat_map(|c| w.encode(c))
+            .flat_map(|c| w.encode(c, false))
             .map(|t| parse_client(&t).unwrap().msg)
             .collect();
         assert_eq!(
@@ -277,14 +299,14 @@ mod tests {
             }
         );
         assert_eq!(parsed[1], ClientMessage::DragStart { icon: 1 });
-        assert_eq!(parsed[2], ClientMessage::DragEnd { icon: 1 });
         assert_eq!(
-            parsed[3],
+            parsed[2],
             ClientMessage::UnbindSensor {
                 icon: 1,
                 sensor: "right".into()
             }
         );
+        assert_eq!(parsed[3], ClientMessage::DragEnd { icon: 1 });
         assert_eq!(
             parsed[4],
             ClientMessage::Drag {
@@ -316,6 +338,23 @@ mod tests {
             m => panic!("{m:?}"),
         }
         assert_eq!(parsed.len(), 10);
+        // an ordered drag carries a request number, a coalesced one does not
+        let drag = Command::Drag {
+            icon: 2,
+            target: DVec3::ZERO,
+        };
+        assert!(
+            parse_client(&w.encode(&drag, true)[0])
+                .unwrap()
+                .req
+                .is_some()
+        );
+        assert!(
+            parse_client(&w.encode(&drag, false)[0])
+                .unwrap()
+                .req
+                .is_none()
+        );
     }
 
     #[test]

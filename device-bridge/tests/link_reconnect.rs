@@ -23,7 +23,7 @@ impl Wire for TestWire {
     fn hello(&self, token: &str, design: Option<u64>) -> String {
         format!("hello {token} {}", design.unwrap_or(0))
     }
-    fn encode(&self, cmd: &Command) -> Vec<String> {
+    fn encode(&self, cmd: &Command, _ordered: bool) -> Vec<String> {
         match cmd {
             // hand samples and device status are not what this test is about
             Command::HandSample { .. } | Command::DeviceStatus { .. } => vec![],

@@ -193,3 +193,81 @@ async fn hand_pulls_a_load_icon_within_the_spring_band() {
     bridge.await.unwrap().unwrap();
     server.stop().await;
 }
+
+/// The 3D mouse through spacenavd (a fake daemon socket): a button selects an
+/// icon, pushing the cap moves it, letting go ends the drag; the menu buttons
+/// put it to sleep.
+#[tokio::test(flavor = "multi_thread", worker_threads = 4)]
+async fn space_mouse_selects_moves_and_puts_an_icon_to_sleep() {
+    use vsculpt_bridge::config::{DeviceConfig, DeviceKind};
+    use vsculpt_bridge::sim::spacenavd::FakeSpacenavd;
+    init_logs();
+    let dir = temp_dir("bridge-mouse");
+    let server = RunningServer::start(&dir.join("data"), None).await;
+    let icons = snapshot_icons(server.addr, &server.viewer_token).await;
+    let first = icons.iter().min_by_key(|i| i.id).cloned().unwrap();
+    let p = DVec3::from_array(first.xyz);
+    let daemon = FakeSpacenavd::start(dir.join("spnav.sock")).unwrap();
+    let mut mouse = DeviceConfig::new("mouse", DeviceKind::Spacenavd);
+    mouse.spacenavd.socket = Some(dir.join("spnav.sock").display().to_string());
+    let mut cfg = vsculpt_bridge::config::Config {
+        devices: vec![mouse],
+        ..Default::default()
+    };
+    cfg.menu.speed = 20.0; // mm per second at full deflection
+    // the 3D menu changes icon states, which the server allows editors only
+    cfg.server.url = format!(
+        "ws://{}/ws?design=1&token={}",
+        server.addr, server.editor_token
+    );
+    cfg.validate().unwrap();
+    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
+    let bridge = tokio::spawn(async move {
+        run_live(cfg, Arc::new(ProtocolWire), None, async {
+            let _ = stopped.await;
+        })
+        .await
+    });
+    let connected = eventually(10, || async { (daemon.clients() > 0).then_some(()) }).await;
+    assert!(connected.is_some());
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    // button 2 selects the first icon; push the cap up (z) at full scale for 0.5 s
+    daemon.send_button(2, true);
+    daemon.send_button(2, false);
+    for _ in 0..50 {
+        daemon.send_motion([0, 0, 350, 0, 0, 0], 10);
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    daemon.send_motion([0, 0, 0, 0, 0, 0], 10);
+    let (addr, token) = (server.addr, server.viewer_token.clone());
+    let moved = eventually(10, || {
+        let t = token.clone();
+        async move {
+            let i = icon_now(addr, &t, first.id).await;
+            (i.holder.is_none() && i.xyz[2] - p.z > 5.0).then_some(i)
+        }
+    })
+    .await;
+    let now = icon_now(addr, &token, first.id).await;
+    let moved = moved.unwrap_or_else(|| panic!("icon at {:?} from {p}", now.xyz));
+    assert!(moved.xyz[2] - p.z < 15.0, "{:?}", moved.xyz);
+    // the menu: seven times "next entry" reaches "sleeping", "apply" sets it
+    for _ in 0..7 {
+        daemon.send_button(0, true);
+        daemon.send_button(0, false);
+    }
+    daemon.send_button(1, true);
+    daemon.send_button(1, false);
+    let asleep = eventually(10, || {
+        let t = token.clone();
+        async move {
+            let i = icon_now(addr, &t, first.id).await;
+            (i.state == IconState::Sleeping).then_some(i)
+        }
+    })
+    .await;
+    assert!(asleep.is_some(), "the menu did not put the icon to sleep");
+    stop.send(()).unwrap();
+    bridge.await.unwrap().unwrap();
+    server.stop().await;
+}

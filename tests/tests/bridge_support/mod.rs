@@ -50,6 +50,7 @@ pub struct RunningServer {
     pub addr: SocketAddr,
     pub device_url: String,
     pub viewer_token: String,
+    pub editor_token: String,
     pub shutdown: Shutdown,
     pub task: tokio::task::JoinHandle<()>,
 }
@@ -81,6 +82,7 @@ impl RunningServer {
         };
         let device_url = line("device");
         let viewer_token = line("viewer").split("token=").nth(1).unwrap().to_string();
+        let editor_token = line("editor").split("token=").nth(1).unwrap().to_string();
         let task = tokio::spawn(async move {
             let _ = server.run().await;
         });
@@ -88,6 +90,7 @@ impl RunningServer {
             addr,
             device_url,
             viewer_token,
+            editor_token,
             shutdown,
             task,
         }
