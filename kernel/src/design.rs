@@ -126,6 +126,8 @@ pub struct Design {
     problem_dirty: bool,
     drag: Option<ActiveDrag>,
     revision: u64,
+    /// The previous control points, reused as the next solve's output buffer.
+    scratch: Vec<DVec3>,
 }
 
 impl Design {
@@ -148,6 +150,7 @@ impl Design {
             problem_dirty: true,
             drag: None,
             revision: 0,
+            scratch: Vec::new(),
         })
     }
 
@@ -614,7 +617,8 @@ impl Design {
     pub fn solve(&mut self) -> Result<SolveReport, DesignError> {
         let drag = self.drag;
         let reference = std::mem::take(&mut self.reference);
-        let mut out = vec![DVec3::ZERO; reference.len()];
+        let mut out = std::mem::take(&mut self.scratch);
+        out.resize(reference.len(), DVec3::ZERO);
         let result = self.ensure_solver().and_then(|solver| {
             Ok(match drag {
                 Some(d) => solver.drag(d.id.0, d.t, &reference, &mut out)?,
@@ -622,13 +626,22 @@ impl Design {
             })
         });
         self.reference = reference;
-        let report = result?;
-        self.accept(out)?;
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                self.scratch = out;
+                return Err(e);
+            }
+        };
+        // The solver's output is finite (its inputs are validated): swap it in.
+        std::mem::swap(self.surface.points_mut_vec(), &mut out);
+        self.scratch = out;
+        self.replace_icons();
+        self.revision += 1;
         Ok(report)
     }
 
-    fn accept(&mut self, points: Vec<DVec3>) -> Result<(), DesignError> {
-        self.surface.set_points(points)?;
+    fn replace_icons(&mut self) {
         let surface = &self.surface;
         for icon in self.icons.values_mut() {
             let pts: Vec<DVec3> = icon
@@ -638,8 +651,6 @@ impl Design {
                 .collect();
             icon.xyz = centroid(&pts);
         }
-        self.revision += 1;
-        Ok(())
     }
 
     /// Grabs an icon: it becomes driving; its drag starts from its current

@@ -18,11 +18,13 @@
 //!   how each becomes constraint equations or loads.
 //! * [`spring`] — the spring model that maps a drag to a force.
 //! * [`analysis`] — curvature and tessellation for clients.
+//! * [`curve_design`] — the same icons sculpting a deformable curve.
 //! * [`design`] — a design (surface, icons, material) as a value: edit, solve,
 //!   snapshot, restore.
 
 pub mod analysis;
 pub mod bspline;
+pub mod curve_design;
 pub mod design;
 pub mod energy;
 pub mod icon;

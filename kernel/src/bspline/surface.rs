@@ -115,6 +115,12 @@ impl BSplineSurface {
         &mut self.points
     }
 
+    /// The control point vector, for crate-internal buffer swaps that keep
+    /// its length (and finiteness).
+    pub(crate) fn points_mut_vec(&mut self) -> &mut Vec<DVec3> {
+        &mut self.points
+    }
+
     /// Replaces every control point; the count must match and all must be finite.
     pub fn set_points(&mut self, points: Vec<DVec3>) -> Result<(), GeometryError> {
         if points.len() != self.points.len() {

@@ -83,7 +83,50 @@ fn row_key(r: &ScalarRow) -> RowKey {
 #[derive(Debug)]
 struct Response {
     group: usize,
-    r: [Vec<DVec3>; 3],
+    kind: ResponseKind,
+}
+
+/// δ(t) − δ(0) = R t. Without projected equations every coordinate answers
+/// alone and alike, so R = ρ ⊗ I with one scalar field ρ: a third of the
+/// memory traffic per frame.
+#[derive(Debug)]
+enum ResponseKind {
+    Uniform(Vec<f64>),
+    Coupled([Vec<DVec3>; 3]),
+}
+
+impl ResponseKind {
+    fn new(r: [Vec<DVec3>; 3]) -> Self {
+        let scale = r
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+        let tol = 1e-12 * scale.max(1e-300);
+        let uniform = (0..r[0].len()).all(|i| {
+            let (a, b, c) = (r[0][i], r[1][i], r[2][i]);
+            a.y.abs() <= tol
+                && a.z.abs() <= tol
+                && b.x.abs() <= tol
+                && b.z.abs() <= tol
+                && c.x.abs() <= tol
+                && c.y.abs() <= tol
+                && (a.x - b.y).abs() <= tol
+                && (a.x - c.z).abs() <= tol
+        });
+        if uniform {
+            ResponseKind::Uniform(r[0].iter().map(|v| v.x).collect())
+        } else {
+            ResponseKind::Coupled(r)
+        }
+    }
+}
+
+/// The solution with every drag input at zero, for one reference shape.
+#[derive(Debug)]
+struct Base {
+    reference: Vec<DVec3>,
+    /// reference + δ(0).
+    start: Vec<DVec3>,
 }
 
 /// Solves the problem icons hand it, fast enough for drag frames.
@@ -98,8 +141,7 @@ pub struct Solver {
     loads: Vec<LoadCol>,
     s_pinv: Vec<f64>,
     rank_deficiency: usize,
-    /// δ with every drag input at zero, and the C·P_ref it was computed for.
-    base: Option<(Vec<f64>, Vec<DVec3>)>,
+    base: Option<Base>,
     response: Option<Response>,
 }
 
@@ -310,7 +352,10 @@ impl Solver {
         for ((o, r), d) in out.iter_mut().zip(reference).zip(&delta) {
             *o = *r + *d;
         }
-        self.base = Some((cx, delta));
+        self.base = Some(Base {
+            reference: reference.to_vec(),
+            start: out.to_vec(),
+        });
         Ok(self.report(out, None, DVec3::ZERO))
     }
 
@@ -335,10 +380,14 @@ impl Solver {
             .iter()
             .position(|g| g.key == key)
             .ok_or(SolveError::UnknownGroup(key))?;
-        let cx = self.c_times(reference);
-        if self.base.as_ref().is_none_or(|(bcx, _)| *bcx != cx) {
+        if self.base.as_ref().is_none_or(|b| b.reference != reference) {
+            let cx = self.c_times(reference);
             let delta = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
-            self.base = Some((cx.clone(), delta));
+            let start = reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect();
+            self.base = Some(Base {
+                reference: reference.to_vec(),
+                start,
+            });
         }
         if self.response.as_ref().is_none_or(|r| r.group != group) {
             let zero = vec![0.0; self.eqs.len()];
@@ -346,14 +395,25 @@ impl Solver {
                 let inputs = self.unit_inputs(group, e);
                 self.refined_delta(&inputs, &zero)
             });
-            self.response = Some(Response { group, r });
+            self.response = Some(Response {
+                group,
+                kind: ResponseKind::new(r),
+            });
         }
-        let (Some((_, base)), Some(resp)) = (&self.base, &self.response) else {
+        let (Some(base), Some(resp)) = (&self.base, &self.response) else {
             return Err(SolveError::Factor("drag caches missing".into()));
         };
-        let [r0, r1, r2] = &resp.r;
-        for i in 0..out.len() {
-            out[i] = reference[i] + base[i] + r0[i] * t.x + r1[i] * t.y + r2[i] * t.z;
+        match &resp.kind {
+            ResponseKind::Uniform(rho) => {
+                for ((o, s), r) in out.iter_mut().zip(&base.start).zip(rho) {
+                    *o = *s + t * *r;
+                }
+            }
+            ResponseKind::Coupled([r0, r1, r2]) => {
+                for i in 0..out.len() {
+                    out[i] = base.start[i] + r0[i] * t.x + r1[i] * t.y + r2[i] * t.z;
+                }
+            }
         }
         Ok(self.report(out, Some(group), t))
     }

@@ -1,0 +1,151 @@
+//! The paper's five surfaces (20×15 … 81×159 bicubic control points), each
+//! with 4 point position constraints, 1 curve constraint and one dragged
+//! point load (paper 003, Table 2). Measures:
+//!
+//! * `drag_frame` — one drag frame: solve + re-place every icon;
+//! * `constraint_change` — an icon switched (sleeping → passive) and solved;
+//! * `refactor` — a material change: numeric refactorisation + solve;
+//! * `tessellate` — the client tessellation at the paper's polygon count;
+//! * `full_frame` — drag frame + tessellation with normals and curvature.
+//!
+//! Run: `cargo bench -p vsculpt-kernel --bench sculpt`. Figures in BENCHMARKS.md.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use glam::DVec3;
+use std::hint::black_box;
+use std::time::Duration;
+use vsculpt_kernel::analysis::{Tessellation, Tessellator, samples_for};
+use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
+use vsculpt_kernel::design::Design;
+use vsculpt_kernel::energy::SurfaceMaterial;
+use vsculpt_kernel::icon::{Anchor, IconId, IconSpec, IconState, Role};
+
+/// (nu, nv, polygons) of paper 003's Table 2.
+const GRIDS: [(usize, usize, usize); 5] = [
+    (20, 15, 1533),
+    (38, 32, 2028),
+    (42, 40, 3956),
+    (91, 54, 13000),
+    (81, 159, 48536),
+];
+
+struct Scene {
+    design: Design,
+    load: IconId,
+    switch: IconId,
+    start: DVec3,
+}
+
+fn scene(nu: usize, nv: usize) -> Scene {
+    let mut s = BSplineSurface::plane(nu as f64 / 10.0, nv as f64 / 10.0, nu, nv, 3).unwrap();
+    let (w, h) = (nu as f64 / 10.0, nv as f64 / 10.0);
+    for p in s.points_mut() {
+        p.z = 0.2
+            * w.min(h)
+            * (std::f64::consts::PI * p.x / w).sin()
+            * (std::f64::consts::PI * p.y / h).sin();
+    }
+    let mut d = Design::new(s, SurfaceMaterial::default()).unwrap();
+    d.set_adaptive_spring(false);
+    let point = |u: f64, v: f64, role| IconSpec {
+        anchor: Anchor::Point { u, v },
+        role,
+        state: IconState::Passive,
+        target: None,
+    };
+    for (u, v) in [(0.1, 0.1), (0.9, 0.1), (0.1, 0.9), (0.9, 0.9)] {
+        d.add_icon(point(u, v, Role::Position)).unwrap();
+    }
+    let line = BSplineCurve::new(
+        KnotVector::clamped_uniform(1, 2).unwrap(),
+        vec![DVec3::new(0.2, 0.25, 0.0), DVec3::new(0.8, 0.25, 0.0)],
+    )
+    .unwrap();
+    d.add_icon(IconSpec {
+        anchor: Anchor::Curve(line),
+        role: Role::Position,
+        state: IconState::Passive,
+        target: None,
+    })
+    .unwrap();
+    let switch = d.add_icon(point(0.3, 0.7, Role::Position)).unwrap();
+    d.set_state(switch, IconState::Sleeping).unwrap();
+    let load = d.add_icon(point(0.5, 0.6, Role::Load)).unwrap();
+    d.solve().unwrap();
+    let start = d.icon(load).unwrap().xyz;
+    d.drag_start(load).unwrap();
+    d.drag(load, start + DVec3::Z * 0.01).unwrap();
+    Scene {
+        design: d,
+        load,
+        switch,
+        start,
+    }
+}
+
+fn benches(c: &mut Criterion) {
+    let mut group = c.benchmark_group("sculpt");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    for (nu, nv, polygons) in GRIDS {
+        let id = format!("{nu}x{nv}");
+        let mut sc = scene(nu, nv);
+        let mut k = 0u64;
+        group.bench_function(BenchmarkId::new("drag_frame", &id), |b| {
+            b.iter(|| {
+                k += 1;
+                let lift = 0.01 + 0.001 * (k % 7) as f64;
+                black_box(sc.design.drag(sc.load, sc.start + DVec3::Z * lift).unwrap())
+            })
+        });
+        let (su, sv) = samples_for(sc.design.surface(), polygons);
+        let mut tess = Tessellator::new(sc.design.surface(), su, sv);
+        let mut out = Tessellation::default();
+        group.bench_function(BenchmarkId::new("tessellate", &id), |b| {
+            b.iter(|| {
+                tess.fill(sc.design.surface(), &mut out);
+                black_box(out.positions.len())
+            })
+        });
+        group.bench_function(BenchmarkId::new("full_frame", &id), |b| {
+            b.iter(|| {
+                k += 1;
+                let lift = 0.01 + 0.001 * (k % 7) as f64;
+                sc.design.drag(sc.load, sc.start + DVec3::Z * lift).unwrap();
+                tess.fill(sc.design.surface(), &mut out);
+                black_box(out.positions.len())
+            })
+        });
+        sc.design.release(sc.load).unwrap();
+        group.bench_function(BenchmarkId::new("constraint_change", &id), |b| {
+            b.iter(|| {
+                k += 1;
+                let state = if k % 2 == 0 {
+                    IconState::Passive
+                } else {
+                    IconState::Sleeping
+                };
+                sc.design.set_state(sc.switch, state).unwrap();
+                black_box(sc.design.solve().unwrap())
+            })
+        });
+        group.bench_function(BenchmarkId::new("refactor", &id), |b| {
+            b.iter(|| {
+                k += 1;
+                let m = SurfaceMaterial {
+                    beta11: 1.0 + 0.1 * (k % 2) as f64,
+                    ..Default::default()
+                };
+                sc.design.set_material(m).unwrap();
+                black_box(sc.design.solve().unwrap())
+            })
+        });
+        println!("{id}: {} triangles", out.triangles());
+    }
+    group.finish();
+}
+
+criterion_group!(sculpt, benches);
+criterion_main!(sculpt);
