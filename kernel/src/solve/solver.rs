@@ -574,11 +574,42 @@ impl Solver {
                 }
             }
         }
+        let max_abs = |m: &Mat<f64>| {
+            (0..m.ncols())
+                .flat_map(|k| m.col_as_slice(k).iter())
+                .fold(0.0f64, |a, &b| a.max(b.abs()))
+        };
+        let mut scale = max_abs(&rho);
         for k in 0..3 {
             let x: Vec<f64> = delta.iter().map(|d| d[k]).collect();
             for (i, v) in self.stiffness().mul(&x).into_iter().enumerate() {
+                scale = scale.max(v.abs());
                 rho[(i, k)] -= v;
             }
+        }
+        // Already accurate (the usual case when the mass term is not tiny):
+        // skip the extra sparse solve.
+        let worst = max_abs(&rho);
+        let cd: Vec<f64> = {
+            let applied: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&delta)).collect();
+            self.eqs
+                .iter()
+                .map(|eq| eq.terms.iter().map(|t| t.coef * applied[t.col][t.k]).sum())
+                .collect()
+        };
+        let target_scale = inputs
+            .targets
+            .iter()
+            .chain(cx)
+            .fold(1.0f64, |m, x| m.max(x.abs()));
+        let constraint_error = self
+            .eqs
+            .iter()
+            .enumerate()
+            .map(|(e, _)| (cd[e] + cx[e] - inputs.targets[e]).abs())
+            .fold(0.0f64, f64::max);
+        if worst <= 1e-13 * scale.max(1e-300) && constraint_error <= 1e-12 * target_scale {
+            return delta;
         }
         // y = K⁻¹ ρ, then project onto the constraints as in `delta`.
         self.factor.solve_in_place(rho.as_mut());
