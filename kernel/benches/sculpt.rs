@@ -122,7 +122,7 @@ fn benches(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("constraint_change", &id), |b| {
             b.iter(|| {
                 k += 1;
-                let state = if k % 2 == 0 {
+                let state = if k.is_multiple_of(2) {
                     IconState::Passive
                 } else {
                     IconState::Sleeping
