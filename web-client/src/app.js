@@ -1,0 +1,376 @@
+// The vsculpt web client: joins the design named in the page URL
+// (?design=ID&token=TOKEN), draws it live, and — for an editor link — lets a
+// person create, drag and switch icons, set the material, undo, commit,
+// revert and restore versions. A viewer link shows the same, read-only, with
+// presence. Exposed as `window.vsculpt` for scripting and tests.
+
+import * as THREE from 'three';
+import { TransformControls } from 'three/addons/controls/TransformControls.js';
+import { Tessellator } from './bspline.js';
+import { View } from './view.js';
+import { IconLayer } from './icons.js';
+import { Link } from './net.js';
+
+const params = new URLSearchParams(location.search);
+const design = Number(params.get('design') || 1);
+const token = params.get('token') || '';
+const $ = (id) => document.getElementById(id);
+
+const state = {
+  access: null,
+  surface: null,
+  tess: null,
+  icons: new Map(),
+  versions: [],
+  presence: [],
+  selected: null,
+  create: 'none',
+  pending: [],
+  revision: 0,
+  frames: 0,
+  material: null,
+  lastError: null,
+};
+
+const view = new View($('viewport'));
+const icons = new IconLayer(view.scene);
+
+function status(kind, text) {
+  const el = $('status');
+  el.className = `status ${kind}`;
+  el.textContent = text;
+  if (kind === 'error') state.lastError = text;
+}
+
+function surfaceFromSnapshot(s) {
+  return {
+    degreeU: s.u.degree,
+    degreeV: s.v.degree,
+    knotsU: Float64Array.from(s.u.knots),
+    knotsV: Float64Array.from(s.v.knots),
+    nu: s.nu,
+    nv: s.nv,
+    points: Float32Array.from(s.points.flat()),
+  };
+}
+
+function density(s) {
+  // About 4 vertices per control point along each direction, capped for 60 fps.
+  const su = Math.min(4 * s.nu, 200);
+  const sv = Math.min(4 * s.nv, 400);
+  return [su, sv];
+}
+
+function redraw() {
+  const s = state.surface;
+  if (!s) return;
+  if (!state.tess || !state.tess.fits(s)) state.tess = new Tessellator(s, ...density(s));
+  state.tess.fill(s);
+  view.setTessellation(state.tess);
+  view.setNet(s);
+  icons.size = view.geometry.boundingSphere ? view.geometry.boundingSphere.radius * 0.025 : 0.05;
+  icons.update(state.icons, s, state.selected);
+  attachGizmo();
+}
+
+function renderPanels() {
+  const editor = state.access === 'editor';
+  document.body.classList.toggle('viewer', !editor);
+  $('role').textContent = state.access ? `${state.access} · design ${design}` : '';
+  $('presence').innerHTML = state.presence
+    .map((p) => `<li>${escape(p.name)} <small>${p.access}</small>${p.holding ? ` holds icon ${p.holding}` : ''}</li>`)
+    .join('');
+  $('history').innerHTML = state.versions
+    .slice()
+    .reverse()
+    .map((v) => `<li><b>v${v.version}</b> ${escape(v.message)} <small>${escape(v.author)} · ${new Date(v.time_ms).toLocaleString()}</small>
+      ${editor ? `<button data-restore="${v.version}">restore</button>` : ''}</li>`)
+    .join('');
+  const sel = state.icons.get(state.selected);
+  $('selection').hidden = !sel;
+  if (sel) {
+    $('sel-title').textContent = `icon ${sel.id} · ${sel.anchor.kind}`;
+    $('sel-role').value = sel.role.kind === 'derivative' ? sel.role.which : sel.role.kind;
+    $('sel-state').value = sel.state;
+    $('sel-sensors').textContent = sel.sensors.join(', ') || 'none';
+  }
+  if (state.material) {
+    $('alpha').value = state.material.alpha11;
+    $('beta').value = state.material.beta11;
+  }
+  for (const fmt of ['igs', 'obj', 'stl', 'gltf']) $(`export-${fmt}`).href = `/api/designs/${design}/export.${fmt}?token=${encodeURIComponent(token)}`;
+}
+
+function escape(s) {
+  return String(s).replace(/[&<>"']/g, (c) => `&#${c.charCodeAt(0)};`);
+}
+
+function onMessage(msg) {
+  switch (msg.type) {
+    case 'welcome':
+      state.access = msg.access;
+      break;
+    case 'snapshot':
+      state.surface = surfaceFromSnapshot(msg.surface);
+      state.icons = new Map(msg.icons.map((i) => [i.id, i]));
+      state.versions = msg.versions;
+      state.presence = msg.presence;
+      state.material = msg.material;
+      state.revision = msg.revision;
+      $('undo').disabled = !msg.can_undo;
+      $('redo').disabled = !msg.can_redo;
+      redraw();
+      break;
+    case 'icon_created':
+    case 'icon_updated':
+      state.icons.set(msg.icon.id, msg.icon);
+      redraw();
+      break;
+    case 'icon_deleted':
+      state.icons.delete(msg.icon);
+      if (state.selected === msg.icon) state.selected = null;
+      redraw();
+      break;
+    case 'material_changed':
+      state.material = msg.material;
+      break;
+    case 'committed':
+      state.versions.push(msg.version);
+      break;
+    case 'versions':
+      state.versions = msg.versions;
+      break;
+    case 'presence':
+      state.presence = msg.clients;
+      break;
+    case 'history':
+      $('undo').disabled = !msg.can_undo;
+      $('redo').disabled = !msg.can_redo;
+      break;
+    case 'error':
+      status('error', `${msg.code}: ${msg.message}`);
+      break;
+    default:
+      break;
+  }
+  renderPanels();
+}
+
+function onFrame(f) {
+  state.frames++;
+  state.revision = f.revision;
+  state.surface = { degreeU: f.degreeU, degreeV: f.degreeV, knotsU: f.knotsU, knotsV: f.knotsV, nu: f.nu, nv: f.nv, points: f.points };
+  for (const fi of f.icons) {
+    const icon = state.icons.get(fi.id);
+    if (icon) icon.xyz = fi.xyz;
+  }
+  scheduleRedraw();
+}
+
+let redrawQueued = false;
+function scheduleRedraw() {
+  if (redrawQueued) return;
+  redrawQueued = true;
+  requestAnimationFrame(() => {
+    redrawQueued = false;
+    if (dragging) {
+      // During a drag only the surface and handle positions change.
+      state.tess.fill(state.surface);
+      view.setTessellation(state.tess);
+      view.setNet(state.surface);
+      icons.move([...state.icons.values()].map((i) => ({ id: i.id, xyz: i.xyz })));
+    } else {
+      redraw();
+    }
+  });
+}
+
+const link = new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status });
+const send = (msg) => link.send(msg);
+
+// --- editing ----------------------------------------------------------------
+
+const gizmo = new TransformControls(view.camera, view.renderer.domElement);
+view.scene.add(gizmo.getHelper());
+const proxy = new THREE.Object3D();
+view.scene.add(proxy);
+let dragging = false;
+let pendingDrag = null;
+
+function attachGizmo() {
+  const sel = state.icons.get(state.selected);
+  if (!sel || state.access !== 'editor' || sel.role.kind === 'derivative') {
+    gizmo.detach();
+    return;
+  }
+  if (!dragging) {
+    proxy.position.set(...(sel.role.kind === 'position' && sel.anchor.kind === 'point' ? sel.target : sel.xyz));
+    gizmo.attach(proxy);
+  }
+}
+
+gizmo.addEventListener('dragging-changed', (e) => {
+  view.controls.enabled = !e.value;
+  const id = state.selected;
+  if (id == null) return;
+  if (e.value) {
+    dragging = true;
+    send({ type: 'drag_start', icon: id });
+  } else {
+    if (pendingDrag) sendDrag();
+    send({ type: 'drag_end', icon: id });
+    dragging = false;
+  }
+});
+gizmo.addEventListener('objectChange', () => {
+  if (!dragging) return;
+  const first = pendingDrag == null;
+  pendingDrag = [proxy.position.x, proxy.position.y, proxy.position.z];
+  if (first) requestAnimationFrame(sendDrag);
+});
+function sendDrag() {
+  if (!pendingDrag || state.selected == null) return;
+  send({ type: 'drag', icon: state.selected, xyz: pendingDrag });
+  pendingDrag = null;
+}
+
+const raycaster = new THREE.Raycaster();
+const pointer = new THREE.Vector2();
+let downAt = null;
+view.renderer.domElement.addEventListener('pointerdown', (e) => {
+  downAt = [e.clientX, e.clientY];
+});
+view.renderer.domElement.addEventListener('pointerup', (e) => {
+  if (!downAt || Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]) > 4 || dragging || gizmo.dragging) return;
+  const rect = view.renderer.domElement.getBoundingClientRect();
+  pointer.set(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(pointer, view.camera);
+  const hitIcon = raycaster.intersectObjects(icons.handles(), false)[0];
+  if (hitIcon) {
+    select(hitIcon.object.userData.iconId);
+    return;
+  }
+  const hit = raycaster.intersectObject(view.mesh, false)[0];
+  if (hit && hit.uv) pick(hit.uv.x, hit.uv.y);
+});
+
+function select(id) {
+  state.selected = id;
+  redraw();
+  renderPanels();
+}
+
+const ROLES = {
+  position: { kind: 'position' },
+  load: { kind: 'load' },
+  normal: { kind: 'normal' },
+  R: { kind: 'derivative', which: 'R' },
+  V: { kind: 'derivative', which: 'V' },
+  R2: { kind: 'derivative', which: 'R2' },
+  V2: { kind: 'derivative', which: 'V2' },
+  RV: { kind: 'derivative', which: 'RV' },
+};
+
+/** A click on the surface at (u, v) in the current creation mode. */
+function pick(u, v) {
+  if (state.access !== 'editor') return;
+  const mode = state.create;
+  const role = ROLES[$('create-role').value] || ROLES.position;
+  if (mode === 'point') {
+    createIcon({ kind: 'point', u, v }, role);
+  } else if (mode === 'curve') {
+    state.pending.push([u, v]);
+    $('pending').textContent = `${state.pending.length} curve points (finish to create)`;
+  } else if (mode === 'region') {
+    state.pending.push([u, v]);
+    if (state.pending.length === 2) {
+      const [[u0, v0], [u1, v1]] = state.pending;
+      state.pending = [];
+      createIcon({ kind: 'region', u0, v0, u1, v1, inside: $('region-inside').checked }, role);
+    }
+  }
+}
+
+function createIcon(anchor, role) {
+  return send({ type: 'create_icon', spec: { anchor, role, state: 'passive' } });
+}
+
+function finishCurve() {
+  const pts = state.pending;
+  state.pending = [];
+  $('pending').textContent = '';
+  if (pts.length < 2) return;
+  const degree = Math.min(3, pts.length - 1);
+  const n = pts.length;
+  const knots = [...Array(degree + 1).fill(0)];
+  for (let k = 1; k < n - degree; k++) knots.push(k / (n - degree));
+  knots.push(...Array(degree + 1).fill(1));
+  createIcon({ kind: 'curve', curve: { knots: { degree, knots }, points: pts } }, ROLES[$('create-role').value] || ROLES.position);
+}
+
+// --- panels -------------------------------------------------------------------
+
+$('mode').addEventListener('change', (e) => {
+  view.setMode(e.target.value);
+  $('legend').hidden = !(e.target.value === 'mean' || e.target.value === 'gauss');
+});
+$('range').addEventListener('input', (e) => {
+  const r = Number(e.target.value);
+  view.setRange(r);
+  $('legend-min').textContent = (-r).toPrecision(2);
+  $('legend-max').textContent = r.toPrecision(2);
+});
+$('net').addEventListener('change', (e) => {
+  view.net.visible = e.target.checked;
+});
+$('fit').addEventListener('click', () => view.fit());
+$('create').addEventListener('change', (e) => {
+  state.create = e.target.value;
+  state.pending = [];
+});
+$('finish-curve').addEventListener('click', finishCurve);
+$('sel-role').addEventListener('change', (e) => send({ type: 'set_role', icon: state.selected, role: ROLES[e.target.value] }));
+$('sel-state').addEventListener('change', (e) => send({ type: 'set_state', icon: state.selected, state: e.target.value }));
+$('sel-delete').addEventListener('click', () => send({ type: 'delete_icon', icon: state.selected }));
+$('sel-bind').addEventListener('click', () => {
+  const sensor = $('sel-sensor').value.trim();
+  if (sensor) send({ type: 'bind_sensor', icon: state.selected, sensor });
+});
+$('material').addEventListener('submit', (e) => {
+  e.preventDefault();
+  const a = Number($('alpha').value);
+  const b = Number($('beta').value);
+  send({ type: 'set_material', material: { alpha11: a, alpha12: 0, alpha22: a, beta11: b, beta12: b, beta22: b } });
+});
+$('undo').addEventListener('click', () => send({ type: 'undo' }));
+$('redo').addEventListener('click', () => send({ type: 'redo' }));
+$('revert').addEventListener('click', () => send({ type: 'revert' }));
+$('commit').addEventListener('submit', (e) => {
+  e.preventDefault();
+  send({ type: 'commit', message: $('commit-message').value || 'commit' });
+  $('commit-message').value = '';
+});
+$('history').addEventListener('click', (e) => {
+  const v = e.target.dataset.restore;
+  if (v) send({ type: 'restore_version', version: Number(v) });
+});
+
+// --- VR ---------------------------------------------------------------------------
+
+$('enter-vr').addEventListener('click', async () => {
+  if (!navigator.xr || !(await navigator.xr.isSessionSupported('immersive-vr'))) {
+    status('error', 'WebXR immersive VR is not available in this browser');
+    return;
+  }
+  const session = await navigator.xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
+  await view.renderer.xr.setSession(session);
+});
+
+// --- loop ------------------------------------------------------------------------
+
+view.renderer.setAnimationLoop(() => {
+  view.controls.update();
+  view.render();
+});
+
+window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link };

@@ -1,0 +1,248 @@
+// B-spline surface evaluation and tessellation in the browser, from the
+// control net and knots the server sends (the kernel's evaluation is the
+// reference; tests/bspline.test.mjs checks the identities). Curvature sign
+// convention as in the kernel: n = w_u × w_v normalised, a curvature is
+// positive where the surface bends toward n.
+
+/** Index of the knot span holding t (clamped into the domain). */
+export function findSpan(knots, degree, t) {
+  const n = knots.length - degree - 1;
+  const a = knots[degree];
+  const b = knots[n];
+  if (!(t >= a)) t = a;
+  if (t >= b) {
+    let s = n - 1;
+    while (s > degree && knots[s] === knots[s + 1]) s--;
+    return s;
+  }
+  let lo = degree;
+  let hi = n;
+  while (hi - lo > 1) {
+    const mid = (lo + hi) >> 1;
+    if (knots[mid] <= t) lo = mid;
+    else hi = mid;
+  }
+  return lo;
+}
+
+/**
+ * Values and derivatives up to order 2 of the degree+1 non-zero basis
+ * functions at t: returns { first, d: [N, N', N''] } (Piegl & Tiller A2.3).
+ */
+export function basisDerivs(knots, degree, t) {
+  const p = degree;
+  const span = findSpan(knots, p, t);
+  const a0 = knots[p];
+  const b0 = knots[knots.length - p - 1];
+  t = Math.min(Math.max(t, a0), b0);
+  const ndu = Array.from({ length: p + 1 }, () => new Float64Array(p + 1));
+  const left = new Float64Array(p + 1);
+  const right = new Float64Array(p + 1);
+  ndu[0][0] = 1;
+  for (let j = 1; j <= p; j++) {
+    left[j] = t - knots[span + 1 - j];
+    right[j] = knots[span + j] - t;
+    let saved = 0;
+    for (let r = 0; r < j; r++) {
+      ndu[j][r] = right[r + 1] + left[j - r];
+      const temp = ndu[r][j - 1] / ndu[j][r];
+      ndu[r][j] = saved + right[r + 1] * temp;
+      saved = left[j - r] * temp;
+    }
+    ndu[j][j] = saved;
+  }
+  const d = [new Float64Array(p + 1), new Float64Array(p + 1), new Float64Array(p + 1)];
+  for (let j = 0; j <= p; j++) d[0][j] = ndu[j][p];
+  const nd = Math.min(2, p);
+  for (let r = 0; r <= p; r++) {
+    let s1 = 0;
+    let s2 = 1;
+    const a = [new Float64Array(p + 1), new Float64Array(p + 1)];
+    a[0][0] = 1;
+    for (let k = 1; k <= nd; k++) {
+      let dk = 0;
+      const rk = r - k;
+      const pk = p - k;
+      if (r >= k) {
+        a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+        dk = a[s2][0] * ndu[rk][pk];
+      }
+      const j1 = rk >= -1 ? 1 : -rk;
+      const j2 = r - 1 <= pk ? k - 1 : p - r;
+      for (let j = j1; j <= j2; j++) {
+        a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
+        dk += a[s2][j] * ndu[rk + j][pk];
+      }
+      if (r <= pk) {
+        a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+        dk += a[s2][k] * ndu[r][pk];
+      }
+      d[k][r] = dk;
+      const tmp = s1;
+      s1 = s2;
+      s2 = tmp;
+    }
+  }
+  let f = p;
+  for (let k = 1; k <= nd; k++) {
+    for (let j = 0; j <= p; j++) d[k][j] *= f;
+    f *= p - k;
+  }
+  return { first: span - p, d };
+}
+
+/**
+ * A surface as the frame carries it: { degreeU, degreeV, knotsU, knotsV,
+ * nu, nv, points } with points a flat array of nu·nv·3 (row-major i·nv + j).
+ * Returns w and its derivatives at (u, v) as arrays [x, y, z].
+ */
+export function surfaceDerivs(s, u, v) {
+  const bu = basisDerivs(s.knotsU, s.degreeU, u);
+  const bv = basisDerivs(s.knotsV, s.degreeV, v);
+  const out = { p: [0, 0, 0], u: [0, 0, 0], v: [0, 0, 0], uu: [0, 0, 0], uv: [0, 0, 0], vv: [0, 0, 0] };
+  for (let a = 0; a <= s.degreeU; a++) {
+    const row = (bu.first + a) * s.nv + bv.first;
+    const c = [[0, 0, 0], [0, 0, 0], [0, 0, 0]];
+    for (let b = 0; b <= s.degreeV; b++) {
+      const k = (row + b) * 3;
+      for (let dv = 0; dv < 3; dv++) {
+        const w = bv.d[dv][b];
+        c[dv][0] += w * s.points[k];
+        c[dv][1] += w * s.points[k + 1];
+        c[dv][2] += w * s.points[k + 2];
+      }
+    }
+    for (let x = 0; x < 3; x++) {
+      out.p[x] += bu.d[0][a] * c[0][x];
+      out.u[x] += bu.d[1][a] * c[0][x];
+      out.v[x] += bu.d[0][a] * c[1][x];
+      out.uu[x] += bu.d[2][a] * c[0][x];
+      out.uv[x] += bu.d[1][a] * c[1][x];
+      out.vv[x] += bu.d[0][a] * c[2][x];
+    }
+  }
+  return out;
+}
+
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+
+/** Unit normal, mean and Gaussian curvature from derivatives (null if degenerate). */
+export function curvature(d) {
+  const E = dot(d.u, d.u);
+  const F = dot(d.u, d.v);
+  const G = dot(d.v, d.v);
+  const det = E * G - F * F;
+  if (!(det > 1e-24 * Math.max(E * G, 1e-300))) return null;
+  const c = cross(d.u, d.v);
+  const len = Math.hypot(c[0], c[1], c[2]);
+  const n = [c[0] / len, c[1] / len, c[2] / len];
+  const L = dot(d.uu, n);
+  const M = dot(d.uv, n);
+  const N = dot(d.vv, n);
+  return { normal: n, gauss: (L * N - M * M) / det, mean: (E * N - 2 * F * M + G * L) / (2 * det) };
+}
+
+function uniform(a, b, n) {
+  const out = new Float64Array(n);
+  for (let k = 0; k < n; k++) out[k] = a + ((b - a) * k) / (n - 1);
+  return out;
+}
+
+/**
+ * Precomputed basis tables for one knot layout and density; `fill` refills
+ * typed arrays in place (positions, normals, mean, gauss), so a drag frame
+ * costs one pass over the vertices and no allocation.
+ */
+export class Tessellator {
+  constructor(s, samplesU, samplesV) {
+    this.key = `${s.degreeU}|${s.degreeV}|${Array.from(s.knotsU)}|${Array.from(s.knotsV)}`;
+    this.su = samplesU;
+    this.sv = samplesV;
+    this.us = uniform(s.knotsU[s.degreeU], s.knotsU[s.knotsU.length - s.degreeU - 1], samplesU);
+    this.vs = uniform(s.knotsV[s.degreeV], s.knotsV[s.knotsV.length - s.degreeV - 1], samplesV);
+    this.tu = Array.from(this.us, (t) => basisDerivs(s.knotsU, s.degreeU, t));
+    this.tv = Array.from(this.vs, (t) => basisDerivs(s.knotsV, s.degreeV, t));
+    const n = samplesU * samplesV;
+    this.positions = new Float32Array(n * 3);
+    this.normals = new Float32Array(n * 3);
+    this.mean = new Float32Array(n);
+    this.gauss = new Float32Array(n);
+    this.uvs = new Float32Array(n * 2);
+    this.rows = new Float64Array(s.nu * samplesV * 9);
+    const idx = [];
+    for (let a = 0; a < samplesU - 1; a++) {
+      for (let b = 0; b < samplesV - 1; b++) {
+        const i0 = a * samplesV + b;
+        const i1 = (a + 1) * samplesV + b;
+        idx.push(i0, i1, i1 + 1, i0, i1 + 1, i0 + 1);
+      }
+    }
+    this.indices = n > 65535 ? new Uint32Array(idx) : new Uint16Array(idx);
+  }
+
+  fits(s) {
+    return this.key === `${s.degreeU}|${s.degreeV}|${Array.from(s.knotsU)}|${Array.from(s.knotsV)}`;
+  }
+
+  fill(s) {
+    const { su, sv, rows } = this;
+    const pv = s.degreeV;
+    const pu = s.degreeU;
+    const P = s.points;
+    for (let i = 0; i < s.nu; i++) {
+      for (let b = 0; b < sv; b++) {
+        const t = this.tv[b];
+        const base = (i * sv + b) * 9;
+        for (let q = 0; q < 9; q++) rows[base + q] = 0;
+        for (let k = 0; k <= pv; k++) {
+          const o = (i * s.nv + t.first + k) * 3;
+          for (let dv = 0; dv < 3; dv++) {
+            const w = t.d[dv][k];
+            rows[base + dv * 3] += w * P[o];
+            rows[base + dv * 3 + 1] += w * P[o + 1];
+            rows[base + dv * 3 + 2] += w * P[o + 2];
+          }
+        }
+      }
+    }
+    const d = { p: [0, 0, 0], u: [0, 0, 0], v: [0, 0, 0], uu: [0, 0, 0], uv: [0, 0, 0], vv: [0, 0, 0] };
+    for (let a = 0; a < su; a++) {
+      const t = this.tu[a];
+      for (let b = 0; b < sv; b++) {
+        for (const key in d) d[key].fill(0);
+        for (let k = 0; k <= pu; k++) {
+          const base = ((t.first + k) * sv + b) * 9;
+          const n0 = t.d[0][k];
+          const n1 = t.d[1][k];
+          const n2 = t.d[2][k];
+          for (let x = 0; x < 3; x++) {
+            const c0 = rows[base + x];
+            const c1 = rows[base + 3 + x];
+            const c2 = rows[base + 6 + x];
+            d.p[x] += n0 * c0;
+            d.u[x] += n1 * c0;
+            d.v[x] += n0 * c1;
+            d.uu[x] += n2 * c0;
+            d.uv[x] += n1 * c1;
+            d.vv[x] += n0 * c2;
+          }
+        }
+        const idx = a * sv + b;
+        this.positions.set(d.p, idx * 3);
+        this.uvs[idx * 2] = this.us[a];
+        this.uvs[idx * 2 + 1] = this.vs[b];
+        const c = curvature(d);
+        if (c) {
+          this.normals.set(c.normal, idx * 3);
+          this.mean[idx] = c.mean;
+          this.gauss[idx] = c.gauss;
+        } else {
+          this.normals.set([0, 0, 1], idx * 3);
+          this.mean[idx] = 0;
+          this.gauss[idx] = 0;
+        }
+      }
+    }
+  }
+}

@@ -1,0 +1,87 @@
+// The WebSocket link to the server: hello with the protocol version and the
+// page's token, JSON events and binary geometry frames, reconnect with
+// backoff after the server goes away. Requests carry a `req` number and are
+// answered by `ack` or `error`.
+
+import { decodeFrame, PROTOCOL_VERSION } from './frame.js';
+
+export class Link {
+  constructor({ design, token, name, onMessage, onFrame, onStatus }) {
+    this.design = design;
+    this.token = token;
+    this.name = name;
+    this.onMessage = onMessage;
+    this.onFrame = onFrame;
+    this.onStatus = onStatus;
+    this.req = 0;
+    this.backoff = 250;
+    this.ws = null;
+    this.closedByServer = false;
+    this.connect();
+  }
+
+  connect() {
+    const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
+    const ws = new WebSocket(`${proto}//${location.host}/ws`);
+    ws.binaryType = 'arraybuffer';
+    this.ws = ws;
+    this.onStatus('connecting', 'connecting to the server…');
+    ws.onopen = () => {
+      ws.send(JSON.stringify({
+        type: 'hello',
+        protocol: PROTOCOL_VERSION,
+        token: this.token,
+        design: this.design,
+        client_name: this.name,
+        client_kind: 'browser',
+      }));
+    };
+    ws.onmessage = (ev) => {
+      if (typeof ev.data === 'string') {
+        let msg;
+        try {
+          msg = JSON.parse(ev.data);
+        } catch (e) {
+          this.onStatus('error', `unreadable message from the server: ${e}`);
+          return;
+        }
+        if (msg.type === 'welcome') {
+          this.backoff = 250;
+          this.onStatus('connected', `connected as ${msg.access}`);
+        }
+        if (msg.type === 'error' && (msg.code === 'bad_token' || msg.code === 'bad_version')) {
+          this.closedByServer = true;
+        }
+        this.onMessage(msg);
+      } else {
+        try {
+          this.onFrame(decodeFrame(ev.data));
+        } catch (e) {
+          this.onStatus('error', `bad geometry frame: ${e.message}`);
+        }
+      }
+    };
+    ws.onclose = () => {
+      if (this.closedByServer) {
+        this.onStatus('error', 'the server refused this link (token or version); reload with a valid link');
+        return;
+      }
+      this.onStatus('reconnecting', `connection lost; reconnecting in ${Math.round(this.backoff)} ms`);
+      setTimeout(() => this.connect(), this.backoff);
+      this.backoff = Math.min(this.backoff * 2, 4000);
+    };
+  }
+
+  /** Sends a message; returns its request number. */
+  send(msg) {
+    const req = ++this.req;
+    if (this.ws && this.ws.readyState === WebSocket.OPEN) {
+      this.ws.send(JSON.stringify({ ...msg, req }));
+    }
+    return req;
+  }
+
+  get open() {
+    return this.ws && this.ws.readyState === WebSocket.OPEN;
+  }
+}

@@ -1,0 +1,149 @@
+// The 3D view: renderer, lights, orbit camera, the surface mesh with its
+// display modes (shaded, mean / Gaussian curvature map, zebra stripes) and
+// the control net.
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+
+const zebraVertex = `
+varying vec3 vNormal;
+varying vec3 vView;
+void main() {
+  vec4 mv = modelViewMatrix * vec4(position, 1.0);
+  vNormal = normalize(normalMatrix * normal);
+  vView = normalize(-mv.xyz);
+  gl_Position = projectionMatrix * mv;
+}`;
+const zebraFragment = `
+uniform float stripes;
+varying vec3 vNormal;
+varying vec3 vView;
+void main() {
+  vec3 n = normalize(vNormal);
+  if (!gl_FrontFacing) n = -n;
+  vec3 r = reflect(-normalize(vView), n);
+  float s = step(0.5, fract(r.y * stripes));
+  gl_FragColor = vec4(vec3(0.08 + 0.9 * s), 1.0);
+}`;
+
+/** Diverging colour map: blue (−range) → white (0) → red (+range). */
+export function curvatureColor(value, range, out, o) {
+  const x = Math.max(-1, Math.min(1, value / (range || 1)));
+  if (x >= 0) {
+    out[o] = 1;
+    out[o + 1] = 1 - x;
+    out[o + 2] = 1 - x;
+  } else {
+    out[o] = 1 + x;
+    out[o + 1] = 1 + x;
+    out[o + 2] = 1;
+  }
+}
+
+export class View {
+  constructor(container) {
+    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio);
+    this.renderer.setSize(container.clientWidth, container.clientHeight);
+    this.renderer.xr.enabled = true;
+    container.appendChild(this.renderer.domElement);
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0x20242b);
+    this.camera = new THREE.PerspectiveCamera(45, container.clientWidth / container.clientHeight, 0.01, 1000);
+    this.camera.up.set(0, 0, 1);
+    this.camera.position.set(3, -3, 3);
+    this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.2));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(3, -2, 5);
+    this.scene.add(sun);
+    this.geometry = new THREE.BufferGeometry();
+    this.shaded = new THREE.MeshStandardMaterial({ color: 0xb8c4d6, metalness: 0.1, roughness: 0.45, side: THREE.DoubleSide });
+    this.colored = new THREE.MeshStandardMaterial({ vertexColors: true, metalness: 0.0, roughness: 0.6, side: THREE.DoubleSide });
+    this.zebra = new THREE.ShaderMaterial({ uniforms: { stripes: { value: 8 } }, vertexShader: zebraVertex, fragmentShader: zebraFragment, side: THREE.DoubleSide });
+    this.mesh = new THREE.Mesh(this.geometry, this.shaded);
+    this.mesh.name = 'surface';
+    this.scene.add(this.mesh);
+    this.net = new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0x6fa8ff }));
+    this.net.visible = false;
+    this.scene.add(this.net);
+    this.mode = 'shaded';
+    this.range = 1;
+    this.fitted = false;
+    window.addEventListener('resize', () => {
+      this.camera.aspect = container.clientWidth / container.clientHeight;
+      this.camera.updateProjectionMatrix();
+      this.renderer.setSize(container.clientWidth, container.clientHeight);
+    });
+  }
+
+  /** Puts a tessellation (from bspline.js) into the mesh, reusing buffers. */
+  setTessellation(t) {
+    const g = this.geometry;
+    if (g.userData.tess !== t) {
+      g.setAttribute('position', new THREE.BufferAttribute(t.positions, 3));
+      g.setAttribute('normal', new THREE.BufferAttribute(t.normals, 3));
+      g.setAttribute('uv', new THREE.BufferAttribute(t.uvs, 2));
+      g.setAttribute('color', new THREE.BufferAttribute(new Float32Array(t.positions.length), 3));
+      g.setIndex(new THREE.BufferAttribute(t.indices, 1));
+      g.userData.tess = t;
+    }
+    for (const name of ['position', 'normal', 'uv']) g.attributes[name].needsUpdate = true;
+    this.updateColors();
+    g.computeBoundingSphere();
+    g.computeBoundingBox();
+    if (!this.fitted) {
+      this.fit();
+      this.fitted = true;
+    }
+  }
+
+  updateColors() {
+    const t = this.geometry.userData.tess;
+    if (!t || (this.mode !== 'mean' && this.mode !== 'gauss')) return;
+    const values = this.mode === 'mean' ? t.mean : t.gauss;
+    const colors = this.geometry.attributes.color.array;
+    for (let i = 0; i < values.length; i++) curvatureColor(values[i], this.range, colors, i * 3);
+    this.geometry.attributes.color.needsUpdate = true;
+  }
+
+  setMode(mode) {
+    this.mode = mode;
+    this.mesh.material = mode === 'zebra' ? this.zebra : mode === 'shaded' ? this.shaded : this.colored;
+    this.updateColors();
+  }
+
+  setRange(range) {
+    this.range = range;
+    this.updateColors();
+  }
+
+  setNet(surface) {
+    const pts = [];
+    const P = surface.points;
+    const at = (i, j) => [P[(i * surface.nv + j) * 3], P[(i * surface.nv + j) * 3 + 1], P[(i * surface.nv + j) * 3 + 2]];
+    for (let i = 0; i < surface.nu; i++) {
+      for (let j = 0; j < surface.nv; j++) {
+        if (j + 1 < surface.nv) pts.push(...at(i, j), ...at(i, j + 1));
+        if (i + 1 < surface.nu) pts.push(...at(i, j), ...at(i + 1, j));
+      }
+    }
+    this.net.geometry.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
+  }
+
+  fit() {
+    const s = this.geometry.boundingSphere;
+    if (!s) return;
+    this.controls.target.copy(s.center);
+    const dist = (s.radius / Math.sin((this.camera.fov * Math.PI) / 360)) * 1.1;
+    this.camera.position.copy(s.center).add(new THREE.Vector3(0.6, -0.9, 0.7).normalize().multiplyScalar(dist));
+    this.camera.near = dist / 100;
+    this.camera.far = dist * 100;
+    this.camera.updateProjectionMatrix();
+    this.controls.update();
+  }
+
+  render() {
+    this.renderer.render(this.scene, this.camera);
+  }
+}

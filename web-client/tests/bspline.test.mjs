@@ -1,0 +1,118 @@
+// The browser's B-spline evaluation against exact identities, and the frame
+// decoder against a frame built byte by byte per protocol/README.md.
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { basisDerivs, surfaceDerivs, curvature, Tessellator } from '../src/bspline.js';
+import { decodeFrame } from '../src/frame.js';
+
+const knots = [0, 0, 0, 0, 0.2, 0.5, 0.5, 0.8, 1, 1, 1, 1];
+
+test('partition of unity and derivatives summing to zero', () => {
+  for (let k = 0; k <= 100; k++) {
+    const b = basisDerivs(knots, 3, k / 100);
+    const sum = (a) => a.reduce((x, y) => x + y, 0);
+    assert.ok(Math.abs(sum(b.d[0]) - 1) < 1e-14);
+    assert.ok(Math.abs(sum(b.d[1])) < 1e-10);
+    assert.ok(Math.abs(sum(b.d[2])) < 1e-8);
+  }
+});
+
+test('Piegl & Tiller example 2.3 values', () => {
+  const b = basisDerivs([0, 0, 0, 1, 2, 3, 4, 4, 5, 5, 5], 2, 2.5);
+  assert.equal(b.first, 2);
+  assert.deepEqual(Array.from(b.d[0]).map((x) => Math.round(x * 1e12) / 1e12), [0.125, 0.75, 0.125]);
+  assert.deepEqual(Array.from(b.d[1]).map((x) => Math.round(x * 1e12) / 1e12), [-0.5, 0, 0.5]);
+});
+
+function plane(nu, nv) {
+  // Control points at the Greville abscissae reproduce w(u,v) = (2u, 3v, 0).
+  const kv = (n) => {
+    const k = [0, 0, 0, 0];
+    for (let i = 1; i < n - 3; i++) k.push(i / (n - 3));
+    k.push(1, 1, 1, 1);
+    return k;
+  };
+  const ku = kv(nu);
+  const kvv = kv(nv);
+  const g = (k, i) => (k[i + 1] + k[i + 2] + k[i + 3]) / 3;
+  const points = [];
+  for (let i = 0; i < nu; i++) for (let j = 0; j < nv; j++) points.push(2 * g(ku, i), 3 * g(kvv, j), 0);
+  return { degreeU: 3, degreeV: 3, knotsU: ku, knotsV: kvv, nu, nv, points: Float32Array.from(points) };
+}
+
+test('a plane is reproduced exactly, flat, with normal +z', () => {
+  const s = plane(7, 6);
+  for (const [u, v] of [[0, 0], [0.3, 0.7], [1, 1], [0.55, 0.1]]) {
+    const d = surfaceDerivs(s, u, v);
+    assert.ok(Math.abs(d.p[0] - 2 * u) < 1e-6 && Math.abs(d.p[1] - 3 * v) < 1e-6);
+    const c = curvature(d);
+    assert.ok(Math.abs(c.normal[2] - 1) < 1e-9 && c.mean === 0 && c.gauss === 0);
+  }
+});
+
+test('derivatives match finite differences and the tessellator matches direct evaluation', () => {
+  const s = plane(8, 7);
+  for (let k = 0; k < s.points.length; k += 3) s.points[k + 2] = Math.sin(k * 0.37);
+  const h = 1e-5;
+  const d = surfaceDerivs(s, 0.4, 0.6);
+  const dp = surfaceDerivs(s, 0.4 + h, 0.6);
+  const dm = surfaceDerivs(s, 0.4 - h, 0.6);
+  for (let x = 0; x < 3; x++) {
+    assert.ok(Math.abs((dp.p[x] - dm.p[x]) / (2 * h) - d.u[x]) < 1e-5);
+    assert.ok(Math.abs((dp.u[x] - dm.u[x]) / (2 * h) - d.uu[x]) < 1e-3);
+  }
+  const t = new Tessellator(s, 9, 11);
+  t.fill(s);
+  assert.equal(t.indices.length, 6 * 8 * 10);
+  for (const idx of [0, 23, 98]) {
+    const e = surfaceDerivs(s, t.uvs[idx * 2], t.uvs[idx * 2 + 1]);
+    const c = curvature(e);
+    for (let x = 0; x < 3; x++) {
+      assert.ok(Math.abs(t.positions[idx * 3 + x] - e.p[x]) < 1e-5);
+      assert.ok(Math.abs(t.normals[idx * 3 + x] - c.normal[x]) < 1e-5);
+    }
+    assert.ok(Math.abs(t.mean[idx] - c.mean) < 1e-4 * (1 + Math.abs(c.mean)));
+  }
+});
+
+function frameBytes() {
+  const nu = 4;
+  const nv = 4;
+  const nk = 8;
+  const pts = 40 + 8 * nk * 2;
+  const icons = Math.ceil((pts + 12 * nu * nv) / 8) * 8;
+  const buf = new ArrayBuffer(icons + 24);
+  const dv = new DataView(buf);
+  [0x56, 0x53, 0x47, 0x46, 1, 1].forEach((b, i) => dv.setUint8(i, b));
+  dv.setBigUint64(8, 7n, true);
+  dv.setBigUint64(16, 42n, true);
+  dv.setUint32(24, nu, true);
+  dv.setUint32(28, nv, true);
+  dv.setUint8(32, 3);
+  dv.setUint8(33, 3);
+  dv.setUint32(36, 1, true);
+  [0, 0, 0, 0, 1, 1, 1, 1].forEach((k, i) => {
+    dv.setFloat64(40 + 8 * i, k, true);
+    dv.setFloat64(40 + 64 + 8 * i, k, true);
+  });
+  for (let k = 0; k < nu * nv * 3; k++) dv.setFloat32(pts + 4 * k, k, true);
+  dv.setBigUint64(icons, 9n, true);
+  dv.setFloat32(icons + 8, 1.5, true);
+  return buf;
+}
+
+test('a frame built per the README decodes; truncations are refused', () => {
+  const buf = frameBytes();
+  const f = decodeFrame(buf);
+  assert.equal(f.design, 7);
+  assert.equal(f.revision, 42);
+  assert.equal(f.points[5], 5);
+  assert.deepEqual(f.icons[0], { id: 9, xyz: [1.5, 0, 0] });
+  for (const len of [0, 10, 39, 100, buf.byteLength - 1]) {
+    assert.throws(() => decodeFrame(buf.slice(0, len)));
+  }
+  const bad = buf.slice(0);
+  new DataView(bad).setUint8(0, 0);
+  assert.throws(() => decodeFrame(bad), /magic/);
+});
