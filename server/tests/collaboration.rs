@@ -330,3 +330,47 @@ async fn designs_and_versions_over_the_websocket() {
     v.wait_for("snapshot").await;
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn edits_are_solved_by_the_kernel() {
+    let server = TestServer::start(common::data_dir("solve")).await;
+    let d = server.demo().clone();
+    let mut e = Client::connect(server.addr, d.id, &d.editor, "ed").await;
+    let pin = icon_of_role(&e.snapshot, "position");
+    let id = pin["id"].as_u64().unwrap();
+    let p: [f64; 3] = serde_json::from_value(pin["xyz"].clone()).unwrap();
+    // Moving a position constraint's target moves the surface through it.
+    let to = [p[0], p[1] + 1.0, p[2] + 6.0];
+    e.ok(json!({"type": "move_icon", "icon": id, "xyz": to}))
+        .await;
+    let s = http::get(server.addr, "/api/designs/1", Some(&d.viewer))
+        .await
+        .json();
+    let icon = s["design"]["icons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["id"] == json!(id))
+        .unwrap()
+        .clone();
+    let xyz: [f64; 3] = serde_json::from_value(icon["xyz"].clone()).unwrap();
+    for k in 0..3 {
+        assert!((xyz[k] - to[k]).abs() < 1e-6, "{xyz:?} vs {to:?}");
+    }
+    // Sleeping, it holds nothing; its state round-trips.
+    e.ok(json!({"type": "set_state", "icon": id, "state": "sleeping"}))
+        .await;
+    let u = e.wait_for("icon_updated").await;
+    assert_eq!(u["icon"]["state"], "sleeping");
+    // Switching role: position → normal (target becomes the current normal).
+    e.ok(json!({"type": "set_role", "icon": id, "role": {"kind": "normal"}}))
+        .await;
+    let u = e.wait_for("icon_updated").await;
+    let n: [f64; 3] = serde_json::from_value(u["icon"]["target"].clone()).unwrap();
+    assert!(((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-9);
+    // The material change reaches everyone.
+    e.ok(json!({"type": "set_material", "material": {"alpha11": 0.02, "alpha12": 0.0, "alpha22": 0.02, "beta11": 2.0, "beta12": 1.0, "beta22": 2.0}})).await;
+    let m = e.wait_for("material_changed").await;
+    assert_eq!(m["material"]["beta11"], 2.0);
+    server.stop().await;
+}

@@ -716,7 +716,9 @@ impl Actor {
                     self.check_holder(client, *id)?;
                 }
                 let before = self.doc.clone();
+                let t = Instant::now();
                 let created = self.model.apply(edit)?;
+                self.metrics.solve(t.elapsed());
                 self.undo.push((*before).clone());
                 // A deleted icon can no longer be held.
                 let gone: Vec<u64> = self
