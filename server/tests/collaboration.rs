@@ -358,18 +358,26 @@ async fn edits_are_solved_by_the_kernel() {
         assert!((xyz[k] - to[k]).abs() < 1e-6, "{xyz:?} vs {to:?}");
     }
     // Sleeping, it holds nothing; its state round-trips.
-    e.ok(json!({"type": "set_state", "icon": id, "state": "sleeping"}))
+    // (No req: the event may overtake an ack, and `ok` would skip it.)
+    e.send(json!({"type": "set_state", "icon": id, "state": "sleeping"}))
         .await;
-    let u = e.wait_for("icon_updated").await;
-    assert_eq!(u["icon"]["state"], "sleeping");
+    // Updates arrive in order; the move above updated every icon the
+    // solve moved, so look for this icon's new state.
+    let mut u = e.wait_for("icon_updated").await;
+    while !(u["icon"]["id"] == json!(id) && u["icon"]["state"] == "sleeping") {
+        u = e.wait_for("icon_updated").await;
+    }
     // Switching role: position → normal (target becomes the current normal).
-    e.ok(json!({"type": "set_role", "icon": id, "role": {"kind": "normal"}}))
+    e.send(json!({"type": "set_role", "icon": id, "role": {"kind": "normal"}}))
         .await;
-    let u = e.wait_for("icon_updated").await;
+    let mut u = e.wait_for("icon_updated").await;
+    while !(u["icon"]["id"] == json!(id) && u["icon"]["role"] == json!({"kind": "normal"})) {
+        u = e.wait_for("icon_updated").await;
+    }
     let n: [f64; 3] = serde_json::from_value(u["icon"]["target"].clone()).unwrap();
     assert!(((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-9);
     // The material change reaches everyone.
-    e.ok(json!({"type": "set_material", "material": {"alpha11": 0.02, "alpha12": 0.0, "alpha22": 0.02, "beta11": 2.0, "beta12": 1.0, "beta22": 2.0}})).await;
+    e.send(json!({"type": "set_material", "material": {"alpha11": 0.02, "alpha12": 0.0, "alpha22": 0.02, "beta11": 2.0, "beta12": 1.0, "beta22": 2.0}})).await;
     let m = e.wait_for("material_changed").await;
     assert_eq!(m["material"]["beta11"], 2.0);
     server.stop().await;

@@ -8,7 +8,7 @@ use super::doc::{
 use super::edit::SurfaceQuery;
 use super::engine::Engine;
 use super::error::{CommandError, ErrorKind};
-use vsculpt_kernel::bspline::{KnotVector, greville};
+use vsculpt_kernel::bspline::{KnotVector, greville, interpolate_surface};
 
 fn kernel(e: impl std::fmt::Display) -> CommandError {
     CommandError::new(ErrorKind::InvalidValue, e.to_string())
@@ -68,11 +68,31 @@ fn shell_height(s: f64, t: f64) -> f64 {
 
 /// The demo design: a 16 × 12 bicubic mouse shell, 120 × 70 mm, with two
 /// position constraints (front and back), a load on the palm rest and a
-/// normal constraint on the button area.
+/// normal constraint on the button area. The surface interpolates a
+/// 16 × 12 grid of points on the shell (kernel `interpolate_surface`).
 pub fn demo() -> Result<DesignDoc, CommandError> {
-    let surface = surface_from(16, 12, |s, t| {
-        [120.0 * s - 60.0, 70.0 * t - 35.0, shell_height(s, t)]
-    })?;
+    let (m, n) = (16, 12);
+    let mut grid = Vec::with_capacity(m * n);
+    for k in 0..m {
+        for l in 0..n {
+            let (s, t) = (k as f64 / (m - 1) as f64, l as f64 / (n - 1) as f64);
+            grid.push(glam::DVec3::new(
+                120.0 * s - 60.0,
+                70.0 * t - 35.0,
+                shell_height(s, t),
+            ));
+        }
+    }
+    let fitted = interpolate_surface(&grid, m, n, 3, 3).map_err(kernel)?;
+    let surface = SurfaceDoc {
+        u_degree: 3,
+        v_degree: 3,
+        u_knots: fitted.u_knots().knots().to_vec(),
+        v_knots: fitted.v_knots().knots().to_vec(),
+        nu: fitted.nu(),
+        nv: fitted.nv(),
+        points: fitted.points().iter().map(|p| p.to_array()).collect(),
+    };
     let mut doc = DesignDoc {
         format: DOC_FORMAT,
         name: "demo".into(),
