@@ -20,46 +20,66 @@ use vsculpt_bridge::device::flock::{FlockSettings, encode_record, pose_words};
 use vsculpt_bridge::device::runner::{DeviceRunner, RunOptions};
 use vsculpt_bridge::device::{GloveValues, Reading, Sample, SourceId, Timestamp};
 use vsculpt_bridge::hand::{GloveCalibration, glove_shape};
-use vsculpt_bridge::interaction::{Command, IconKind, IconRole, IconState, IconView, Interaction};
-use vsculpt_bridge::link::{ServerEvent, Wire};
+use vsculpt_bridge::interaction::{IconKind, IconRole, IconState, IconView, Interaction};
+use vsculpt_bridge::link::Wire;
 use vsculpt_bridge::outbox::Outbox;
 use vsculpt_bridge::sim::flock::FlockSim;
 use vsculpt_bridge::sim::pty::PtySim;
+use vsculpt_bridge::wire::ProtocolWire;
 
-/// JSON text per command, close to the real protocol's size.
-struct JsonWire;
+/// What a protocol-v1 server says to a joining device: welcome, then a snapshot
+/// with one position icon at the origin.
+const WELCOME: &str =
+    r#"{"type": "welcome", "client_id": 1, "access": "device", "design": 1, "protocol": 1}"#;
+const SNAPSHOT: &str = r#"{"type": "snapshot", "design": {"id": 1, "name": "bench", "versions": 0}, "revision": 0,
+ "surface": {"u": {"degree": 1, "knots": [0, 0, 1, 1]}, "v": {"degree": 1, "knots": [0, 0, 1, 1]}, "nu": 2, "nv": 2,
+             "points": [[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]]},
+ "material": {"alpha11": 1, "alpha12": 0, "alpha22": 1, "beta11": 1, "beta12": 1, "beta22": 1},
+ "icons": [{"id": 1, "anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "position"}, "state": "passive",
+            "xyz": [0, 0, 0], "target": [0, 0, 0], "sensors": []}],
+ "versions": [], "presence": [], "can_undo": false, "can_redo": false}"#;
 
-impl Wire for JsonWire {
-    fn hello(&self, token: &str, _design: Option<u64>) -> String {
-        serde_json::json!({ "type": "hello", "token": token }).to_string()
-    }
-    fn encode(&self, cmd: &Command, _ordered: bool) -> Vec<String> {
-        match cmd {
-            Command::Drag { icon, target } => {
-                vec![serde_json::json!({ "type": "drag", "icon": icon, "target": target.to_array() }).to_string()]
-            }
-            c => vec![
-                serde_json::json!({ "type": "command", "debug": format!("{c:?}") }).to_string(),
-            ],
+/// A WebSocket server on its own runtime that greets like the vsculpt server and
+/// reports the arrival time of every `drag` to `arrived`.
+fn sink(
+    arrived: Option<std::sync::mpsc::Sender<std::time::Instant>>,
+) -> (tokio::runtime::Runtime, std::net::SocketAddr) {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .thread_name("sink")
+        .enable_all()
+        .build()
+        .expect("sink runtime");
+    let listener = rt
+        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
+        .expect("bind");
+    let addr = listener.local_addr().expect("addr");
+    rt.spawn(async move {
+        while let Ok((tcp, _)) = listener.accept().await {
+            let arrived = arrived.clone();
+            tokio::spawn(async move {
+                use futures_util::SinkExt;
+                let Ok(ws) = tokio_tungstenite::accept_async(tcp).await else {
+                    return;
+                };
+                let (mut tx, mut rx) = ws.split();
+                let _ = rx.next().await;
+                for m in [WELCOME, SNAPSHOT] {
+                    let _ = tx
+                        .send(tokio_tungstenite::tungstenite::Message::text(m))
+                        .await;
+                }
+                while let Some(Ok(m)) = rx.next().await {
+                    if let Some(a) = &arrived
+                        && m.to_text().is_ok_and(|t| t.contains("\"type\":\"drag\""))
+                    {
+                        let _ = a.send(std::time::Instant::now());
+                    }
+                }
+            });
         }
-    }
-    fn decode(&self, text: &str) -> Result<Vec<ServerEvent>, String> {
-        let _: serde_json::Value = serde_json::from_str(text).map_err(|e| e.to_string())?;
-        Ok(vec![ServerEvent::Icons {
-            icons: vec![IconView {
-                id: 1,
-                position: DVec3::ZERO,
-                target: DVec3::ZERO,
-                role: IconRole::Constraint,
-                kind: IconKind::Position,
-                state: IconState::Passive,
-            }],
-            area: Some(1.0),
-        }])
-    }
-    fn accepts(&self, event: &ServerEvent) -> bool {
-        matches!(event, ServerEvent::Icons { .. })
-    }
+    });
+    (rt, addr)
 }
 
 fn config(port: &str) -> Config {
@@ -116,7 +136,7 @@ fn per_sample(c: &mut Criterion) {
     interaction.handle(&grab(), &mut cmds);
     let mut decoder = build_decoder(SourceId(0), &cfg.devices[0]);
     let mut outbox = Outbox::new();
-    let wire = JsonWire;
+    let wire = ProtocolWire;
     let mut samples = Vec::new();
     let mut i = 0usize;
     c.bench_function("pipeline/record_to_encoded_drag", |b| {
@@ -173,33 +193,7 @@ fn session_cpu(c: &mut Criterion) {
     let mut sim = FlockSim::new(1, false, Duration::from_millis(1));
     sim.set_pose(0, DVec3::new(0.01, 0.0, 0.0), DQuat::IDENTITY);
     let sim = PtySim::start(sim, &link).expect("pty");
-    // the WebSocket sink runs on its own runtime with its own thread names
-    let sink_rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(1)
-        .thread_name("sink")
-        .enable_all()
-        .build()
-        .expect("sink runtime");
-    let listener = sink_rt
-        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
-        .expect("bind");
-    let addr = listener.local_addr().expect("addr");
-    sink_rt.spawn(async move {
-        while let Ok((tcp, _)) = listener.accept().await {
-            tokio::spawn(async move {
-                let Ok(ws) = tokio_tungstenite::accept_async(tcp).await else {
-                    return;
-                };
-                let (mut tx, mut rx) = ws.split();
-                let _ = rx.next().await;
-                use futures_util::SinkExt;
-                let _ = tx
-                    .send(tokio_tungstenite::tungstenite::Message::text("{}"))
-                    .await;
-                while let Some(Ok(_)) = rx.next().await {}
-            });
-        }
-    });
+    let (_sink_rt, addr) = sink(None);
     let mut cfg = config(&link.display().to_string());
     cfg.server.url = format!("ws://{addr}/ws?token=t");
     let rt = tokio::runtime::Builder::new_multi_thread()
@@ -212,7 +206,7 @@ fn session_cpu(c: &mut Criterion) {
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let cfg2 = cfg.clone();
     let engine = rt.spawn(async move {
-        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(JsonWire), rx, async {
+        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(ProtocolWire), rx, async {
             let _ = stop_rx.await;
         })
         .await
@@ -271,37 +265,7 @@ fn record_to_server(c: &mut Criterion) {
     let (mut master, slave) = serialport::TTYPort::pair().expect("pty");
     let port = serialport::SerialPort::name(&slave).expect("pty name");
     let (arrived_tx, arrived) = std::sync::mpsc::channel::<std::time::Instant>();
-    let sink_rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(1)
-        .thread_name("sink")
-        .enable_all()
-        .build()
-        .expect("sink runtime");
-    let listener = sink_rt
-        .block_on(tokio::net::TcpListener::bind("127.0.0.1:0"))
-        .expect("bind");
-    let addr = listener.local_addr().expect("addr");
-    sink_rt.spawn(async move {
-        while let Ok((tcp, _)) = listener.accept().await {
-            let arrived_tx = arrived_tx.clone();
-            tokio::spawn(async move {
-                use futures_util::SinkExt;
-                let Ok(ws) = tokio_tungstenite::accept_async(tcp).await else {
-                    return;
-                };
-                let (mut tx, mut rx) = ws.split();
-                let _ = rx.next().await;
-                let _ = tx
-                    .send(tokio_tungstenite::tungstenite::Message::text("{}"))
-                    .await;
-                while let Some(Ok(m)) = rx.next().await {
-                    if m.to_text().is_ok_and(|t| t.contains("\"drag\"")) {
-                        let _ = arrived_tx.send(std::time::Instant::now());
-                    }
-                }
-            });
-        }
-    });
+    let (_sink_rt, addr) = sink(Some(arrived_tx));
     let mut cfg = config(&port);
     cfg.server.url = format!("ws://{addr}/ws?token=t");
     let rt = tokio::runtime::Builder::new_multi_thread()
@@ -313,7 +277,7 @@ fn record_to_server(c: &mut Criterion) {
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let cfg2 = cfg.clone();
     let engine = rt.spawn(async move {
-        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(JsonWire), rx, async {
+        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(ProtocolWire), rx, async {
             let _ = stop_rx.await;
         })
         .await

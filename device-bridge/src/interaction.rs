@@ -261,7 +261,12 @@ impl Hold {
     }
 }
 
+/// Hands are reported to other clients at presence rate (architecture: 10–30 Hz,
+/// latest wins), not at the tracker's rate; drags still go at the tracker's rate.
+pub const HAND_SAMPLE_PERIOD_US: u64 = 33_000;
+
 struct HandSlot {
+    last_report: Option<Timestamp>,
     tracker: SourceId,
     sensor: u16,
     glove: Option<SourceId>,
@@ -295,6 +300,7 @@ impl Interaction {
                 let (tracker, _) = config.device(&h.tracker)?;
                 let glove = h.glove.as_ref().and_then(|g| config.device(g)).map(|g| g.0);
                 Some(HandSlot {
+                    last_report: None,
                     tracker,
                     sensor: h.sensor,
                     glove,
@@ -464,13 +470,19 @@ impl Interaction {
                         continue;
                     }
                     let pose = h.hand.update_pose(position, orientation, sample.time);
-                    out.push(Command::HandSample {
-                        sensor: h.name.clone(),
-                        position: pose.position,
-                        orientation: pose.orientation,
-                        flexion: h.hand.flexion_rad(),
-                        time: sample.time,
+                    let due = h.last_report.is_none_or(|t| {
+                        sample.time.since(t).as_micros() as u64 >= HAND_SAMPLE_PERIOD_US
                     });
+                    if due {
+                        h.last_report = Some(sample.time);
+                        out.push(Command::HandSample {
+                            sensor: h.name.clone(),
+                            position: pose.position,
+                            orientation: pose.orientation,
+                            flexion: h.hand.flexion_rad(),
+                            time: sample.time,
+                        });
+                    }
                     if let Some(g) = &mut h.hold {
                         g.offset = pose.position - g.origin;
                         out.push(g.drag());
@@ -784,6 +796,22 @@ mod tests {
             }
             o => panic!("{o:?}"),
         }
+    }
+
+    #[test]
+    fn hand_samples_go_at_presence_rate() {
+        let mut i = Interaction::new(&config());
+        let mut out = Vec::new();
+        for t in 0..100u64 {
+            let mut s = pose(DVec3::X * t as f64);
+            s.time = Timestamp(t * 1000); // a 1 kHz tracker for 0.1 s
+            i.handle(&s, &mut out);
+        }
+        let n = out
+            .iter()
+            .filter(|c| matches!(c, Command::HandSample { .. }))
+            .count();
+        assert_eq!(n, 4); // t = 0, 33, 66, 99 ms
     }
 
     #[test]
