@@ -30,6 +30,8 @@ cargo test --workspace --locked
 # --- browser end-to-end tests (real headless Chromium) -------------------
 if [ -f web-client/package.json ] && grep -q '"test"' web-client/package.json; then
   echo "== browser tests"
-  cargo build --release --locked -p vsculpt-server
-  (cd web-client && npm test)
+  # The debug server binary the Rust tests already built (dependencies are
+  # optimised in the dev profile, so it solves at full speed).
+  cargo build --locked -p vsculpt-server
+  (cd web-client && VSCULPT_SERVER_BIN="$PWD/../target/debug/vsculpt-server" npm test)
 fi

@@ -1,0 +1,229 @@
+// End-to-end in real headless Chromium against the real server: the page
+// draws the surface, an editor creates a position constraint by clicking the
+// surface and drags it with the gizmo, the server's REST API shows the
+// surface moved, curvature and zebra views change the picture, a viewer sees
+// the change live and cannot edit, and the page reconnects by itself after
+// the server restarts.
+
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn } from 'node:child_process';
+import { mkdtempSync, existsSync, mkdirSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, dirname, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const webDir = resolve(here, '..');
+const serverBin = process.env.VSCULPT_SERVER_BIN || resolve(webDir, '../target/release/vsculpt-server');
+const artifacts = join(webDir, 'test-artifacts');
+const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-web-'));
+let server;
+let links;
+let browser;
+
+function startServer(listen) {
+  return new Promise((resolveStart, reject) => {
+    const child = spawn(serverBin, ['--listen', listen, '--data', dataDir, '--web-dir', webDir], { stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    const timer = setTimeout(() => reject(new Error(`server did not print its links:\n${out}`)), 30000);
+    child.stdout.on('data', (d) => {
+      out += d;
+      const base = out.match(/listening on (http:\/\/\S+)/);
+      const editor = out.match(/design 1 "[^"]*" editor: (\S+)/);
+      const viewer = out.match(/design 1 "[^"]*" viewer: (\S+)/);
+      if (base && editor && viewer) {
+        clearTimeout(timer);
+        resolveStart({ child, base: base[1], editor: editor[1], viewer: viewer[1] });
+      }
+    });
+    child.stderr.on('data', (d) => {
+      out += d;
+    });
+    child.on('exit', (code) => reject(new Error(`server exited (${code}):\n${out}`)));
+  });
+}
+
+async function stopServer() {
+  if (!server) return;
+  const exited = new Promise((r) => server.child.once('exit', r));
+  server.child.kill('SIGTERM');
+  await exited;
+}
+
+before(async () => {
+  assert.ok(existsSync(serverBin), `server binary missing at ${serverBin}: run cargo build --release -p vsculpt-server`);
+  mkdirSync(artifacts, { recursive: true });
+  server = await startServer('127.0.0.1:0');
+  links = server;
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking', '--disable-component-update', '--no-first-run'],
+  });
+});
+
+after(async () => {
+  if (browser) await browser.close();
+  await stopServer();
+  rmSync(dataDir, { recursive: true, force: true });
+});
+
+async function open(url) {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 700 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  await page.goto(url);
+  await page.waitForFunction(() => window.vsculpt && window.vsculpt.state.surface && window.vsculpt.state.access, null, { timeout: 30000 });
+  page.errors = errors;
+  return page;
+}
+
+/** Fraction of canvas pixels that differ from the background colour, and a colour histogram key. */
+async function pixels(page) {
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  return page.evaluate(() => {
+    const src = window.vsculpt.view.renderer.domElement;
+    const c = document.createElement('canvas');
+    c.width = src.width;
+    c.height = src.height;
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data;
+    let drawn = 0;
+    let red = 0;
+    let dark = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      const bg = Math.abs(d[i] - 0x20) + Math.abs(d[i + 1] - 0x24) + Math.abs(d[i + 2] - 0x2b) < 12;
+      if (!bg) drawn++;
+      if (!bg && d[i] > d[i + 2] + 40) red++;
+      if (!bg && d[i] < 40 && d[i + 1] < 40 && d[i + 2] < 40) dark++;
+    }
+    const n = d.length / 4;
+    return { drawn: drawn / n, red: red / n, dark: dark / n };
+  });
+}
+
+async function designJson(token) {
+  const res = await fetch(`${links.base}/api/designs/1?token=${token}`);
+  assert.equal(res.status, 200);
+  return res.json();
+}
+
+const tokenOf = (url) => new URL(url).searchParams.get('token');
+
+test('editor: draws, creates by clicking, drags with the gizmo, analysis views; viewer follows live and cannot edit', async () => {
+  const editor = await open(links.editor);
+  const shot = await pixels(editor);
+  await editor.screenshot({ path: join(artifacts, 'editor.png') });
+  assert.ok(shot.drawn > 0.05, `surface drawn: ${JSON.stringify(shot)}`);
+
+  const viewer = await open(links.viewer);
+  assert.equal(await viewer.evaluate(() => window.vsculpt.state.access), 'viewer');
+  assert.equal(await viewer.isVisible('#commit'), false, 'viewer has no edit controls');
+
+  // Click the middle of the surface in "point icon" mode: a position constraint.
+  const before = await editor.evaluate(() => window.vsculpt.state.icons.size);
+  await editor.selectOption('#create', 'point');
+  await editor.selectOption('#create-role', 'position');
+  const centre = await editor.evaluate(() => {
+    const v = window.vsculpt.view;
+    const s = v.geometry.boundingSphere;
+    const p = s.center.clone();
+    // The surface point under the bounding-sphere centre: nearest vertex to it in xy.
+    const pos = v.geometry.attributes.position.array;
+    let best = 0;
+    let bd = Infinity;
+    for (let i = 0; i < pos.length; i += 3) {
+      const dd = (pos[i] - p.x) ** 2 + (pos[i + 1] - p.y) ** 2;
+      if (dd < bd) {
+        bd = dd;
+        best = i;
+      }
+    }
+    p.set(pos[best], pos[best + 1], pos[best + 2]).project(v.camera);
+    const r = v.renderer.domElement.getBoundingClientRect();
+    return { x: r.left + ((p.x + 1) / 2) * r.width, y: r.top + ((1 - p.y) / 2) * r.height };
+  });
+  await editor.mouse.click(centre.x, centre.y);
+  await editor.waitForFunction((n) => window.vsculpt.state.icons.size > n, before, { timeout: 10000 });
+  const icon = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  const created = await editor.evaluate((id) => window.vsculpt.state.icons.get(id), icon);
+  assert.equal(created.role.kind, 'position');
+
+  // Select it by clicking its handle, then drag the gizmo's Z arrow upward.
+  await editor.selectOption('#create', 'none');
+  await editor.evaluate((id) => window.vsculpt.select(id), icon);
+  const restBefore = await designJson(tokenOf(links.editor));
+  const zHandle = await editor.evaluate(() => {
+    const v = window.vsculpt.view;
+    const r = v.renderer.domElement.getBoundingClientRect();
+    const proj = (p) => {
+      const q = p.clone().project(v.camera);
+      return { x: r.left + ((q.x + 1) / 2) * r.width, y: r.top + ((1 - q.y) / 2) * r.height };
+    };
+    const helper = v.scene.children.find((c) => c.isTransformControlsRoot || c.type === 'TransformControlsRoot') || null;
+    const base = window.vsculpt.state.icons.get(window.vsculpt.state.selected).target;
+    const o = new v.camera.position.constructor(...base);
+    // The gizmo scales with distance: its Z arrow spans about 0.1·distance·fov factor above the origin.
+    const dist = v.camera.position.distanceTo(o);
+    const tip = o.clone();
+    tip.z += dist * 0.07;
+    return { from: proj(tip), origin: proj(o), hasHelper: !!helper };
+  });
+  await editor.mouse.move(zHandle.from.x, zHandle.from.y);
+  await editor.mouse.down();
+  for (let k = 1; k <= 10; k++) await editor.mouse.move(zHandle.from.x, zHandle.from.y - 6 * k);
+  await editor.mouse.up();
+  await editor.waitForFunction(
+    (id) => {
+      const i = window.vsculpt.state.icons.get(id);
+      return i && i.state === 'passive' && window.vsculpt.state.frames > 1;
+    },
+    icon,
+    { timeout: 10000 },
+  );
+  await new Promise((r) => setTimeout(r, 500));
+  const restAfter = await designJson(tokenOf(links.editor));
+  assert.notDeepEqual(restAfter.design, restBefore.design, 'the gizmo drag moved the surface on the server');
+  const moved = await editor.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
+  assert.ok(moved[2] > created.target[2] + 1e-3, `dragged upward: ${created.target} → ${moved}`);
+  await editor.screenshot({ path: join(artifacts, 'editor-dragged.png') });
+
+  // The viewer saw it live: same revision and control points.
+  await viewer.waitForFunction((id) => window.vsculpt.state.icons.has(id), icon, { timeout: 10000 });
+  const [pe, pv] = await Promise.all([editor, viewer].map((p) => p.evaluate(() => Array.from(window.vsculpt.state.surface.points))));
+  assert.deepEqual(pv, pe);
+
+  // A viewer's edit is refused by the server.
+  await viewer.evaluate((id) => window.vsculpt.send({ type: 'set_state', icon: id, state: 'sleeping' }), icon);
+  await viewer.waitForFunction(() => (window.vsculpt.state.lastError || '').startsWith('forbidden'), null, { timeout: 10000 });
+  assert.equal(await editor.evaluate((id) => window.vsculpt.state.icons.get(id).state, icon), 'passive');
+
+  // Curvature and zebra views change the picture.
+  const shaded = await pixels(editor);
+  await editor.selectOption('#mode', 'mean');
+  await editor.fill('#range', '0.2');
+  await editor.dispatchEvent('#range', 'input');
+  const mean = await pixels(editor);
+  await editor.screenshot({ path: join(artifacts, 'mean-curvature.png') });
+  await editor.selectOption('#mode', 'zebra');
+  const zebra = await pixels(editor);
+  await editor.screenshot({ path: join(artifacts, 'zebra.png') });
+  assert.ok(Math.abs(mean.red - shaded.red) > 0.001 || mean.red > 0.001, `curvature colours: ${JSON.stringify({ shaded, mean })}`);
+  assert.ok(zebra.dark > shaded.dark + 0.01, `zebra stripes: ${JSON.stringify({ shaded, zebra })}`);
+  assert.deepEqual(editor.errors, []);
+  await viewer.close();
+  await editor.close();
+});
+
+test('the page reconnects by itself after the server restarts', async () => {
+  const page = await open(links.editor);
+  const port = new URL(links.base).port;
+  await stopServer();
+  await page.waitForFunction(() => document.getElementById('status').className.includes('reconnecting'), null, { timeout: 10000 });
+  server = await startServer(`127.0.0.1:${port}`);
+  await page.waitForFunction(() => document.getElementById('status').className.includes('connected') && !document.getElementById('status').className.includes('re'), null, { timeout: 20000 });
+  assert.ok(await page.evaluate(() => window.vsculpt.state.surface !== null));
+  await page.close();
+});
