@@ -21,7 +21,7 @@ const LIFT: f64 = 20.0;
 async fn grab_lift_release(server: &RunningServer, studio: &Studio, id: u64, p: DVec3) {
     let (addr, token) = (server.addr, server.viewer_token.clone());
     // the bridge is connected and sees the hand: close it
-    tokio::time::sleep(Duration::from_millis(800)).await;
+    wait_bridge(server).await;
     studio.close_hand(true);
     let held = eventually(10, || {
         let t = token.clone();
@@ -159,7 +159,7 @@ async fn hand_pulls_a_load_icon_within_the_spring_band() {
         })
         .await
     });
-    tokio::time::sleep(Duration::from_millis(800)).await;
+    wait_bridge(&server).await;
     studio.close_hand(true);
     let (addr, token) = (server.addr, server.viewer_token.clone());
     eventually(10, || {
@@ -230,7 +230,7 @@ async fn space_mouse_selects_moves_and_puts_an_icon_to_sleep() {
     });
     let connected = eventually(10, || async { (daemon.clients() > 0).then_some(()) }).await;
     assert!(connected.is_some());
-    tokio::time::sleep(Duration::from_millis(500)).await;
+    wait_bridge(&server).await;
     // button 2 selects the first icon; push the cap up (z) at full scale for 0.5 s
     daemon.send_button(2, true);
     daemon.send_button(2, false);

@@ -69,7 +69,7 @@ async fn corrupt_tracker_bytes_never_move_the_icon_off_the_hand_path() {
     let mut frames = watch_frames(server.addr, &server.viewer_token).await;
     let studio = Studio::start(&dir, p);
     let (stop, bridge) = start_bridge(bridge_config(&dir, &server.device_url));
-    tokio::time::sleep(Duration::from_millis(800)).await;
+    wait_bridge(&server).await;
     studio.close_hand(true);
     wait_held(&server, icon.id, true).await;
     // lift by 20 mm while the line spits garbage: stray bytes, records cut short,
@@ -123,7 +123,7 @@ async fn tracker_unplugged_mid_drag_releases_and_drags_again_when_back() {
     let p = DVec3::from_array(icon.xyz);
     let mut studio = Studio::start(&dir, p);
     let (stop, bridge) = start_bridge(bridge_config(&dir, &server.device_url));
-    tokio::time::sleep(Duration::from_millis(800)).await;
+    wait_bridge(&server).await;
     studio.close_hand(true);
     wait_held(&server, icon.id, true).await;
     lift(&studio, p, p + DVec3::new(0.0, 0.0, 10.0), 10).await;
@@ -176,7 +176,7 @@ async fn server_restart_mid_drag_restores_the_binding() {
     let p = DVec3::from_array(icon.xyz);
     let studio = Studio::start(&dir, p);
     let (stop, bridge) = start_bridge(bridge_config(&dir, &server.device_url));
-    tokio::time::sleep(Duration::from_millis(800)).await;
+    wait_bridge(&server).await;
     studio.close_hand(true);
     wait_held(&server, icon.id, true).await;
     lift(&studio, p, p + DVec3::new(0.0, 0.0, 8.0), 8).await;

@@ -195,6 +195,32 @@ pub async fn snapshot_icons(addr: SocketAddr, token: &str) -> Vec<Icon> {
     }
 }
 
+/// Waits until the bridge has joined the design (it is in the presence list), then
+/// a little longer for its devices to stream.
+pub async fn wait_bridge(server: &RunningServer) {
+    let (addr, token) = (server.addr, server.viewer_token.clone());
+    let joined = eventually(20, || {
+        let t = token.clone();
+        async move {
+            let (_tx, mut rx) = join(addr, &t).await;
+            loop {
+                let m = tokio::time::timeout(Duration::from_secs(10), rx.recv())
+                    .await
+                    .ok()??;
+                if let ServerMessage::Snapshot { presence, .. } = m {
+                    return presence
+                        .iter()
+                        .any(|p| p.name == vsculpt_bridge::wire::CLIENT_NAME)
+                        .then_some(());
+                }
+            }
+        }
+    })
+    .await;
+    assert!(joined.is_some(), "the bridge never joined the design");
+    tokio::time::sleep(Duration::from_millis(400)).await;
+}
+
 /// The snapshot's surface control points.
 pub async fn snapshot_points(addr: SocketAddr, token: &str) -> Vec<[f64; 3]> {
     let (_tx, mut rx) = join(addr, token).await;
