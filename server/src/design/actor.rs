@@ -191,6 +191,16 @@ pub enum Request {
     },
 }
 
+/// Runs CPU-heavy model work (a rebuild and solve: a refactorisation on
+/// large surfaces) without stalling the runtime's other tasks, where the
+/// runtime allows it.
+fn heavy<T>(f: impl FnOnce() -> T) -> T {
+    match tokio::runtime::Handle::try_current().map(|h| h.runtime_flavor()) {
+        Ok(tokio::runtime::RuntimeFlavor::MultiThread) => tokio::task::block_in_place(f),
+        _ => f(),
+    }
+}
+
 /// A handle to a running design actor.
 #[derive(Clone, Debug)]
 pub struct DesignHandle {
@@ -717,7 +727,7 @@ impl Actor {
                 }
                 let before = self.doc.clone();
                 let t = Instant::now();
-                let created = self.model.apply(edit)?;
+                let created = heavy(|| self.model.apply(edit))?;
                 self.metrics.solve(t.elapsed());
                 self.undo.push((*before).clone());
                 // A deleted icon can no longer be held.
@@ -814,7 +824,7 @@ impl Actor {
                         },
                     )
                 })?;
-                match DesignModel::load(&doc) {
+                match heavy(|| DesignModel::load(&doc)) {
                     Ok(m) => self.model = m,
                     Err(e) => {
                         // Put the stacks back as they were.
@@ -877,7 +887,7 @@ impl Actor {
                     CommandError::new(ErrorKind::UnknownVersion, "no such version")
                 })?;
                 let doc = DesignDoc::from_bytes(&bytes)?;
-                let model = DesignModel::load(&doc)?;
+                let model = heavy(|| DesignModel::load(&doc))?;
                 self.undo.push(self.model.to_doc());
                 self.model = model;
                 self.clear_drags();
