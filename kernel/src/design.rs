@@ -122,6 +122,9 @@ pub struct Design {
     next_id: u64,
     spring: Spring,
     adaptive: bool,
+    /// The spring stiffness the solver's load gains were built with; a
+    /// running load drag is scaled by k / built_k.
+    built_k: f64,
     solver: Option<Solver>,
     problem_dirty: bool,
     drag: Option<ActiveDrag>,
@@ -144,6 +147,7 @@ impl Design {
             material,
             icons: BTreeMap::new(),
             next_id: 1,
+            built_k: spring.stiffness(),
             spring,
             adaptive: true,
             solver: None,
@@ -587,6 +591,7 @@ impl Design {
             if let Some(solver) = self.solver.as_mut() {
                 solver.set_problem(problem)?;
             }
+            self.built_k = self.spring.stiffness();
             self.problem_dirty = false;
         }
         self.solver
@@ -616,12 +621,26 @@ impl Design {
     /// drag) and re-places the icons on the surface.
     pub fn solve(&mut self) -> Result<SolveReport, DesignError> {
         let drag = self.drag;
+        let load_scale = |d: &Design| -> f64 {
+            match d.drag {
+                Some(a) if d.icons.get(&a.id).is_some_and(|i| i.role == Role::Load) => {
+                    d.spring.stiffness() / d.built_k
+                }
+                _ => 1.0,
+            }
+        };
         let reference = std::mem::take(&mut self.reference);
         let mut out = std::mem::take(&mut self.scratch);
         out.resize(reference.len(), DVec3::ZERO);
-        let result = self.ensure_solver().and_then(|solver| {
+        let ready = self.ensure_solver().map(|_| ());
+        let scale = load_scale(self);
+        let result = ready.and_then(|()| {
+            let solver = self
+                .solver
+                .as_mut()
+                .ok_or(DesignError::Unsupported("no solver".into()))?;
             Ok(match drag {
-                Some(d) => solver.drag(d.id.0, d.t, &reference, &mut out)?,
+                Some(d) => solver.drag(d.id.0, d.t * scale, &reference, &mut out)?,
                 None => solver.solve(&reference, &mut out)?,
             })
         });
@@ -742,15 +761,23 @@ impl Design {
             }
         };
         self.icon_mut(id)?.target = target;
-        let actual = self.icons[&id].xyz;
+        let mut report = report;
+        let mut actual = self.icons[&id].xyz;
         if self.adaptive && self.icons[&id].role == Role::Load {
-            let dx = (xyz - d.grabbed_at).length();
-            let dy = (actual - d.grabbed_at).length();
-            if matches!(
-                self.spring.adapt(dx, dy),
-                Adaptation::Raised | Adaptation::Lowered
-            ) {
-                self.problem_dirty = true;
+            // Paper 003's loop, inside the frame: a load's pull is linear in
+            // κ, so re-solving with a new κ is a rescaled drag input — the
+            // fast path again, no new columns.
+            for _ in 0..4 {
+                let dx = (xyz - d.grabbed_at).length();
+                let dy = (actual - d.grabbed_at).length();
+                if !matches!(
+                    self.spring.adapt(dx, dy),
+                    Adaptation::Raised | Adaptation::Lowered
+                ) {
+                    break;
+                }
+                report = self.solve()?;
+                actual = self.icons[&id].xyz;
             }
         }
         Ok(DragReport {

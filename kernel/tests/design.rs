@@ -384,14 +384,9 @@ fn the_spring_adapts_into_the_band_on_soft_and_stiff_surfaces() {
         d.set_kappa(1e-3).unwrap();
         let start = d.icon(load).unwrap().xyz;
         let hand = start + DVec3::new(0.0, 0.0, 0.1);
-        let mut ratio = 0.0;
-        for _ in 0..30 {
-            let r = d.drag(load, hand).unwrap();
-            ratio = (r.actual - start).length() / 0.1;
-            if (0.8..=1.2).contains(&ratio) {
-                break;
-            }
-        }
+        // The adaptation runs inside the frame: the first frame already lands in the band.
+        let r = d.drag(load, hand).unwrap();
+        let ratio = (r.actual - start).length() / 0.1;
         assert!((0.8..=1.2).contains(&ratio), "β = {beta}: ratio {ratio}");
     }
 }
