@@ -310,16 +310,29 @@ function finishCurve() {
 
 // --- panels -------------------------------------------------------------------
 
-$('mode').addEventListener('change', (e) => {
-  view.setMode(e.target.value);
-  $('legend').hidden = !(e.target.value === 'mean' || e.target.value === 'gauss');
-});
-$('range').addEventListener('input', (e) => {
-  const r = Number(e.target.value);
+function setRange(r) {
   view.setRange(r);
+  $('range').value = r;
   $('legend-min').textContent = (-r).toPrecision(2);
   $('legend-max').textContent = r.toPrecision(2);
+}
+
+$('mode').addEventListener('change', (e) => {
+  const mode = e.target.value;
+  view.setMode(mode);
+  const analysis = mode === 'mean' || mode === 'gauss';
+  $('legend').hidden = !analysis;
+  if (analysis && state.tess) {
+    // Start from the 95th percentile of |curvature|; the slider spans 100× around it.
+    const values = Array.from(mode === 'mean' ? state.tess.mean : state.tess.gauss, Math.abs).sort((a, b) => a - b);
+    const p95 = values[Math.floor(values.length * 0.95)] || 1;
+    $('range').min = p95 / 10;
+    $('range').max = p95 * 10;
+    $('range').step = p95 / 100;
+    setRange(p95);
+  }
 });
+$('range').addEventListener('input', (e) => setRange(Number(e.target.value)));
 $('net').addEventListener('change', (e) => {
   view.net.visible = e.target.checked;
 });
