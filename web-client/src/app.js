@@ -10,6 +10,7 @@ import { Tessellator } from './bspline.js';
 import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
+import { XRSculpt } from './xr.js';
 
 const params = new URLSearchParams(location.search);
 const design = Number(params.get('design') || 1);
@@ -370,20 +371,33 @@ $('history').addEventListener('click', (e) => {
 
 // --- VR ---------------------------------------------------------------------------
 
-$('enter-vr').addEventListener('click', async () => {
-  if (!navigator.xr || !(await navigator.xr.isSessionSupported('immersive-vr'))) {
-    status('error', 'WebXR immersive VR is not available in this browser');
-    return;
-  }
-  const session = await navigator.xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
-  await view.renderer.xr.setSession(session);
+const xr = new XRSculpt({
+  view,
+  handles: () => icons.handles(),
+  iconPosition: (id) => {
+    const icon = state.icons.get(id);
+    if (!icon) return null;
+    return icon.role.kind === 'position' && icon.anchor.kind === 'point' ? icon.target : icon.xyz;
+  },
+  send,
+  create: (u, v) => createIcon({ kind: 'point', u, v }, ROLES[$('create-role').value] || ROLES.position),
+  onDragging: (on, id) => {
+    dragging = on;
+    if (on) select(id);
+  },
+  canEdit: () => state.access === 'editor',
+});
+
+$('enter-vr').addEventListener('click', () => {
+  xr.enter().catch((e) => status('error', e.message));
 });
 
 // --- loop ------------------------------------------------------------------------
 
 view.renderer.setAnimationLoop(() => {
+  xr.update();
   view.controls.update();
   view.render();
 });
 
-window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link };
+window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr };

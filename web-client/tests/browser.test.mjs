@@ -215,6 +215,68 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   await editor.close();
 });
 
+test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the controller, the surface moved', async () => {
+  const page = await open(links.editor);
+  // Install the emulated headset from the registry package the server serves.
+  await page.evaluate(async () => {
+    const { XRDevice, metaQuest3 } = await import('/vendor/iwer/build/iwer.module.js');
+    const dev = new XRDevice(metaQuest3);
+    dev.installRuntime({ forceInstall: true });
+    window.__xrdev = dev;
+  });
+  // A position constraint in the middle of the surface.
+  const before = await page.evaluate(() => window.vsculpt.state.icons.size);
+  await page.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.5, v: 0.5 }, { kind: 'position' }));
+  await page.waitForFunction((n) => window.vsculpt.state.icons.size > n, before, { timeout: 10000 });
+  const icon = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  const start = await page.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
+
+  await page.click('#enter-vr');
+  await page.waitForFunction(() => window.vsculpt.view.renderer.xr.isPresenting, null, { timeout: 15000 });
+  const frames = () => page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
+  // Put the right controller's grip on the icon: correct the emulator's pose by
+  // the offset between where it was put and where three's grip group ended up.
+  for (let k = 0; k < 3; k++) {
+    await frames();
+    await page.evaluate((p) => {
+      const v = window.vsculpt;
+      const grip = v.xr.gripPosition(1);
+      const c = window.__xrdev.controllers.right;
+      c.position.set(c.position.x + p[0] - grip.x, c.position.y + p[1] - grip.y, c.position.z + p[2] - grip.z);
+    }, start);
+  }
+  await frames();
+  const restBefore = await designJson(tokenOf(links.editor));
+  await page.evaluate(() => window.__xrdev.controllers.right.updateButtonValue('squeeze', 1));
+  await page.waitForFunction((id) => window.vsculpt.xr.grab && window.vsculpt.xr.grab.id === id, icon, { timeout: 10000 });
+  // Raise the hand 0.2 m in small steps, then let go.
+  for (let k = 1; k <= 10; k++) {
+    await page.evaluate(() => {
+      window.__xrdev.controllers.right.position.y += 0.02;
+    });
+    await page.evaluate(() => new Promise((r) => setTimeout(r, 60)));
+  }
+  await frames();
+  await page.evaluate(() => window.__xrdev.controllers.right.updateButtonValue('squeeze', 0));
+  await page.waitForFunction(() => window.vsculpt.xr.grab === null, null, { timeout: 10000 });
+  assert.ok((await page.evaluate(() => window.vsculpt.xr.drags)) > 0, 'drag messages were sent');
+  await page.waitForFunction(
+    ([id, y]) => {
+      const i = window.vsculpt.state.icons.get(id);
+      return i && i.target[1] > y + 0.1;
+    },
+    [icon, start[1]],
+    { timeout: 10000 },
+  );
+  await new Promise((r) => setTimeout(r, 500));
+  const restAfter = await designJson(tokenOf(links.editor));
+  assert.notDeepEqual(restAfter.design, restBefore.design, 'the VR drag moved the surface on the server');
+  await page.screenshot({ path: join(artifacts, 'vr.png') });
+  assert.deepEqual(page.errors, []);
+  await page.evaluate(() => window.vsculpt.view.renderer.xr.getSession().end());
+  await page.close();
+});
+
 test('the page reconnects by itself after the server restarts', async () => {
   const page = await open(links.editor);
   const port = new URL(links.base).port;

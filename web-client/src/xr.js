@@ -1,0 +1,137 @@
+// WebXR immersive VR through three's renderer.xr: the two controllers act as
+// the glove does. Squeeze grabs the icon the controller touches or points
+// at and drags it with the hand (drag_start / drag / drag_end, like the
+// mouse gizmo); the trigger creates a point icon where the controller's ray
+// hits the surface. Controllers are drawn as simple meshes built here (a
+// grip body and a ray), so nothing is fetched from a CDN at run time.
+
+import * as THREE from 'three';
+
+/** Hand motion in metres is scaled by this many model units per metre of surface size. */
+const HAND_GAIN = 1;
+
+/** Two VR controllers bound to the design: grab-and-drag icons, trigger-to-create. */
+export class XRSculpt {
+  /**
+   * @param {object} o
+   * @param {import('./view.js').View} o.view the 3D view whose renderer.xr is used
+   * @param {() => THREE.Object3D[]} o.handles the icons' pickable handles (userData.iconId)
+   * @param {(id: number) => number[] | null} o.iconPosition where the dragged point of icon `id` is now
+   * @param {(msg: object) => void} o.send sends a protocol message
+   * @param {(u: number, v: number) => void} o.create creates an icon at surface parameter (u, v)
+   * @param {(on: boolean, id: number | null) => void} o.onDragging told when a VR drag starts and ends
+   * @param {() => boolean} o.canEdit whether this page may edit
+   */
+  constructor(o) {
+    Object.assign(this, o);
+    this.raycaster = new THREE.Raycaster();
+    this.controllers = [];
+    /** The current grab: controller index, icon, start positions of hand and icon. */
+    this.grab = null;
+    this.drags = 0;
+    const xr = this.view.renderer.xr;
+    for (let i = 0; i < 2; i++) {
+      const ray = xr.getController(i);
+      const grip = xr.getControllerGrip(i);
+      ray.add(makeRay());
+      grip.add(makeBody());
+      ray.addEventListener('squeezestart', () => this.squeezeStart(i));
+      ray.addEventListener('squeezeend', () => this.squeezeEnd(i));
+      ray.addEventListener('selectstart', () => this.trigger(i));
+      this.view.scene.add(ray, grip);
+      this.controllers.push({ ray, grip });
+    }
+  }
+
+  /** Enters an immersive-vr session; resolves false with a reason when the browser has none. */
+  async enter() {
+    if (!navigator.xr || !(await navigator.xr.isSessionSupported('immersive-vr'))) {
+      throw new Error('WebXR immersive VR is not available in this browser');
+    }
+    const session = await navigator.xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
+    await this.view.renderer.xr.setSession(session);
+    session.addEventListener('end', () => {
+      if (this.grab) this.squeezeEnd(this.grab.index);
+    });
+  }
+
+  /** World position of a controller's grip. */
+  gripPosition(i) {
+    return this.controllers[i].grip.getWorldPosition(new THREE.Vector3());
+  }
+
+  /** Sets the raycaster along controller i's target ray. */
+  aim(i) {
+    const ray = this.controllers[i].ray;
+    ray.updateMatrixWorld(true);
+    const origin = new THREE.Vector3().setFromMatrixPosition(ray.matrixWorld);
+    const dir = new THREE.Vector3(0, 0, -1).transformDirection(ray.matrixWorld);
+    this.raycaster.set(origin, dir);
+  }
+
+  /** The icon under controller i: the nearest handle within reach of the grip, else the one its ray hits. */
+  iconAt(i) {
+    const p = this.gripPosition(i);
+    const radius = this.view.geometry.boundingSphere ? this.view.geometry.boundingSphere.radius : 1;
+    const reach = Math.max(0.08, radius * 0.08);
+    let best = null;
+    for (const h of this.handles()) {
+      const d = h.getWorldPosition(new THREE.Vector3()).distanceTo(p);
+      if (d <= reach && (!best || d < best.d)) best = { id: h.userData.iconId, d };
+    }
+    if (best) return best.id;
+    this.aim(i);
+    const hit = this.raycaster.intersectObjects(this.handles(), false)[0];
+    return hit ? hit.object.userData.iconId : null;
+  }
+
+  squeezeStart(i) {
+    if (!this.canEdit() || this.grab) return;
+    const id = this.iconAt(i);
+    if (id == null) return;
+    const start = this.iconPosition(id);
+    if (!start) return;
+    this.grab = { index: i, id, hand: this.gripPosition(i), icon: new THREE.Vector3(...start), last: null };
+    this.onDragging(true, id);
+    this.send({ type: 'drag_start', icon: id });
+  }
+
+  squeezeEnd(i) {
+    const g = this.grab;
+    if (!g || g.index !== i) return;
+    this.update();
+    this.send({ type: 'drag_end', icon: g.id });
+    this.grab = null;
+    this.onDragging(false, g.id);
+  }
+
+  trigger(i) {
+    if (!this.canEdit()) return;
+    this.aim(i);
+    const hit = this.raycaster.intersectObject(this.view.mesh, false)[0];
+    if (hit && hit.uv) this.create(hit.uv.x, hit.uv.y);
+  }
+
+  /** Called every frame: sends the grabbed icon's new position when the hand moved. */
+  update() {
+    const g = this.grab;
+    if (!g) return;
+    const delta = this.gripPosition(g.index).sub(g.hand).multiplyScalar(HAND_GAIN);
+    const target = g.icon.clone().add(delta);
+    if (g.last && g.last.distanceTo(target) < 1e-6) return;
+    g.last = target;
+    this.drags++;
+    this.send({ type: 'drag', icon: g.id, xyz: [target.x, target.y, target.z] });
+  }
+}
+
+function makeRay() {
+  const geometry = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(0, 0, 0), new THREE.Vector3(0, 0, -5)]);
+  return new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0x88ccff }));
+}
+
+function makeBody() {
+  const body = new THREE.Mesh(new THREE.CylinderGeometry(0.015, 0.02, 0.1, 16), new THREE.MeshStandardMaterial({ color: 0x333340, roughness: 0.6 }));
+  body.rotation.x = Math.PI / 2;
+  return body;
+}
