@@ -55,10 +55,18 @@ function surfaceFromSnapshot(s) {
   };
 }
 
+/** Most vertices a tessellation may have. */
+const VERTEX_BUDGET = 50000;
+
 function density(s) {
-  // About 4 vertices per control point along each direction, capped for 60 fps.
-  const su = Math.min(4 * s.nu, 200);
-  const sv = Math.min(4 * s.nv, 400);
+  // About 4 vertices per control point along each direction, within a budget
+  // of 50 000 vertices so a drag frame re-tessellates in ~10 ms (60 fps on
+  // the paper's 81×159 surface; see tests/bspline.test.mjs).
+  let su = 4 * s.nu;
+  let sv = 4 * s.nv;
+  const scale = Math.min(1, Math.sqrt(VERTEX_BUDGET / (su * sv)));
+  su = Math.max(2 * s.nu, Math.round(su * scale), 8);
+  sv = Math.max(2 * s.nv, Math.round(sv * scale), 8);
   return [su, sv];
 }
 

@@ -185,62 +185,97 @@ export class Tessellator {
     return this.key === `${s.degreeU}|${s.degreeV}|${Array.from(s.knotsU)}|${Array.from(s.knotsV)}`;
   }
 
+  /** Flat basis table: for sample k, [first, N_0..N_p, N'_0..N'_p, N''_0..N''_p] with stride 1 + 3(p+1). */
+  static table(rows, p) {
+    const stride = 1 + 3 * (p + 1);
+    const out = new Float64Array(rows.length * stride);
+    rows.forEach((t, k) => {
+      out[k * stride] = t.first;
+      for (let d = 0; d < 3; d++) for (let j = 0; j <= p; j++) out[k * stride + 1 + d * (p + 1) + j] = t.d[d][j];
+    });
+    return out;
+  }
+
   fill(s) {
     const { su, sv, rows } = this;
     const pv = s.degreeV;
     const pu = s.degreeU;
     const P = s.points;
+    const nv = s.nv;
+    if (!this.flatU) {
+      this.flatU = Tessellator.table(this.tu, pu);
+      this.flatV = Tessellator.table(this.tv, pv);
+    }
+    const TU = this.flatU;
+    const TV = this.flatV;
+    const strideU = 1 + 3 * (pu + 1);
+    const strideV = 1 + 3 * (pv + 1);
+    const qv = pv + 1;
+    const qu = pu + 1;
+    // Pass 1: for every control row i and v sample b, the v-direction sums
+    // (value, d/dv, d²/dv²) of the row's points.
     for (let i = 0; i < s.nu; i++) {
       for (let b = 0; b < sv; b++) {
-        const t = this.tv[b];
-        const base = (i * sv + b) * 9;
-        for (let q = 0; q < 9; q++) rows[base + q] = 0;
+        const tb = b * strideV;
+        const first = TV[tb];
+        let x0 = 0, y0 = 0, z0 = 0, x1 = 0, y1 = 0, z1 = 0, x2 = 0, y2 = 0, z2 = 0;
         for (let k = 0; k <= pv; k++) {
-          const o = (i * s.nv + t.first + k) * 3;
-          for (let dv = 0; dv < 3; dv++) {
-            const w = t.d[dv][k];
-            rows[base + dv * 3] += w * P[o];
-            rows[base + dv * 3 + 1] += w * P[o + 1];
-            rows[base + dv * 3 + 2] += w * P[o + 2];
-          }
+          const o = (i * nv + first + k) * 3;
+          const px = P[o], py = P[o + 1], pz = P[o + 2];
+          const w0 = TV[tb + 1 + k], w1 = TV[tb + 1 + qv + k], w2 = TV[tb + 1 + 2 * qv + k];
+          x0 += w0 * px; y0 += w0 * py; z0 += w0 * pz;
+          x1 += w1 * px; y1 += w1 * py; z1 += w1 * pz;
+          x2 += w2 * px; y2 += w2 * py; z2 += w2 * pz;
         }
+        const base = (i * sv + b) * 9;
+        rows[base] = x0; rows[base + 1] = y0; rows[base + 2] = z0;
+        rows[base + 3] = x1; rows[base + 4] = y1; rows[base + 5] = z1;
+        rows[base + 6] = x2; rows[base + 7] = y2; rows[base + 8] = z2;
       }
     }
-    const d = { p: [0, 0, 0], u: [0, 0, 0], v: [0, 0, 0], uu: [0, 0, 0], uv: [0, 0, 0], vv: [0, 0, 0] };
+    // Pass 2: combine along u; derivatives, normal and curvature per vertex.
+    const pos = this.positions, nor = this.normals, mean = this.mean, gauss = this.gauss, uvs = this.uvs;
     for (let a = 0; a < su; a++) {
-      const t = this.tu[a];
+      const ta = a * strideU;
+      const first = TU[ta];
       for (let b = 0; b < sv; b++) {
-        for (const key in d) d[key].fill(0);
+        let px = 0, py = 0, pz = 0, ux = 0, uy = 0, uz = 0, vx = 0, vy = 0, vz = 0;
+        let uux = 0, uuy = 0, uuz = 0, uvx = 0, uvy = 0, uvz = 0, vvx = 0, vvy = 0, vvz = 0;
         for (let k = 0; k <= pu; k++) {
-          const base = ((t.first + k) * sv + b) * 9;
-          const n0 = t.d[0][k];
-          const n1 = t.d[1][k];
-          const n2 = t.d[2][k];
-          for (let x = 0; x < 3; x++) {
-            const c0 = rows[base + x];
-            const c1 = rows[base + 3 + x];
-            const c2 = rows[base + 6 + x];
-            d.p[x] += n0 * c0;
-            d.u[x] += n1 * c0;
-            d.v[x] += n0 * c1;
-            d.uu[x] += n2 * c0;
-            d.uv[x] += n1 * c1;
-            d.vv[x] += n0 * c2;
-          }
+          const base = ((first + k) * sv + b) * 9;
+          const n0 = TU[ta + 1 + k], n1 = TU[ta + 1 + qu + k], n2 = TU[ta + 1 + 2 * qu + k];
+          const c0x = rows[base], c0y = rows[base + 1], c0z = rows[base + 2];
+          const c1x = rows[base + 3], c1y = rows[base + 4], c1z = rows[base + 5];
+          const c2x = rows[base + 6], c2y = rows[base + 7], c2z = rows[base + 8];
+          px += n0 * c0x; py += n0 * c0y; pz += n0 * c0z;
+          ux += n1 * c0x; uy += n1 * c0y; uz += n1 * c0z;
+          vx += n0 * c1x; vy += n0 * c1y; vz += n0 * c1z;
+          uux += n2 * c0x; uuy += n2 * c0y; uuz += n2 * c0z;
+          uvx += n1 * c1x; uvy += n1 * c1y; uvz += n1 * c1z;
+          vvx += n0 * c2x; vvy += n0 * c2y; vvz += n0 * c2z;
         }
         const idx = a * sv + b;
-        this.positions.set(d.p, idx * 3);
-        this.uvs[idx * 2] = this.us[a];
-        this.uvs[idx * 2 + 1] = this.vs[b];
-        const c = curvature(d);
-        if (c) {
-          this.normals.set(c.normal, idx * 3);
-          this.mean[idx] = c.mean;
-          this.gauss[idx] = c.gauss;
+        pos[idx * 3] = px; pos[idx * 3 + 1] = py; pos[idx * 3 + 2] = pz;
+        uvs[idx * 2] = this.us[a];
+        uvs[idx * 2 + 1] = this.vs[b];
+        const E = ux * ux + uy * uy + uz * uz;
+        const F = ux * vx + uy * vy + uz * vz;
+        const G = vx * vx + vy * vy + vz * vz;
+        const det = E * G - F * F;
+        if (det > 1e-24 * Math.max(E * G, 1e-300)) {
+          let nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+          const len = Math.sqrt(nx * nx + ny * ny + nz * nz);
+          nx /= len; ny /= len; nz /= len;
+          const L = uux * nx + uuy * ny + uuz * nz;
+          const M = uvx * nx + uvy * ny + uvz * nz;
+          const N = vvx * nx + vvy * ny + vvz * nz;
+          nor[idx * 3] = nx; nor[idx * 3 + 1] = ny; nor[idx * 3 + 2] = nz;
+          mean[idx] = (E * N - 2 * F * M + G * L) / (2 * det);
+          gauss[idx] = (L * N - M * M) / det;
         } else {
-          this.normals.set([0, 0, 1], idx * 3);
-          this.mean[idx] = 0;
-          this.gauss[idx] = 0;
+          nor[idx * 3] = 0; nor[idx * 3 + 1] = 0; nor[idx * 3 + 2] = 1;
+          mean[idx] = 0;
+          gauss[idx] = 0;
         }
       }
     }
