@@ -219,6 +219,15 @@ async fn a_device_drags_but_cannot_edit_or_commit() {
     dev.ok(json!({"type": "device_sample", "sensor": "right-hand", "position": [1.0, 2.0, 3.0], "orientation": [1.0, 0.0, 0.0, 0.0], "time_us": 5})).await;
     dev.ok(json!({"type": "device_status", "device": "glove", "condition": "connected"}))
         .await;
+    // The 3D mouse's menu: role and state switches are allowed.
+    dev.ok(json!({"type": "set_state", "icon": id, "state": "sleeping"}))
+        .await;
+    dev.ok(json!({"type": "set_role", "icon": id, "role": {"kind": "load"}}))
+        .await;
+    dev.ok(json!({"type": "set_state", "icon": id, "state": "passive"}))
+        .await;
+    dev.ok(json!({"type": "bind_sensor", "icon": id, "sensor": "right-hand"}))
+        .await;
     dev.refused(json!({"type": "commit", "message": "x"}), "forbidden")
         .await;
     dev.refused(json!({"type": "delete_icon", "icon": 1}), "forbidden")

@@ -702,7 +702,9 @@ impl Actor {
         let allowed = match role {
             Role::Editor => true,
             Role::Viewer => false,
-            // A device bridge drags icons and binds its sensors, nothing else.
+            // A device bridge drags icons, binds its sensors and switches an
+            // icon's role and state (the 3D mouse's menu, paper 003); it may
+            // not create, delete, commit or restore.
             Role::Device => matches!(
                 command,
                 Command::Grab { .. }
@@ -711,6 +713,8 @@ impl Actor {
                     | Command::Edit(
                         super::model::Edit::BindSensor { .. }
                             | super::model::Edit::UnbindSensor { .. }
+                            | super::model::Edit::SetRole { .. }
+                            | super::model::Edit::SetState { .. }
                     )
             ),
         };
