@@ -1,11 +1,12 @@
 // Icons drawn as paper 003 draws them: red sphere = position constraint,
 // green sphere = load, yellow sphere labelled R/V/R2/V2/RV = derivative
 // constraint, a 3D arrow along N = normal constraint, a polyline for a curve
-// icon, an outlined patch for a region icon; grey when sleeping, larger and
+// icon (with its curvature comb), an outlined patch for a region icon; grey when sleeping, larger and
 // glowing while driving.
 
 import * as THREE from 'three';
 import { surfaceDerivs } from './bspline.js';
+import { curvatureSamples, combSegments } from './comb.js';
 
 const COLORS = { position: 0xe53935, load: 0x43a047, derivative: 0xfdd835, normal: 0x1e88e5 };
 const GREY = 0x8a8a8a;
@@ -93,6 +94,14 @@ export class IconLayer {
     if (surface && icon.anchor.kind === 'curve') {
       const pts = curveUv(icon.anchor).map(([u, v]) => new THREE.Vector3(...surfaceDerivs(surface, u, v).p));
       g.add(new THREE.Line(new THREE.BufferGeometry().setFromPoints(pts), new THREE.LineBasicMaterial({ color, linewidth: 2 })));
+      // The curvature comb along the curve icon.
+      const comb = combSegments(curvatureSamples(surface, icon.anchor.curve, 64), 8 * this.size);
+      const combMat = new THREE.LineBasicMaterial({ color: 0xff80ff, transparent: true, opacity: 0.8 });
+      const teeth = new THREE.BufferGeometry();
+      teeth.setAttribute('position', new THREE.Float32BufferAttribute(comb.teeth, 3));
+      const outline = new THREE.BufferGeometry();
+      outline.setAttribute('position', new THREE.Float32BufferAttribute(comb.outline, 3));
+      g.add(new THREE.LineSegments(teeth, combMat), new THREE.Line(outline, combMat));
     }
     if (surface && icon.anchor.kind === 'region') {
       const { u0, v0, u1, v1 } = icon.anchor;

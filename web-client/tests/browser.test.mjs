@@ -277,6 +277,32 @@ test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the control
   await page.close();
 });
 
+test('a curve icon is drawn on the surface with its curvature comb', async () => {
+  const page = await open(links.editor);
+  const before = await page.evaluate(() => window.vsculpt.state.icons.size);
+  await page.evaluate(() =>
+    window.vsculpt.createIcon(
+      { kind: 'curve', curve: { knots: { degree: 2, knots: [0, 0, 0, 1, 1, 1] }, points: [[0.2, 0.2], [0.5, 0.8], [0.8, 0.3]] } },
+      { kind: 'position' },
+    ),
+  );
+  await page.waitForFunction((n) => window.vsculpt.state.icons.size > n, before, { timeout: 10000 });
+  const id = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  assert.equal(await page.evaluate((i) => window.vsculpt.state.icons.get(i).anchor.kind, id), 'curve');
+  await page.waitForFunction(
+    (i) => {
+      const g = window.vsculpt.view.scene.getObjectByName('icons');
+      const obj = g && g.children.find((c) => c.userData.iconId === i);
+      return obj && obj.children.some((c) => c.isLineSegments && c.geometry.attributes.position.count === 128);
+    },
+    id,
+    { timeout: 10000 },
+  );
+  await page.screenshot({ path: join(artifacts, 'curve-comb.png') });
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('the page reconnects by itself after the server restarts', async () => {
   const page = await open(links.editor);
   const port = new URL(links.base).port;

@@ -116,3 +116,22 @@ test('a frame built per the README decodes; truncations are refused', () => {
   new DataView(bad).setUint8(0, 0);
   assert.throws(() => decodeFrame(bad), /magic/);
 });
+
+test('curvature comb: a parabola drawn on a plane has the analytic curvature', async () => {
+  const { curvatureSamples, combSegments } = await import('../src/comb.js');
+  // w(u, v) = (2u, 3v, 0); the (u, v) curve u = t, v = t² (Bézier (0,0), (½,0), (1,1))
+  // traces x = 2t, y = 3t², whose curvature is 12 / (4 + 36 t²)^{3/2}.
+  const plane = { degreeU: 1, knotsU: [0, 0, 1, 1], nu: 2, degreeV: 1, knotsV: [0, 0, 1, 1], nv: 2, points: [0, 0, 0, 0, 3, 0, 2, 0, 0, 2, 3, 0] };
+  const curve = { knots: { degree: 2, knots: [0, 0, 0, 1, 1, 1] }, points: [[0, 0, 0], [0.5, 0, 0], [1, 1, 0]] };
+  const samples = curvatureSamples(plane, curve, 11);
+  samples.forEach((s, i) => {
+    const t = i / 10;
+    const exact = 12 / (4 + 36 * t * t) ** 1.5;
+    assert.ok(Math.abs(s.kappa - exact) < 1e-12, `t=${t}: ${s.kappa} vs ${exact}`);
+    assert.ok(Math.abs(s.point[0] - 2 * t) < 1e-12 && Math.abs(s.point[1] - 3 * t * t) < 1e-12);
+  });
+  // The parabola bends toward +y at t = 0, so the tooth points to −y there.
+  assert.ok(samples[0].vector[1] > 0);
+  const { teeth } = combSegments(samples, 0.5);
+  assert.ok(Math.abs(teeth[4] - (0 - 0.5)) < 1e-12, `tooth end y: ${teeth[4]}`);
+});
