@@ -18,6 +18,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 use thiserror::Error;
 
+use crate::analysis::{Tessellation, tessellate};
 use crate::bspline::{BSplineSurface, GeometryError};
 use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
 use crate::icon::{
@@ -540,6 +541,17 @@ impl Design {
         self.problem_dirty = true;
         self.revision += 1;
         Ok(())
+    }
+
+    /// The current surface tessellated for clients: `samples_u × samples_v`
+    /// vertices (each clamped to 2..=4096) with normals, (u,v), mean and
+    /// Gaussian curvature (see [`crate::analysis::tessellate`]).
+    pub fn tessellate(&self, samples_u: usize, samples_v: usize) -> Tessellation {
+        tessellate(
+            &self.surface,
+            samples_u.clamp(2, 4096),
+            samples_v.clamp(2, 4096),
+        )
     }
 
     /// Halves every knot span (knot insertion): the same shape with four

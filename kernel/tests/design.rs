@@ -409,3 +409,23 @@ fn refining_keeps_shape_and_icons() {
     assert!((d.surface().point(0.5, 0.5) - t).length() < 1e-9);
     assert!(d.insert_knot(true, f64::NAN).is_err());
 }
+
+#[test]
+fn tessellation_samples_the_current_surface() {
+    let mut d = design();
+    let id = d.add_icon(point(0.5, 0.5, Role::Position)).unwrap();
+    d.move_icon(id, DVec3::new(1.0, 0.75, 0.6)).unwrap();
+    let t = d.tessellate(5, 0);
+    assert_eq!((t.samples_u, t.samples_v), (5, 2));
+    assert_eq!(t.positions.len(), 10);
+    // Vertex (a, b) sits at u = a/4, v = b on the solved surface.
+    for a in 0..5 {
+        for b in 0..2 {
+            let (u, v) = (a as f64 / 4.0, b as f64);
+            let want = d.surface().point(u, v);
+            let got = t.positions[a * 2 + b];
+            let got = DVec3::new(got[0] as f64, got[1] as f64, got[2] as f64);
+            assert!((got - want).length() < 1e-5, "({u}, {v}): {got} vs {want}");
+        }
+    }
+}
