@@ -377,7 +377,7 @@ fn bad_input_is_refused() {
 
     let pts: Vec<DVec3> = (0..6).map(|k| DVec3::new(k as f64, 0.0, 0.0)).collect();
     assert!(matches!(
-        interpolate_curve(&vec![DVec3::Y; 6], 3),
+        interpolate_curve(&[DVec3::Y; 6], 3),
         Err(GeometryError::Singular(_))
     ));
     let mut dup = pts.clone();
