@@ -661,13 +661,24 @@ impl Solver {
         delta
     }
 
+    /// The report of `out` with group `shifted`'s drag input at `t`.
+    /// Allocation-free: it runs on every drag frame.
     fn report(&self, out: &[DVec3], shifted: Option<usize>, t: DVec3) -> SolveReport {
-        let targets = self.inputs(shifted, t).targets;
-        let cp = self.c_times(out);
-        let residual = cp
+        let residual = self
+            .eqs
             .iter()
-            .zip(&targets)
-            .map(|(a, b)| (a - b).abs())
+            .map(|e| {
+                let value: f64 = e
+                    .terms
+                    .iter()
+                    .map(|term| term.coef * self.rows[term.col].apply(out)[term.k])
+                    .sum();
+                let target = match (e.shift, shifted) {
+                    (Some(k), Some(g)) if e.group == g => e.target + t[k],
+                    _ => e.target,
+                };
+                (value - target).abs()
+            })
             .fold(0.0, f64::max);
         SolveReport {
             constraint_residual: residual,
