@@ -156,3 +156,56 @@ fn a_curve_holds_its_constraint_and_follows_its_load() {
     assert!(rise.x.abs() < 1e-12 && rise.y.abs() < 1e-12, "{rise}");
     assert!((lifted.point(0.3) - target).length() < 1e-9);
 }
+
+#[test]
+fn a_numeric_refactor_equals_a_fresh_factor() {
+    let kv = knots();
+    let soft = CurveMaterial::default();
+    let stiff = CurveMaterial { beta: 5.0, ..soft };
+    let points: Vec<DVec3> = greville(&kv)
+        .iter()
+        .map(|&t| DVec3::new(t, 0.0, 0.0))
+        .collect();
+    let curve = BSplineCurve::new(kv.clone(), points).unwrap();
+    let problem = Problem {
+        groups: vec![Group {
+            key: 1,
+            equations: vec![Equation::Vector {
+                row: curve_row(&curve, 0.5, 0),
+                target: DVec3::new(0.5, 0.3, 0.0),
+            }],
+            loads: vec![Load {
+                row: curve_row(&curve, 0.2, 0),
+                force: DVec3::new(0.0, 0.0, 1.0),
+                drag_gain: 0.0,
+            }],
+        }],
+    };
+    let solve = |solver: &mut Solver| {
+        let mut out = vec![DVec3::ZERO; curve.points().len()];
+        solver.solve(curve.points(), &mut out).unwrap();
+        out
+    };
+    let mut refactored = Solver::new(Stiffness::curve(&kv, &soft).unwrap()).unwrap();
+    refactored.set_problem(problem.clone()).unwrap();
+    let before = solve(&mut refactored);
+    refactored
+        .refactor(Stiffness::curve(&kv, &stiff).unwrap())
+        .unwrap();
+    let mut fresh = Solver::new(Stiffness::curve(&kv, &stiff).unwrap()).unwrap();
+    fresh.set_problem(problem).unwrap();
+    let (a, b) = (solve(&mut refactored), solve(&mut fresh));
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-12, "{diff}");
+    // The material matters: the stiffer curve bends differently.
+    let moved = a
+        .iter()
+        .zip(&before)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-6, "{moved}");
+}

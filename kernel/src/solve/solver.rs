@@ -561,7 +561,7 @@ impl Solver {
     /// sparse solve and recovers the digits lost to cancellation in δ0 − Yλ
     /// when the mass term is small (K is then ill-conditioned in its affine
     /// modes).
-    fn refined_delta(&self, inputs: &Inputs, cx: &[f64]) -> Vec<DVec3> {
+    fn refined_delta(&mut self, inputs: &Inputs, cx: &[f64]) -> Vec<DVec3> {
         let (mut delta, lambda) = self.delta_lambda(inputs, cx);
         if self.eqs.is_empty() && self.loads.is_empty() {
             return delta;
