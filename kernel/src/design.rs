@@ -280,8 +280,15 @@ impl Design {
                 "derivative and normal constraints need a point anchor".into(),
             ));
         }
-        if let (Anchor::Region { inside: false, .. }, Role::Position) = (anchor, role) {
-            // Allowed: holds the region. Its target cannot move (see `set_target`).
+        Ok(())
+    }
+
+    /// An outside-region constraint holds its patch: its target never moves.
+    fn check_movable(icon: &Icon) -> Result<(), DesignError> {
+        if let (Anchor::Region { inside: false, .. }, Role::Position) = (&icon.anchor, icon.role) {
+            return Err(DesignError::Unsupported(
+                "an outside region holds its patch; it cannot be moved or dragged".into(),
+            ));
         }
         Ok(())
     }
@@ -424,11 +431,7 @@ impl Design {
             return Err(DesignError::NotFinite("target"));
         }
         let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
-        if let (Anchor::Region { inside: false, .. }, Role::Position) = (&icon.anchor, icon.role) {
-            return Err(DesignError::Unsupported(
-                "an outside region holds its patch; it cannot be moved".into(),
-            ));
-        }
+        Self::check_movable(icon)?;
         let target = if icon.role == Role::Normal {
             target
                 .try_normalize()
@@ -691,11 +694,7 @@ impl Design {
         if self.dragging() == Some(id) {
             return Ok(());
         }
-        if let (Anchor::Region { inside: false, .. }, Role::Position) = (&icon.anchor, icon.role) {
-            return Err(DesignError::Unsupported(
-                "an outside region holds its patch; it cannot be dragged".into(),
-            ));
-        }
+        Self::check_movable(icon)?;
         if let Some(other) = self.dragging() {
             self.finish_drag_of(other);
         }

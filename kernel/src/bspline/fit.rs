@@ -30,7 +30,9 @@ fn centripetal(points: &[DVec3]) -> Result<Vec<f64>, GeometryError> {
         acc += di;
         t.push(acc / total);
     }
-    *t.last_mut().unwrap_or(&mut 0.0) = 1.0;
+    if let Some(last) = t.last_mut() {
+        *last = 1.0;
+    }
     Ok(t)
 }
 
