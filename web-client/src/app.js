@@ -7,6 +7,7 @@
 import * as THREE from 'three';
 import { TransformControls } from 'three/addons/controls/TransformControls.js';
 import { Tessellator } from './bspline.js';
+import { TessellationWorker } from './tessellate.js';
 import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
@@ -60,8 +61,7 @@ const VERTEX_BUDGET = 50000;
 
 function density(s) {
   // About 4 vertices per control point along each direction, within a budget
-  // of 50 000 vertices so a drag frame re-tessellates in ~10 ms (60 fps on
-  // the paper's 81×159 surface; see tests/bspline.test.mjs).
+  // of 50 000 vertices (81×159 gets 162×318; BENCHMARKS.md, web client).
   let su = 4 * s.nu;
   let sv = 4 * s.nv;
   const scale = Math.min(1, Math.sqrt(VERTEX_BUDGET / (su * sv)));
@@ -70,11 +70,21 @@ function density(s) {
   return [su, sv];
 }
 
+/** Work counted for BENCHMARKS.md (bench/browser-fps.mjs reads it): full redraws, surfaces sent to the worker and shown. */
+const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null };
+
+/** Counts surface changes (frames, snapshots); what the mesh shows is `shownSeq`. */
+let surfaceSeq = 0;
+let shownSeq = 0;
+
+/** Full redraw: tessellation on the main thread, exact bounds, icons rebuilt. */
 function redraw() {
   const s = state.surface;
   if (!s) return;
+  perf.redraws++;
   if (!state.tess || !state.tess.fits(s)) state.tess = new Tessellator(s, ...density(s));
   state.tess.fill(s);
+  shownSeq = surfaceSeq;
   view.setTessellation(state.tess);
   view.setNet(s);
   icons.size = view.geometry.boundingSphere ? view.geometry.boundingSphere.radius * 0.025 : 0.05;
@@ -121,6 +131,7 @@ function onMessage(msg) {
       break;
     case 'snapshot':
       state.surface = surfaceFromSnapshot(msg.surface);
+      surfaceSeq++;
       state.icons = new Map(msg.icons.map((i) => [i.id, i]));
       state.versions = msg.versions;
       state.presence = msg.presence;
@@ -169,30 +180,60 @@ function onFrame(f) {
   state.frames++;
   state.revision = f.revision;
   state.surface = { degreeU: f.degreeU, degreeV: f.degreeV, knotsU: f.knotsU, knotsV: f.knotsV, nu: f.nu, nv: f.nv, points: f.points };
+  surfaceSeq++;
   for (const fi of f.icons) {
     const icon = state.icons.get(fi.id);
     if (icon) icon.xyz = fi.xyz;
   }
-  scheduleRedraw();
+  // Coalescing: the render loop tessellates only the newest surface, once per animation frame.
+  frameDue = true;
+  clearTimeout(settleTimer);
+  settleTimer = setTimeout(settle, SETTLE_MS);
 }
 
-let redrawQueued = false;
-function scheduleRedraw() {
-  if (redrawQueued) return;
-  redrawQueued = true;
-  requestAnimationFrame(() => {
-    redrawQueued = false;
-    if (dragging) {
-      // During a drag only the surface and handle positions change.
-      state.tess.fill(state.surface);
-      view.setTessellation(state.tess);
-      view.setNet(state.surface);
-      icons.move([...state.icons.values()].map((i) => ({ id: i.id, xyz: i.xyz })));
-    } else {
-      redraw();
-    }
-  });
+/** After this long without a frame, a full redraw redraws icons (curves, regions) on the settled surface. */
+const SETTLE_MS = 200;
+let settleTimer = null;
+let frameDue = false;
+
+function settle() {
+  if (dragging) settleTimer = setTimeout(settle, SETTLE_MS);
+  else redraw();
 }
+
+
+/** The per-frame path: the newest surface to the worker (or filled here when there is none); same layout only. */
+function showNewestFrame() {
+  const s = state.surface;
+  if (!s) return;
+  if (!state.tess || !state.tess.fits(s)) {
+    redraw();
+    return;
+  }
+  perf.submitted++;
+  if (!tessWorker.submit(surfaceSeq, s, state.tess)) {
+    state.tess.fill(s);
+    surfaceShown(surfaceSeq, state.tess);
+  }
+}
+
+/** `tess` now holds surface number `seq`: update the mesh, the net and the handles in place. */
+function surfaceShown(seq, tess) {
+  if (seq <= shownSeq || tess !== state.tess) return;
+  shownSeq = seq;
+  perf.shown++;
+  view.updateTessellation(tess);
+  view.setNet(state.surface);
+  icons.move([...state.icons.values()].map((i) => ({ id: i.id, xyz: i.xyz })));
+}
+
+const tessWorker = new TessellationWorker({
+  onFilled: surfaceShown,
+  onFailure: (reason) => {
+    perf.workerFailed = reason;
+    frameDue = true;
+  },
+});
 
 const link = new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status });
 const send = (msg) => link.send(msg);
@@ -342,9 +383,7 @@ $('mode').addEventListener('change', (e) => {
   }
 });
 $('range').addEventListener('input', (e) => setRange(Number(e.target.value)));
-$('net').addEventListener('change', (e) => {
-  view.net.visible = e.target.checked;
-});
+$('net').addEventListener('change', (e) => view.showNet(e.target.checked));
 $('fit').addEventListener('click', () => view.fit());
 $('create').addEventListener('change', (e) => {
   state.create = e.target.value;
@@ -403,9 +442,13 @@ $('enter-vr').addEventListener('click', () => {
 // --- loop ------------------------------------------------------------------------
 
 view.renderer.setAnimationLoop(() => {
+  if (frameDue) {
+    frameDue = false;
+    showNewestFrame();
+  }
   xr.update();
   view.controls.update();
   view.render();
 });
 
-window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr };
+window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr, perf };

@@ -150,103 +150,135 @@ function uniform(a, b, n) {
 }
 
 /**
- * Precomputed basis tables for one knot layout and density; `fill` refills
- * typed arrays in place (positions, normals, mean, gauss), so a drag frame
- * costs one pass over the vertices and no allocation.
+ * Basis table of one direction: for sample k, the index of its first
+ * non-zero basis function (`first`, integers so the hot loops index with
+ * integer arithmetic) and N, N', N'' of the degree+1 non-zero functions at
+ * w[(3k + d)(p + 1) + j].
+ */
+function basisTable(knots, p, ts) {
+  const q = p + 1;
+  const first = new Int32Array(ts.length);
+  const w = new Float64Array(ts.length * 3 * q);
+  ts.forEach((t, k) => {
+    const b = basisDerivs(knots, p, t);
+    first[k] = b.first;
+    for (let d = 0; d < 3; d++) w.set(b.d[d], (3 * k + d) * q);
+  });
+  return { first, w };
+}
+
+const sameKnots = (a, b) => a.length === b.length && a.every((x, i) => x === b[i]);
+
+/**
+ * The fast path of the client's per-frame work: basis tables precomputed
+ * for one knot layout and sample density; `fill` refills its typed arrays
+ * in place (positions, normals, mean, gauss), so a geometry frame costs two
+ * separable passes and no allocation:
+ *
+ * 1. contract the control net with the v-basis (value, d/dv, d²/dv²) for
+ *    every control row and v sample: nu·sv·(pv+1)·9 multiply-adds;
+ * 2. contract those rows with the u-basis for every vertex, giving w, w_u,
+ *    w_v, w_uu, w_uv, w_vv, then the unit normal and the mean and Gaussian
+ *    curvature: su·sv·(pu+1)·18 multiply-adds.
+ *
+ * Outputs are Float32Array (GPU attributes) unless `{ float64: true }`,
+ * which the tests use to compare with `surfaceDerivs` to 1e-12.
  */
 export class Tessellator {
-  constructor(s, samplesU, samplesV) {
-    this.key = `${s.degreeU}|${s.degreeV}|${Array.from(s.knotsU)}|${Array.from(s.knotsV)}`;
+  constructor(s, samplesU, samplesV, { float64 = false } = {}) {
+    this.degreeU = s.degreeU;
+    this.degreeV = s.degreeV;
+    this.knotsU = Float64Array.from(s.knotsU);
+    this.knotsV = Float64Array.from(s.knotsV);
+    this.nu = s.nu;
+    this.nv = s.nv;
     this.su = samplesU;
     this.sv = samplesV;
     this.us = uniform(s.knotsU[s.degreeU], s.knotsU[s.knotsU.length - s.degreeU - 1], samplesU);
     this.vs = uniform(s.knotsV[s.degreeV], s.knotsV[s.knotsV.length - s.degreeV - 1], samplesV);
-    this.tu = Array.from(this.us, (t) => basisDerivs(s.knotsU, s.degreeU, t));
-    this.tv = Array.from(this.vs, (t) => basisDerivs(s.knotsV, s.degreeV, t));
+    this.tableU = basisTable(s.knotsU, s.degreeU, this.us);
+    this.tableV = basisTable(s.knotsV, s.degreeV, this.vs);
     const n = samplesU * samplesV;
-    this.positions = new Float32Array(n * 3);
-    this.normals = new Float32Array(n * 3);
-    this.mean = new Float32Array(n);
-    this.gauss = new Float32Array(n);
+    const Out = float64 ? Float64Array : Float32Array;
+    this.positions = new Out(n * 3);
+    this.normals = new Out(n * 3);
+    this.mean = new Out(n);
+    this.gauss = new Out(n);
+    /** Per vertex (u, v): fixed for the layout, so written once here. */
     this.uvs = new Float32Array(n * 2);
+    for (let a = 0; a < samplesU; a++) {
+      for (let b = 0; b < samplesV; b++) {
+        this.uvs[(a * samplesV + b) * 2] = this.us[a];
+        this.uvs[(a * samplesV + b) * 2 + 1] = this.vs[b];
+      }
+    }
+    /** Axis-aligned bounds of the last fill: min x, y, z, max x, y, z. */
+    this.box = new Float64Array(6);
     this.rows = new Float64Array(s.nu * samplesV * 9);
-    const idx = [];
+    const idx = n > 65535 ? new Uint32Array((samplesU - 1) * (samplesV - 1) * 6) : new Uint16Array((samplesU - 1) * (samplesV - 1) * 6);
+    let o = 0;
     for (let a = 0; a < samplesU - 1; a++) {
       for (let b = 0; b < samplesV - 1; b++) {
         const i0 = a * samplesV + b;
         const i1 = (a + 1) * samplesV + b;
-        idx.push(i0, i1, i1 + 1, i0, i1 + 1, i0 + 1);
+        idx[o++] = i0; idx[o++] = i1; idx[o++] = i1 + 1;
+        idx[o++] = i0; idx[o++] = i1 + 1; idx[o++] = i0 + 1;
       }
     }
-    this.indices = n > 65535 ? new Uint32Array(idx) : new Uint16Array(idx);
+    this.indices = idx;
   }
 
+  /** Whether surface `s` has this tessellator's degrees, knots and net size. */
   fits(s) {
-    return this.key === `${s.degreeU}|${s.degreeV}|${Array.from(s.knotsU)}|${Array.from(s.knotsV)}`;
-  }
-
-  /** Flat basis table: for sample k, [first, N_0..N_p, N'_0..N'_p, N''_0..N''_p] with stride 1 + 3(p+1). */
-  static table(rows, p) {
-    const stride = 1 + 3 * (p + 1);
-    const out = new Float64Array(rows.length * stride);
-    rows.forEach((t, k) => {
-      out[k * stride] = t.first;
-      for (let d = 0; d < 3; d++) for (let j = 0; j <= p; j++) out[k * stride + 1 + d * (p + 1) + j] = t.d[d][j];
-    });
-    return out;
+    return s.degreeU === this.degreeU && s.degreeV === this.degreeV && s.nu === this.nu && s.nv === this.nv &&
+      sameKnots(s.knotsU, this.knotsU) && sameKnots(s.knotsV, this.knotsV);
   }
 
   fill(s) {
     const { su, sv, rows } = this;
-    const pv = s.degreeV;
-    const pu = s.degreeU;
     const P = s.points;
     const nv = s.nv;
-    if (!this.flatU) {
-      this.flatU = Tessellator.table(this.tu, pu);
-      this.flatV = Tessellator.table(this.tv, pv);
-    }
-    const TU = this.flatU;
-    const TV = this.flatV;
-    const strideU = 1 + 3 * (pu + 1);
-    const strideV = 1 + 3 * (pv + 1);
-    const qv = pv + 1;
-    const qu = pu + 1;
+    const qu = s.degreeU + 1;
+    const qv = s.degreeV + 1;
+    const fu = this.tableU.first, wu = this.tableU.w;
+    const fv = this.tableV.first, wv = this.tableV.w;
     // Pass 1: for every control row i and v sample b, the v-direction sums
     // (value, d/dv, d²/dv²) of the row's points.
     for (let i = 0; i < s.nu; i++) {
       for (let b = 0; b < sv; b++) {
-        const tb = b * strideV;
-        const first = TV[tb];
+        const o0 = (i * nv + fv[b]) * 3;
+        const t = 3 * b * qv;
         let x0 = 0, y0 = 0, z0 = 0, x1 = 0, y1 = 0, z1 = 0, x2 = 0, y2 = 0, z2 = 0;
-        for (let k = 0; k <= pv; k++) {
-          const o = (i * nv + first + k) * 3;
+        for (let k = 0; k < qv; k++) {
+          const o = o0 + 3 * k;
           const px = P[o], py = P[o + 1], pz = P[o + 2];
-          const w0 = TV[tb + 1 + k], w1 = TV[tb + 1 + qv + k], w2 = TV[tb + 1 + 2 * qv + k];
+          const w0 = wv[t + k], w1 = wv[t + qv + k], w2 = wv[t + 2 * qv + k];
           x0 += w0 * px; y0 += w0 * py; z0 += w0 * pz;
           x1 += w1 * px; y1 += w1 * py; z1 += w1 * pz;
           x2 += w2 * px; y2 += w2 * py; z2 += w2 * pz;
         }
-        const base = (i * sv + b) * 9;
-        rows[base] = x0; rows[base + 1] = y0; rows[base + 2] = z0;
-        rows[base + 3] = x1; rows[base + 4] = y1; rows[base + 5] = z1;
-        rows[base + 6] = x2; rows[base + 7] = y2; rows[base + 8] = z2;
+        const r = (i * sv + b) * 9;
+        rows[r] = x0; rows[r + 1] = y0; rows[r + 2] = z0;
+        rows[r + 3] = x1; rows[r + 4] = y1; rows[r + 5] = z1;
+        rows[r + 6] = x2; rows[r + 7] = y2; rows[r + 8] = z2;
       }
     }
     // Pass 2: combine along u; derivatives, normal and curvature per vertex.
-    const pos = this.positions, nor = this.normals, mean = this.mean, gauss = this.gauss, uvs = this.uvs;
+    const pos = this.positions, nor = this.normals, mean = this.mean, gauss = this.gauss;
+    let minX = Infinity, minY = Infinity, minZ = Infinity, maxX = -Infinity, maxY = -Infinity, maxZ = -Infinity;
+    const rowStride = sv * 9;
     for (let a = 0; a < su; a++) {
-      const ta = a * strideU;
-      const first = TU[ta];
+      const t = 3 * a * qu;
+      const r0 = fu[a] * rowStride;
       for (let b = 0; b < sv; b++) {
         let px = 0, py = 0, pz = 0, ux = 0, uy = 0, uz = 0, vx = 0, vy = 0, vz = 0;
         let uux = 0, uuy = 0, uuz = 0, uvx = 0, uvy = 0, uvz = 0, vvx = 0, vvy = 0, vvz = 0;
-        for (let k = 0; k <= pu; k++) {
-          const base = ((first + k) * sv + b) * 9;
-          const n0 = TU[ta + 1 + k], n1 = TU[ta + 1 + qu + k], n2 = TU[ta + 1 + 2 * qu + k];
-          const c0x = rows[base], c0y = rows[base + 1], c0z = rows[base + 2];
-          const c1x = rows[base + 3], c1y = rows[base + 4], c1z = rows[base + 5];
-          const c2x = rows[base + 6], c2y = rows[base + 7], c2z = rows[base + 8];
+        let r = r0 + b * 9;
+        for (let k = 0; k < qu; k++, r += rowStride) {
+          const n0 = wu[t + k], n1 = wu[t + qu + k], n2 = wu[t + 2 * qu + k];
+          const c0x = rows[r], c0y = rows[r + 1], c0z = rows[r + 2];
+          const c1x = rows[r + 3], c1y = rows[r + 4], c1z = rows[r + 5];
+          const c2x = rows[r + 6], c2y = rows[r + 7], c2z = rows[r + 8];
           px += n0 * c0x; py += n0 * c0y; pz += n0 * c0z;
           ux += n1 * c0x; uy += n1 * c0y; uz += n1 * c0z;
           vx += n0 * c1x; vy += n0 * c1y; vz += n0 * c1z;
@@ -255,9 +287,14 @@ export class Tessellator {
           vvx += n0 * c2x; vvy += n0 * c2y; vvz += n0 * c2z;
         }
         const idx = a * sv + b;
-        pos[idx * 3] = px; pos[idx * 3 + 1] = py; pos[idx * 3 + 2] = pz;
-        uvs[idx * 2] = this.us[a];
-        uvs[idx * 2 + 1] = this.vs[b];
+        const i3 = idx * 3;
+        pos[i3] = px; pos[i3 + 1] = py; pos[i3 + 2] = pz;
+        if (px < minX) minX = px;
+        if (px > maxX) maxX = px;
+        if (py < minY) minY = py;
+        if (py > maxY) maxY = py;
+        if (pz < minZ) minZ = pz;
+        if (pz > maxZ) maxZ = pz;
         const E = ux * ux + uy * uy + uz * uz;
         const F = ux * vx + uy * vy + uz * vz;
         const G = vx * vx + vy * vy + vz * vz;
@@ -269,15 +306,17 @@ export class Tessellator {
           const L = uux * nx + uuy * ny + uuz * nz;
           const M = uvx * nx + uvy * ny + uvz * nz;
           const N = vvx * nx + vvy * ny + vvz * nz;
-          nor[idx * 3] = nx; nor[idx * 3 + 1] = ny; nor[idx * 3 + 2] = nz;
+          nor[i3] = nx; nor[i3 + 1] = ny; nor[i3 + 2] = nz;
           mean[idx] = (E * N - 2 * F * M + G * L) / (2 * det);
           gauss[idx] = (L * N - M * M) / det;
         } else {
-          nor[idx * 3] = 0; nor[idx * 3 + 1] = 0; nor[idx * 3 + 2] = 1;
+          nor[i3] = 0; nor[i3 + 1] = 0; nor[i3 + 2] = 1;
           mean[idx] = 0;
           gauss[idx] = 0;
         }
       }
     }
+    const box = this.box;
+    box[0] = minX; box[1] = minY; box[2] = minZ; box[3] = maxX; box[4] = maxY; box[5] = maxZ;
   }
 }

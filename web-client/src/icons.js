@@ -55,18 +55,30 @@ export class IconLayer {
   update(icons, surface, selected) {
     for (const [id, obj] of this.objects) {
       if (!icons.has(id)) {
-        this.group.remove(obj);
+        this.remove(obj);
         this.objects.delete(id);
       }
     }
     for (const icon of icons.values()) {
       let obj = this.objects.get(icon.id);
-      if (obj) this.group.remove(obj);
+      if (obj) this.remove(obj);
       obj = this.draw(icon, surface, icon.id === selected);
       obj.userData.iconId = icon.id;
       this.objects.set(icon.id, obj);
       this.group.add(obj);
     }
+  }
+
+  /** Takes an icon's drawing out of the scene and frees its GPU resources. */
+  remove(obj) {
+    this.group.remove(obj);
+    obj.traverse((o) => {
+      if (o.geometry) o.geometry.dispose();
+      if (o.material) {
+        if (o.material.map) o.material.map.dispose();
+        o.material.dispose();
+      }
+    });
   }
 
   draw(icon, surface, selected) {

@@ -77,8 +77,23 @@ export class View {
     });
   }
 
-  /** Puts a tessellation (from bspline.js) into the mesh, reusing buffers. */
+  /** Puts a tessellation (from bspline.js) into the mesh, reusing buffers; exact bounds. */
   setTessellation(t) {
+    this.updateTessellation(t);
+    this.geometry.computeBoundingSphere();
+    this.geometry.computeBoundingBox();
+    if (!this.fitted) {
+      this.fit();
+      this.fitted = true;
+    }
+  }
+
+  /**
+   * The per-frame path: the tessellation's arrays changed in place; flags the
+   * attributes for upload (their buffers are reused, no new geometry) and
+   * takes the bounds from the tessellator's box (the sphere around the box).
+   */
+  updateTessellation(t) {
     const g = this.geometry;
     if (g.userData.tess !== t) {
       g.setAttribute('position', new THREE.BufferAttribute(t.positions, 3));
@@ -88,14 +103,15 @@ export class View {
       g.setIndex(new THREE.BufferAttribute(t.indices, 1));
       g.userData.tess = t;
     }
-    for (const name of ['position', 'normal', 'uv']) g.attributes[name].needsUpdate = true;
+    g.attributes.position.needsUpdate = true;
+    g.attributes.normal.needsUpdate = true;
     this.updateColors();
-    g.computeBoundingSphere();
-    g.computeBoundingBox();
-    if (!this.fitted) {
-      this.fit();
-      this.fitted = true;
-    }
+    const b = t.box;
+    if (!g.boundingBox) g.boundingBox = new THREE.Box3();
+    if (!g.boundingSphere) g.boundingSphere = new THREE.Sphere();
+    g.boundingBox.min.set(b[0], b[1], b[2]);
+    g.boundingBox.max.set(b[3], b[4], b[5]);
+    g.boundingBox.getBoundingSphere(g.boundingSphere);
   }
 
   updateColors() {
@@ -118,17 +134,33 @@ export class View {
     this.updateColors();
   }
 
+  /** Shows the control net of `surface` (copied into a reused buffer; skipped while the net is hidden). */
   setNet(surface) {
-    const pts = [];
-    const P = surface.points;
-    const at = (i, j) => [P[(i * surface.nv + j) * 3], P[(i * surface.nv + j) * 3 + 1], P[(i * surface.nv + j) * 3 + 2]];
-    for (let i = 0; i < surface.nu; i++) {
-      for (let j = 0; j < surface.nv; j++) {
-        if (j + 1 < surface.nv) pts.push(...at(i, j), ...at(i, j + 1));
-        if (i + 1 < surface.nu) pts.push(...at(i, j), ...at(i + 1, j));
+    this.netSurface = surface;
+    if (!this.net.visible) return;
+    const g = this.net.geometry;
+    const { nu, nv } = surface;
+    if (g.userData.nu !== nu || g.userData.nv !== nv) {
+      const segments = [];
+      for (let i = 0; i < nu; i++) {
+        for (let j = 0; j < nv; j++) {
+          if (j + 1 < nv) segments.push(i * nv + j, i * nv + j + 1);
+          if (i + 1 < nu) segments.push(i * nv + j, (i + 1) * nv + j);
+        }
       }
+      g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(nu * nv * 3), 3));
+      g.setIndex(segments);
+      g.userData.nu = nu;
+      g.userData.nv = nv;
     }
-    this.net.geometry.setAttribute('position', new THREE.Float32BufferAttribute(pts, 3));
+    g.attributes.position.array.set(surface.points);
+    g.attributes.position.needsUpdate = true;
+    g.computeBoundingSphere();
+  }
+
+  showNet(visible) {
+    this.net.visible = visible;
+    if (visible && this.netSurface) this.setNet(this.netSurface);
   }
 
   fit() {

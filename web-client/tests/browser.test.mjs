@@ -7,77 +7,32 @@
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { spawn } from 'node:child_process';
 import { mkdtempSync, existsSync, mkdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join, dirname, resolve } from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { join } from 'node:path';
+import { webDir, serverBin, startServer, stopServer, launchChromium, openClient, gizmoZArrow } from './harness.mjs';
 
-const here = dirname(fileURLToPath(import.meta.url));
-const webDir = resolve(here, '..');
-const serverBin = process.env.VSCULPT_SERVER_BIN || resolve(webDir, '../target/release/vsculpt-server');
 const artifacts = join(webDir, 'test-artifacts');
 const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-web-'));
 let server;
 let links;
 let browser;
 
-function startServer(listen) {
-  return new Promise((resolveStart, reject) => {
-    const child = spawn(serverBin, ['--listen', listen, '--data', dataDir, '--web-dir', webDir], { stdio: ['ignore', 'pipe', 'pipe'] });
-    let out = '';
-    const timer = setTimeout(() => reject(new Error(`server did not print its links:\n${out}`)), 30000);
-    child.stdout.on('data', (d) => {
-      out += d;
-      const base = out.match(/listening on (http:\/\/\S+)/);
-      const editor = out.match(/design 1 "[^"]*" editor: (\S+)/);
-      const viewer = out.match(/design 1 "[^"]*" viewer: (\S+)/);
-      if (base && editor && viewer) {
-        clearTimeout(timer);
-        resolveStart({ child, base: base[1], editor: editor[1], viewer: viewer[1] });
-      }
-    });
-    child.stderr.on('data', (d) => {
-      out += d;
-    });
-    child.on('exit', (code) => reject(new Error(`server exited (${code}):\n${out}`)));
-  });
-}
-
-async function stopServer() {
-  if (!server) return;
-  const exited = new Promise((r) => server.child.once('exit', r));
-  server.child.kill('SIGTERM');
-  await exited;
-}
-
 before(async () => {
   assert.ok(existsSync(serverBin), `server binary missing at ${serverBin}: run cargo build --release -p vsculpt-server`);
   mkdirSync(artifacts, { recursive: true });
-  server = await startServer('127.0.0.1:0');
+  server = await startServer({ dataDir });
   links = server;
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking', '--disable-component-update', '--no-first-run'],
-  });
+  browser = await launchChromium();
 });
 
 after(async () => {
   if (browser) await browser.close();
-  await stopServer();
+  await stopServer(server);
   rmSync(dataDir, { recursive: true, force: true });
 });
 
-async function open(url) {
-  const page = await browser.newPage({ viewport: { width: 1100, height: 700 } });
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(String(e)));
-  await page.goto(url);
-  await page.waitForFunction(() => window.vsculpt && window.vsculpt.state.surface && window.vsculpt.state.access, null, { timeout: 30000 });
-  page.errors = errors;
-  return page;
-}
+const open = (url, setup) => openClient(browser, url, setup);
 
 /** Fraction of canvas pixels that differ from the background colour, and a colour histogram key. */
 async function pixels(page) {
@@ -155,22 +110,7 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   await editor.selectOption('#create', 'none');
   await editor.evaluate((id) => window.vsculpt.select(id), icon);
   const restBefore = await designJson(tokenOf(links.editor));
-  const zHandle = await editor.evaluate(() => {
-    const v = window.vsculpt.view;
-    const r = v.renderer.domElement.getBoundingClientRect();
-    const proj = (p) => {
-      const q = p.clone().project(v.camera);
-      return { x: r.left + ((q.x + 1) / 2) * r.width, y: r.top + ((1 - q.y) / 2) * r.height };
-    };
-    const helper = v.scene.children.find((c) => c.isTransformControlsRoot || c.type === 'TransformControlsRoot') || null;
-    const base = window.vsculpt.state.icons.get(window.vsculpt.state.selected).target;
-    const o = new v.camera.position.constructor(...base);
-    // The gizmo scales with distance: its Z arrow spans about 0.1·distance·fov factor above the origin.
-    const dist = v.camera.position.distanceTo(o);
-    const tip = o.clone();
-    tip.z += dist * 0.07;
-    return { from: proj(tip), origin: proj(o), hasHelper: !!helper };
-  });
+  const zHandle = await gizmoZArrow(editor);
   await editor.mouse.move(zHandle.from.x, zHandle.from.y);
   await editor.mouse.down();
   for (let k = 1; k <= 10; k++) await editor.mouse.move(zHandle.from.x, zHandle.from.y - 6 * k);
@@ -188,6 +128,10 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   assert.notDeepEqual(restAfter.design, restBefore.design, 'the gizmo drag moved the surface on the server');
   const moved = await editor.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
   assert.ok(moved[2] > created.target[2] + 1e-3, `dragged upward: ${created.target} → ${moved}`);
+  // The drag's frames were tessellated by the worker and shown in place (no fallback to the main thread).
+  const perf = await editor.evaluate(() => window.vsculpt.perf);
+  assert.equal(perf.workerFailed, null);
+  assert.ok(perf.shown > 0 && perf.shown <= perf.submitted, `worker frames shown: ${JSON.stringify(perf)}`);
   await editor.screenshot({ path: join(artifacts, 'editor-dragged.png') });
 
   // The viewer saw it live: same revision and control points.
@@ -215,15 +159,24 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   await editor.close();
 });
 
-test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the controller, the surface moved', async () => {
-  const page = await open(links.editor);
-  // Install the emulated headset from the registry package the server serves.
+/** Installs iwer's emulated Meta Quest 3 (from the registry package the server serves) as the page's WebXR runtime. */
+async function emulateQuest3(page) {
   await page.evaluate(async () => {
     const { XRDevice, metaQuest3 } = await import('/vendor/iwer/build/iwer.module.js');
     const dev = new XRDevice(metaQuest3);
     dev.installRuntime({ forceInstall: true });
     window.__xrdev = dev;
   });
+}
+
+async function enterVr(page) {
+  await page.click('#enter-vr');
+  await page.waitForFunction(() => window.vsculpt.view.renderer.xr.isPresenting, null, { timeout: 15000 });
+}
+
+test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the controller, the surface moved', async () => {
+  const page = await open(links.editor);
+  await emulateQuest3(page);
   // A position constraint in the middle of the surface.
   const before = await page.evaluate(() => window.vsculpt.state.icons.size);
   await page.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.5, v: 0.5 }, { kind: 'position' }));
@@ -231,8 +184,7 @@ test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the control
   const icon = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
   const start = await page.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
 
-  await page.click('#enter-vr');
-  await page.waitForFunction(() => window.vsculpt.view.renderer.xr.isPresenting, null, { timeout: 15000 });
+  await enterVr(page);
   const frames = () => page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
   // Put the right controller's grip on the icon: correct the emulator's pose by
   // the offset between where it was put and where three's grip group ended up.
@@ -306,9 +258,9 @@ test('a curve icon is drawn on the surface with its curvature comb', async () =>
 test('the page reconnects by itself after the server restarts', async () => {
   const page = await open(links.editor);
   const port = new URL(links.base).port;
-  await stopServer();
+  await stopServer(server);
   await page.waitForFunction(() => document.getElementById('status').className.includes('reconnecting'), null, { timeout: 10000 });
-  server = await startServer(`127.0.0.1:${port}`);
+  server = await startServer({ listen: `127.0.0.1:${port}`, dataDir });
   await page.waitForFunction(() => document.getElementById('status').className.includes('connected') && !document.getElementById('status').className.includes('re'), null, { timeout: 20000 });
   assert.ok(await page.evaluate(() => window.vsculpt.state.surface !== null));
   await page.close();

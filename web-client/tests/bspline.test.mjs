@@ -135,3 +135,71 @@ test('curvature comb: a parabola drawn on a plane has the analytic curvature', a
   const { teeth } = combSegments(samples, 0.5);
   assert.ok(Math.abs(teeth[4] - (0 - 0.5)) < 1e-12, `tooth end y: ${teeth[4]}`);
 });
+
+/** Deterministic pseudo-random numbers in [0, 1) (mulberry32), so a failure reproduces. */
+function random(seed) {
+  let a = seed >>> 0;
+  return () => {
+    a = (a + 0x6d2b79f5) >>> 0;
+    let t = a;
+    t = Math.imul(t ^ (t >>> 15), t | 1);
+    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+}
+
+/** A clamped knot vector of n control points with random, strictly increasing interior knots. */
+function randomKnots(rnd, n, p) {
+  const inner = Array.from({ length: n - p - 1 }, () => rnd()).sort((a, b) => a - b);
+  return [...Array(p + 1).fill(-0.5), ...inner.map((x) => -0.5 + 2 * x), ...Array(p + 1).fill(1.5)];
+}
+
+test('the fast tessellator equals the reference evaluation to 1e-12 on random surfaces', () => {
+  const rnd = random(20240505);
+  for (const [nu, nv, pu, pv, su, sv] of [[11, 9, 3, 2, 23, 19], [7, 13, 2, 3, 17, 29], [6, 6, 4, 1, 12, 7]]) {
+    const s = {
+      degreeU: pu,
+      degreeV: pv,
+      knotsU: randomKnots(rnd, nu, pu),
+      knotsV: randomKnots(rnd, nv, pv),
+      nu,
+      nv,
+      points: Float64Array.from({ length: nu * nv * 3 }, (_, k) => (k % 3 === 0 ? Math.floor(k / 3 / nv) : k % 3 === 1 ? (k / 3) % nv : 0) + (rnd() - 0.5) * 0.8),
+    };
+    const t = new Tessellator(s, su, sv, { float64: true });
+    assert.ok(t.fits(s));
+    t.fill(s);
+    const close = (a, b, what) => assert.ok(Math.abs(a - b) <= 1e-12 * (1 + Math.abs(b)), `${what}: ${a} vs ${b} (${nu}x${nv}, degrees ${pu}/${pv})`);
+    let curved = 0;
+    for (let idx = 0; idx < su * sv; idx++) {
+      // The sample parameters in double precision (t.uvs holds them as f32 for the GPU).
+      const [u, v] = [t.us[Math.floor(idx / sv)], t.vs[idx % sv]];
+      assert.ok(Math.abs(t.uvs[idx * 2] - u) < 1e-6 && Math.abs(t.uvs[idx * 2 + 1] - v) < 1e-6);
+      const e = surfaceDerivs(s, u, v);
+      const c = curvature(e);
+      assert.ok(c, `regular at vertex ${idx}`);
+      for (let x = 0; x < 3; x++) {
+        close(t.positions[idx * 3 + x], e.p[x], `position ${idx}.${x}`);
+        close(t.normals[idx * 3 + x], c.normal[x], `normal ${idx}.${x}`);
+      }
+      close(t.mean[idx], c.mean, `mean curvature ${idx}`);
+      close(t.gauss[idx], c.gauss, `Gaussian curvature ${idx}`);
+      if (Math.abs(c.mean) > 1e-3) curved++;
+    }
+    assert.ok(curved > su * sv / 2, 'the random surface is curved almost everywhere');
+    // The (u, v) grid spans the whole domain, and the bounds are those of the positions.
+    assert.equal(t.us[0], s.knotsU[pu]);
+    assert.equal(t.vs[sv - 1], s.knotsV[nv]);
+    for (let x = 0; x < 3; x++) {
+      const coords = t.positions.filter((_, k) => k % 3 === x);
+      assert.equal(t.box[x], Math.min(...coords));
+      assert.equal(t.box[3 + x], Math.max(...coords));
+    }
+    // A moved control point changes the next fill in place; another knot layout does not fit.
+    const before = t.positions.slice();
+    s.points[((nu >> 1) * nv + (nv >> 1)) * 3 + 2] += 1;
+    t.fill(s);
+    assert.notDeepEqual(t.positions, before);
+    assert.equal(t.fits({ ...s, knotsU: s.knotsU.map((k, i) => (i === pu + 1 ? k + 1e-9 : k)) }), false);
+  }
+});

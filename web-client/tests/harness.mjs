@@ -1,0 +1,106 @@
+// What the browser tests and bench/browser-fps.mjs share: starting the real
+// server on a loopback port and launching headless Chromium (SwiftShader GL).
+// Not a test file itself (the runner picks only *.test.mjs).
+
+import { spawn } from 'node:child_process';
+import { dirname, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+export const webDir = resolve(dirname(fileURLToPath(import.meta.url)), '..');
+export const serverBin = process.env.VSCULPT_SERVER_BIN || resolve(webDir, '../target/release/vsculpt-server');
+
+/**
+ * Starts the server; resolves when it printed its links:
+ * { child, base, editor, viewer } (editor / viewer of the demo design 1, null with --no-demo).
+ */
+export function startServer({ listen = '127.0.0.1:0', dataDir, dir = webDir, args = [] }) {
+  return new Promise((resolveStart, reject) => {
+    const child = spawn(serverBin, ['--listen', listen, '--data', dataDir, '--web-dir', dir, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+    let out = '';
+    const demo = !args.includes('--no-demo');
+    const timer = setTimeout(() => reject(new Error(`server did not print its links:\n${out}`)), 30000);
+    child.stdout.on('data', (d) => {
+      out += d;
+      const base = out.match(/listening on (http:\/\/\S+)/);
+      const editor = out.match(/design 1 "[^"]*" editor: (\S+)/);
+      const viewer = out.match(/design 1 "[^"]*" viewer: (\S+)/);
+      if (base && (!demo || (editor && viewer))) {
+        clearTimeout(timer);
+        resolveStart({ child, base: base[1], editor: editor && editor[1], viewer: viewer && viewer[1] });
+      }
+    });
+    child.stderr.on('data', (d) => {
+      out += d;
+    });
+    child.on('exit', (code) => reject(new Error(`server exited (${code}):\n${out}`)));
+  });
+}
+
+/** Stops a server from startServer and waits for it to exit. */
+export async function stopServer(server) {
+  if (!server || server.child.exitCode !== null) return;
+  const exited = new Promise((r) => server.child.once('exit', r));
+  server.child.kill('SIGTERM');
+  await exited;
+}
+
+/** Headless Chromium (the Debian package) with software GL (SwiftShader) and no background networking. */
+export function launchChromium() {
+  return chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-background-networking', '--disable-component-update', '--no-first-run'],
+  });
+}
+
+/**
+ * Opens `url` in a new page and waits until the client has its surface and
+ * access; page.errors collects page errors, page.requests every URL the page
+ * requested, page.warnings its console warnings. `setup(page)` runs before
+ * the page loads (e.g. to route requests).
+ */
+export async function openClient(browser, url, setup = async () => {}) {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 700 } });
+  const errors = [];
+  const requests = [];
+  const warnings = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('request', (r) => requests.push(r.url()));
+  page.on('console', (m) => {
+    if (m.type() === 'warning') warnings.push(m.text());
+  });
+  page.requests = requests;
+  page.warnings = warnings;
+  await setup(page);
+  await page.goto(url);
+  await page.waitForFunction(() => window.vsculpt && window.vsculpt.state.surface && window.vsculpt.state.access, null, { timeout: 30000 });
+  page.errors = errors;
+  return page;
+}
+
+/** Whether `url` stays on this machine: a loopback host (or a data: URL, or a blob: URL of a loopback origin). */
+export function isLocal(url) {
+  const u = new URL(url);
+  if (u.protocol === 'data:') return true;
+  const origin = u.protocol === 'blob:' ? new URL(u.pathname) : u;
+  return ['127.0.0.1', 'localhost', '[::1]'].includes(origin.hostname);
+}
+
+/** Screen position of the selected icon's gizmo Z arrow (a point on it) and of its origin. */
+export function gizmoZArrow(page) {
+  return page.evaluate(() => {
+    const v = window.vsculpt.view;
+    const r = v.renderer.domElement.getBoundingClientRect();
+    const proj = (p) => {
+      const q = p.clone().project(v.camera);
+      return { x: r.left + ((q.x + 1) / 2) * r.width, y: r.top + ((1 - q.y) / 2) * r.height };
+    };
+    const icon = window.vsculpt.state.icons.get(window.vsculpt.state.selected);
+    const base = icon.role.kind === 'position' && icon.anchor.kind === 'point' ? icon.target : icon.xyz;
+    const o = new v.camera.position.constructor(...base);
+    // The gizmo scales with distance: its Z arrow spans about 0.1·distance·fov factor above the origin.
+    const tip = o.clone();
+    tip.z += v.camera.position.distanceTo(o) * 0.07;
+    return { from: proj(tip), origin: proj(o) };
+  });
+}
