@@ -1,7 +1,9 @@
 //! The static web client: `/` (index.html) and the client's files from the
 //! web-client folder, `/vendor/three/` and `/vendor/iwer/` from its
-//! node_modules. When the client or its npm packages are missing, `/`
-//! answers a page that says how to install them.
+//! node_modules, and `/vendor/webxr-profiles/` (the VR controller profiles
+//! and glTF models of `@webxr-input-profiles/assets`, its `dist/profiles`),
+//! so the client fetches nothing from a CDN. When the client or its npm
+//! packages are missing, `/` answers a page that says how to install them.
 
 use axum::Router;
 use axum::http::{StatusCode, header};
@@ -58,5 +60,9 @@ pub fn router<S: Clone + Send + Sync + 'static>(web_dir: &Path) -> Router<S> {
         .route("/index.html", get(move || index(dir2.clone())))
         .nest_service("/vendor/three", ServeDir::new(modules.join("three")))
         .nest_service("/vendor/iwer", ServeDir::new(modules.join("iwer")))
+        .nest_service(
+            "/vendor/webxr-profiles",
+            ServeDir::new(modules.join("@webxr-input-profiles/assets/dist/profiles")),
+        )
         .fallback_service(ServeDir::new(web_dir).append_index_html_on_directories(false))
 }

@@ -167,6 +167,14 @@ async fn static_client_and_missing_client_page() {
     )
     .unwrap();
     std::fs::write(web.join("node_modules/iwer/index.js"), "export {};").unwrap();
+    let profiles = web.join("node_modules/@webxr-input-profiles/assets/dist/profiles");
+    std::fs::create_dir_all(profiles.join("generic-trigger")).unwrap();
+    std::fs::write(profiles.join("profilesList.json"), "{}").unwrap();
+    std::fs::write(
+        profiles.join("generic-trigger/right.glb"),
+        b"glTF\x02\0\0\0",
+    )
+    .unwrap();
     let server = TestServer::start_with(data.clone(), web).await;
     let r = get(server.addr, "/", None).await;
     assert_eq!(r.status, 200);
@@ -184,6 +192,32 @@ async fn static_client_and_missing_client_page() {
     assert_eq!(
         get(server.addr, "/vendor/iwer/index.js", None).await.status,
         200
+    );
+    let list = get(
+        server.addr,
+        "/vendor/webxr-profiles/profilesList.json",
+        None,
+    )
+    .await;
+    assert_eq!(list.status, 200);
+    assert_eq!(list.text(), "{}");
+    let glb = get(
+        server.addr,
+        "/vendor/webxr-profiles/generic-trigger/right.glb",
+        None,
+    )
+    .await;
+    assert_eq!(glb.status, 200);
+    assert!(glb.text().starts_with("glTF"));
+    assert_eq!(
+        get(
+            server.addr,
+            "/vendor/webxr-profiles/generic-trigger/left.glb",
+            None
+        )
+        .await
+        .status,
+        404
     );
     assert_eq!(get(server.addr, "/src/missing.js", None).await.status, 404);
     server.stop().await;

@@ -2,10 +2,33 @@
 // the glove does. Squeeze grabs the icon the controller touches or points
 // at and drags it with the hand (drag_start / drag / drag_end, like the
 // mouse gizmo); the trigger creates a point icon where the controller's ray
-// hits the surface. Controllers are drawn as simple meshes built here (a
-// grip body and a ray), so nothing is fetched from a CDN at run time.
+// hits the surface. Each controller is drawn with its real model: three's
+// XRControllerModelFactory picks the WebXR input profile of the device and
+// loads its glTF from our own server (/vendor/webxr-profiles, the npm
+// package @webxr-input-profiles/assets; never a CDN). Until a model has
+// loaded, or if it cannot be loaded (logged), a simple grip body stands in.
 
 import * as THREE from 'three';
+import { XRControllerModelFactory } from 'three/addons/webxr/XRControllerModelFactory.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+
+/** Where the server serves the input profiles and controller models (server/src/web.rs). */
+export const PROFILES_PATH = '/vendor/webxr-profiles';
+
+/** A GLTFLoader that logs a controller model that fails to load (the factory's own handler would throw) and counts it. */
+class ControllerModelLoader extends GLTFLoader {
+  constructor() {
+    super();
+    this.failures = 0;
+  }
+
+  load(url, onLoad, onProgress) {
+    super.load(url, onLoad, onProgress, (e) => {
+      this.failures++;
+      console.warn(`vsculpt: the controller model ${url} did not load (${e && e.message ? e.message : e}); drawing the simple controller`);
+    });
+  }
+}
 
 /** Hand motion in metres is scaled by this many model units per metre of surface size. */
 const HAND_GAIN = 1;
@@ -29,17 +52,48 @@ export class XRSculpt {
     /** The current grab: controller index, icon, start positions of hand and icon. */
     this.grab = null;
     this.drags = 0;
+    /** How many controller models have been loaded and shown. */
+    this.modelsLoaded = 0;
+    this.modelLoader = new ControllerModelLoader();
+    this.modelFactory = new XRControllerModelFactory(this.modelLoader, (scene) => this.modelLoaded(scene));
+    this.modelFactory.setPath(PROFILES_PATH);
     const xr = this.view.renderer.xr;
     for (let i = 0; i < 2; i++) {
       const ray = xr.getController(i);
       const grip = xr.getControllerGrip(i);
       ray.add(makeRay());
-      grip.add(makeBody());
+      const fallback = makeBody();
+      const model = this.modelFactory.createControllerModel(grip);
+      grip.add(model, fallback);
+      grip.addEventListener('connected', (e) => this.connected(i, e.data));
+      grip.addEventListener('disconnected', () => {
+        fallback.visible = true;
+      });
       ray.addEventListener('squeezestart', () => this.squeezeStart(i));
       ray.addEventListener('squeezeend', () => this.squeezeEnd(i));
       ray.addEventListener('selectstart', () => this.trigger(i));
       this.view.scene.add(ray, grip);
-      this.controllers.push({ ray, grip });
+      this.controllers.push({ ray, grip, model, fallback });
+    }
+  }
+
+  /** A controller connected: its model is on the way; the simple body shows until it arrives. */
+  connected(i, source) {
+    const c = this.controllers[i];
+    c.fallback.visible = !c.model.children.length;
+    c.profiles = source && source.profiles ? [...source.profiles] : [];
+    if (source && (source.targetRayMode !== 'tracked-pointer' || !source.gamepad || source.hand)) {
+      console.warn(`vsculpt: input source ${i} (${c.profiles.join(', ') || 'no profile'}) has no controller model; drawing the simple controller`);
+    }
+  }
+
+  /** The factory put a loaded model (`scene`) under one controller's grip: hide that controller's stand-in. */
+  modelLoaded(scene) {
+    for (const c of this.controllers) {
+      if (scene.parent === c.model) {
+        c.fallback.visible = false;
+        this.modelsLoaded++;
+      }
     }
   }
 

@@ -10,7 +10,7 @@ import assert from 'node:assert/strict';
 import { mkdtempSync, existsSync, mkdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { webDir, serverBin, startServer, stopServer, launchChromium, openClient, gizmoZArrow } from './harness.mjs';
+import { webDir, serverBin, startServer, stopServer, launchChromium, openClient, gizmoZArrow, isLocal } from './harness.mjs';
 
 const artifacts = join(webDir, 'test-artifacts');
 const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-web-'));
@@ -174,7 +174,7 @@ async function enterVr(page) {
   await page.waitForFunction(() => window.vsculpt.view.renderer.xr.isPresenting, null, { timeout: 15000 });
 }
 
-test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the controller, the surface moved', async () => {
+test('VR (iwer emulated Quest 3): controller models from our server, squeeze on an icon, move the controller, the surface moved', async () => {
   const page = await open(links.editor);
   await emulateQuest3(page);
   // A position constraint in the middle of the surface.
@@ -185,6 +185,13 @@ test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the control
   const start = await page.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
 
   await enterVr(page);
+  // Both controllers get their glTF model from /vendor/webxr-profiles on our server; the stand-ins hide.
+  await page.waitForFunction(() => window.vsculpt.xr.modelsLoaded >= 2, null, { timeout: 20000 });
+  assert.deepEqual(await page.evaluate(() => window.vsculpt.xr.controllers.map((c) => c.fallback.visible)), [false, false]);
+  const base = new URL(links.base).origin;
+  const models = page.requests.filter((u) => u.startsWith(`${base}/vendor/webxr-profiles/`) && u.endsWith('.glb'));
+  assert.ok(models.length >= 1, `a controller glTF fetched from the server: ${page.requests.filter((u) => !u.includes('/src/')).join(' ')}`);
+  assert.ok(page.requests.includes(`${base}/vendor/webxr-profiles/profilesList.json`), 'the profile list came from the server');
   const frames = () => page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
   // Put the right controller's grip on the icon: correct the emulator's pose by
   // the offset between where it was put and where three's grip group ended up.
@@ -224,6 +231,21 @@ test('VR (iwer emulated Quest 3): enter VR, squeeze on an icon, move the control
   const restAfter = await designJson(tokenOf(links.editor));
   assert.notDeepEqual(restAfter.design, restBefore.design, 'the VR drag moved the surface on the server');
   await page.screenshot({ path: join(artifacts, 'vr.png') });
+  assert.deepEqual(page.errors, []);
+  await page.evaluate(() => window.vsculpt.view.renderer.xr.getSession().end());
+  assert.deepEqual(page.requests.filter((u) => !isLocal(u)), [], 'no request left this machine');
+  await page.close();
+});
+
+test('VR: a controller model that cannot be loaded is logged and the simple controller stays', async () => {
+  const page = await open(links.editor, (p) => p.route('**/vendor/webxr-profiles/**/*.glb', (r) => r.fulfill({ status: 404, body: 'gone' })));
+  await emulateQuest3(page);
+  await enterVr(page);
+  await page.waitForFunction(() => window.vsculpt.xr.modelLoader.failures >= 1, null, { timeout: 20000 });
+  await page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
+  assert.equal(await page.evaluate(() => window.vsculpt.xr.modelsLoaded), 0);
+  assert.deepEqual(await page.evaluate(() => window.vsculpt.xr.controllers.map((c) => c.fallback.visible)), [true, true]);
+  assert.ok(page.warnings.some((w) => w.includes('did not load') && w.includes('simple controller')), `logged: ${page.warnings.join(' | ')}`);
   assert.deepEqual(page.errors, []);
   await page.evaluate(() => window.vsculpt.view.renderer.xr.getSession().end());
   await page.close();
