@@ -259,6 +259,24 @@ function attachGizmo() {
   }
 }
 
+// The pointerdown that starts a gizmo drag must not also start an orbit.
+// OrbitControls was created first (view.js), so its pointerdown listener on
+// the canvas runs before the gizmo's: it began a rotation (state ROTATE, the
+// pointer captured, rotateStart at the press) that 'dragging-changed' then
+// only froze by disabling the controls, and the controls came back enabled
+// with that rotation still live. So decide first, in the capture phase on
+// the container: over a gizmo handle, the orbit controls are off before
+// they see the press; a press that started no drag turns them back on.
+$('viewport').addEventListener('pointerdown', (e) => {
+  if (!gizmo.object || !gizmo.enabled || e.button !== 0 || e.target !== view.renderer.domElement) return;
+  const rect = view.renderer.domElement.getBoundingClientRect();
+  gizmo.pointerHover({ x: ((e.clientX - rect.left) / rect.width) * 2 - 1, y: -((e.clientY - rect.top) / rect.height) * 2 + 1, button: e.button });
+  if (gizmo.axis !== null) view.controls.enabled = false;
+}, { capture: true });
+$('viewport').addEventListener('pointerup', () => {
+  if (!gizmo.dragging && !dragging) view.controls.enabled = true;
+}, { capture: true });
+
 gizmo.addEventListener('dragging-changed', (e) => {
   view.controls.enabled = !e.value;
   const id = state.selected;

@@ -251,6 +251,52 @@ test('VR: a controller model that cannot be loaded is logged and the simple cont
   await page.close();
 });
 
+test('after a gizmo drag the orbit controls hold no stale rotation: moving the mouse with no button keeps the camera', async () => {
+  const page = await open(links.editor);
+  const before = await page.evaluate(() => window.vsculpt.state.icons.size);
+  await page.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.35, v: 0.6 }, { kind: 'position' }));
+  await page.waitForFunction((n) => window.vsculpt.state.icons.size > n, before, { timeout: 10000 });
+  const icon = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  await page.evaluate((id) => window.vsculpt.select(id), icon);
+  const z = await gizmoZArrow(page);
+  const camera = () => page.evaluate(() => window.vsculpt.view.camera.position.toArray());
+  // OrbitControls.update re-derives the position every frame (round-off of ~1e-13 relative); a jump is far larger.
+  const moved = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]) > 1e-9 * Math.hypot(...b);
+  const start = await camera();
+  const target = await page.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
+  // Count the rotations the orbit controls begin.
+  await page.evaluate(() => {
+    window.__orbitStarts = 0;
+    window.vsculpt.view.controls.addEventListener('start', () => window.__orbitStarts++);
+  });
+  await page.mouse.move(z.from.x, z.from.y);
+  await page.mouse.down();
+  for (let k = 1; k <= 8; k++) await page.mouse.move(z.from.x + 3 * k, z.from.y - 6 * k);
+  // While the gizmo is held, the orbit controls have begun nothing (state NONE = -1).
+  assert.deepEqual(await page.evaluate(() => [window.__orbitStarts, window.vsculpt.view.controls.state]), [0, -1]);
+  await page.mouse.up();
+  assert.equal(await page.evaluate(() => window.vsculpt.view.controls.enabled), true, 'orbit controls enabled again after the drag');
+  await page.waitForFunction(([id, z0]) => window.vsculpt.state.icons.get(id).target[2] > z0 + 1e-3, [icon, target[2]], { timeout: 10000 });
+  const afterDrag = await camera();
+  assert.ok(!moved(afterDrag, start), `the gizmo drag itself did not orbit the camera: ${start} → ${afterDrag}`);
+  // No button held: these moves must not rotate the view.
+  for (let k = 1; k <= 10; k++) await page.mouse.move(z.from.x - 25 * k, z.from.y + 10 * k);
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const afterMoves = await camera();
+  assert.ok(!moved(afterMoves, start), `the camera did not move: ${start} → ${afterMoves}`);
+  // The orbit controls still work afterwards: a left-button drag on empty background rotates.
+  await page.mouse.move(100, 650);
+  await page.mouse.down();
+  for (let k = 1; k <= 5; k++) await page.mouse.move(100 + 20 * k, 650);
+  await page.mouse.up();
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  const orbited = await camera();
+  assert.ok(moved(orbited, start), `an ordinary drag still orbits: ${start} → ${orbited}`);
+  assert.equal(await page.evaluate(() => window.__orbitStarts), 1);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('a curve icon is drawn on the surface with its curvature comb', async () => {
   const page = await open(links.editor);
   const before = await page.evaluate(() => window.vsculpt.state.icons.size);
