@@ -5,6 +5,7 @@ use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 use vsculpt_kernel::design::{Design, DesignError};
 use vsculpt_kernel::energy::SurfaceMaterial;
 use vsculpt_kernel::icon::{Anchor, Derivative, IconId, IconSpec, IconState, Role, SensorId};
+use vsculpt_kernel::solve::SolveReport;
 
 fn dome() -> BSplineSurface {
     let mut s = BSplineSurface::plane(2.0, 1.5, 12, 10, 3).unwrap();
@@ -427,5 +428,64 @@ fn tessellation_samples_the_current_surface() {
             let got = DVec3::new(got[0] as f64, got[1] as f64, got[2] as f64);
             assert!((got - want).length() < 1e-5, "({u}, {v}): {got} vs {want}");
         }
+    }
+}
+
+/// The paper's scene (bench `sculpt`): a wavy `nu × nv` sheet with four pinned
+/// points, a curve constraint and a load dragged up, then released, and a
+/// fifth point switched on and lifted. Returns the design and its last
+/// solve's report.
+fn paper_scene(nu: usize, nv: usize) -> (Design, SolveReport) {
+    let (w, h) = (nu as f64 / 10.0, nv as f64 / 10.0);
+    let mut s = BSplineSurface::plane(w, h, nu, nv, 3).unwrap();
+    for p in s.points_mut() {
+        p.z = 0.2
+            * w.min(h)
+            * (std::f64::consts::PI * p.x / w).sin()
+            * (std::f64::consts::PI * p.y / h).sin();
+    }
+    let mut d = Design::new(s, SurfaceMaterial::default()).unwrap();
+    d.set_adaptive_spring(false);
+    for (u, v) in [(0.1, 0.1), (0.9, 0.1), (0.1, 0.9), (0.9, 0.9)] {
+        d.add_icon(point(u, v, Role::Position)).unwrap();
+    }
+    let line = BSplineCurve::new(
+        KnotVector::clamped_uniform(1, 2).unwrap(),
+        vec![DVec3::new(0.2, 0.25, 0.0), DVec3::new(0.8, 0.25, 0.0)],
+    )
+    .unwrap();
+    d.add_icon(IconSpec {
+        anchor: Anchor::Curve(line),
+        role: Role::Position,
+        state: IconState::Passive,
+        target: None,
+    })
+    .unwrap();
+    let load = d.add_icon(point(0.5, 0.6, Role::Load)).unwrap();
+    d.solve().unwrap();
+    let start = d.icon(load).unwrap().xyz;
+    d.drag(load, start + DVec3::Z * 0.05 * w.min(h)).unwrap();
+    d.release(load).unwrap();
+    let pin = d.add_icon(point(0.3, 0.7, Role::Position)).unwrap();
+    d.set_target(pin, d.icon(pin).unwrap().xyz + DVec3::new(0.0, 0.0, 0.01))
+        .unwrap();
+    let report = d.solve().unwrap();
+    (d, report)
+}
+
+#[test]
+fn the_papers_scene_holds_every_curve_sample_with_no_equation_dropped() {
+    for (nu, nv) in [(20, 15), (81, 159)] {
+        let (d, report) = paper_scene(nu, nv);
+        // Every equation (four pins, the lifted pin, every curve sample)
+        // holds and none was dropped as redundant: the curve's samples are
+        // sparse enough for S to stay well conditioned.
+        assert!(report.constraint_residual < 1e-9, "{nu}x{nv}: {report:?}");
+        assert_eq!(report.rank_deficiency, 0, "{nu}x{nv}: {report:?}");
+        let curve = d.icons().nth(4).unwrap();
+        assert!(curve.samples().len() >= 2, "{nu}x{nv}");
+        // The lifted pin sits on its new target.
+        let pin = d.icons().last().unwrap();
+        assert!((pin.xyz - pin.target).length() < 1e-9, "{nu}x{nv}");
     }
 }

@@ -52,6 +52,35 @@ fn curve_energy_of_polynomial_fields_is_exact() {
 }
 
 #[test]
+fn the_three_coordinate_product_equals_three_scalar_products() {
+    let s = Stiffness::surface(
+        &KnotVector::clamped_uniform(3, 9).unwrap(),
+        &KnotVector::clamped_uniform(2, 7).unwrap(),
+        &SurfaceMaterial::default(),
+    )
+    .unwrap();
+    let n = s.dim();
+    let p: Vec<DVec3> = (0..n)
+        .map(|i| {
+            let t = i as f64;
+            DVec3::new((0.7 * t).sin(), (1.3 * t).cos(), 0.1 * t)
+        })
+        .collect();
+    let mut y = vec![DVec3::splat(f64::NAN); n];
+    s.mul_points(&p, &mut y);
+    for k in 0..3 {
+        let x: Vec<f64> = p.iter().map(|v| v[k]).collect();
+        for (a, b) in s.mul(&x).iter().zip(&y) {
+            assert!(
+                (a - b[k]).abs() <= 1e-12 * a.abs().max(1.0),
+                "{a} vs {}",
+                b[k]
+            );
+        }
+    }
+}
+
+#[test]
 fn bad_materials_are_refused() {
     let kv = knots();
     let good = SurfaceMaterial::default();

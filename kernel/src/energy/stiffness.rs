@@ -151,6 +151,31 @@ impl Stiffness {
         y
     }
 
+    /// Y = K X for the three coordinate fields at once (one pass over K, no
+    /// allocation): `y[i] = Σ_j K[i][j] · x[j]`. `y` is overwritten.
+    ///
+    /// # Panics
+    /// If `x` or `y` is not [`Self::dim`] long.
+    pub fn mul_points(&self, x: &[glam::DVec3], y: &mut [glam::DVec3]) {
+        let n = self.dim();
+        assert!(x.len() == n && y.len() == n, "mul_points: length");
+        y.fill(glam::DVec3::ZERO);
+        let s = self.lower.symbolic();
+        let (cp, ri, v) = (s.col_ptr(), s.row_idx(), self.lower.val());
+        for c in 0..n {
+            let xc = x[c];
+            let mut acc = glam::DVec3::ZERO;
+            for e in cp[c]..cp[c + 1] {
+                let r = ri[e];
+                y[r] += xc * v[e];
+                if r != c {
+                    acc += x[r] * v[e];
+                }
+            }
+            y[c] += acc;
+        }
+    }
+
     /// The quadratic form xᵀ K x (the energy of one coordinate field).
     pub fn energy(&self, x: &[f64]) -> f64 {
         self.mul(x).iter().zip(x).map(|(a, b)| a * b).sum()

@@ -23,6 +23,7 @@
 //! 3N multiply-adds: no sparse solve, no allocation.
 
 use std::collections::HashMap;
+use std::sync::Arc;
 
 use faer::Mat;
 use glam::DVec3;
@@ -135,7 +136,10 @@ pub struct Solver {
     factor: Factor,
     problem: Problem,
     rows: Vec<ScalarRow>,
-    z: Mat<f64>,
+    /// Z = K⁻¹[a_c], one column per row. Columns are shared, not copied,
+    /// when a new problem keeps a row: a constraint change costs only the
+    /// new rows' solves.
+    z: Vec<Arc<[f64]>>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -149,12 +153,11 @@ impl Solver {
     /// Factors `stiffness` (symbolic and numeric); the problem starts empty.
     pub fn new(stiffness: Stiffness) -> Result<Self, SolveError> {
         let factor = Factor::new(stiffness)?;
-        let n = factor.dim();
         Ok(Self {
             factor,
             problem: Problem::default(),
             rows: Vec::new(),
-            z: Mat::zeros(n, 0),
+            z: Vec::new(),
             g: Vec::new(),
             eqs: Vec::new(),
             loads: Vec::new(),
@@ -189,7 +192,7 @@ impl Solver {
         self.factor.refactor(stiffness)?;
         let problem = std::mem::take(&mut self.problem);
         self.rows.clear();
-        self.z = Mat::zeros(self.dim(), 0);
+        self.z.clear();
         if let Err(e) = self.set_problem(problem.clone()) {
             // Only reachable if the problem was valid before and S fails now:
             // go back to the old stiffness so nothing changes.
@@ -275,7 +278,7 @@ impl Solver {
             .enumerate()
             .map(|(c, r)| (row_key(r), c))
             .collect();
-        let mut z = Mat::<f64>::zeros(n, rows.len());
+        let mut z: Vec<Option<Arc<[f64]>>> = vec![None; rows.len()];
         let missing: Vec<usize> = (0..rows.len())
             .filter(|c| !old.contains_key(&row_key(&rows[*c])))
             .collect();
@@ -288,20 +291,22 @@ impl Solver {
             }
             self.factor.solve_in_place(rhs.as_mut());
             for (m, &c) in missing.iter().enumerate() {
-                z.col_mut(c).copy_from(rhs.col(m));
+                z[c] = Some(rhs.col_as_slice(m).into());
             }
         }
         for (c, r) in rows.iter().enumerate() {
             if let Some(&oc) = old.get(&row_key(r)) {
-                z.col_mut(c).copy_from(self.z.col(oc));
+                z[c] = Some(Arc::clone(&self.z[oc]));
             }
         }
+        let z: Vec<Arc<[f64]>> = z.into_iter().flatten().collect();
+        debug_assert_eq!(z.len(), rows.len());
         // G = Aᵀ Z.
         let nc = rows.len();
         let mut g = vec![0.0; nc * nc];
         for (a, row) in rows.iter().enumerate() {
             for b in 0..nc {
-                let zb = z.col_as_slice(b);
+                let zb = &z[b];
                 g[a * nc + b] = row
                     .indices
                     .iter()
@@ -402,10 +407,12 @@ impl Solver {
         }
         if self.response.as_ref().is_none_or(|r| r.group != group) {
             let zero = vec![0.0; self.eqs.len()];
-            let r = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| {
-                let inputs = self.unit_inputs(group, e);
-                self.refined_delta(&inputs, &zero)
-            });
+            let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
+            let mut solved = self
+                .refined_deltas(&inputs, &[&zero, &zero, &zero])
+                .into_iter();
+            let mut next = || solved.next().unwrap_or_default();
+            let r = [next(), next(), next()];
             self.response = Some(Response {
                 group,
                 kind: ResponseKind::new(r),
@@ -504,9 +511,9 @@ impl Solver {
         }
     }
 
-    /// δ = Z w for the given targets/forces and C·P_ref, and the Lagrange
-    /// multipliers λ.
-    fn delta_lambda(&self, inputs: &Inputs, cx: &[f64]) -> (Vec<DVec3>, Vec<f64>) {
+    /// The Lagrange multipliers λ for the given targets/forces and C·P_ref,
+    /// and the weights w = f − Cᵀλ with δ = Z w.
+    fn lambda_weights(&self, inputs: &Inputs, cx: &[f64]) -> (Vec<f64>, Vec<DVec3>) {
         let nc = self.rows.len();
         let mut w = vec![DVec3::ZERO; nc];
         for (l, f) in self.loads.iter().zip(&inputs.forces) {
@@ -543,122 +550,170 @@ impl Solver {
                 w[t.col][t.k] -= t.coef * lambda;
             }
         }
-        let mut delta = vec![DVec3::ZERO; self.dim()];
+        (lambdas, w)
+    }
+
+    /// δ += Σ_c w_c z_c.
+    fn add_columns(&self, delta: &mut [DVec3], w: &[DVec3]) {
         for (c, wc) in w.iter().enumerate() {
             if *wc == DVec3::ZERO {
                 continue;
             }
-            let zc = self.z.col_as_slice(c);
-            for (d, &zi) in delta.iter_mut().zip(zc) {
+            for (d, &zi) in delta.iter_mut().zip(self.z[c].iter()) {
                 *d += *wc * zi;
             }
         }
-        (delta, lambdas)
     }
 
     /// δ with one step of iterative refinement on the optimality conditions
-    /// K δ + Cᵀλ = b, C δ = d − C P_ref: the correction costs one 3-column
-    /// sparse solve and recovers the digits lost to cancellation in δ0 − Yλ
-    /// when the mass term is small (K is then ill-conditioned in its affine
-    /// modes).
+    /// K δ + Cᵀλ = b, C δ = d − C P_ref.
     fn refined_delta(&mut self, inputs: &Inputs, cx: &[f64]) -> Vec<DVec3> {
-        let (mut delta, lambda) = self.delta_lambda(inputs, cx);
-        if self.eqs.is_empty() && self.loads.is_empty() {
-            return delta;
-        }
+        self.refined_deltas(std::slice::from_ref(inputs), &[cx])
+            .pop()
+            .unwrap_or_default()
+    }
+
+    /// [`Self::refined_delta`] for several inputs at once, their refinement
+    /// steps batched into one sparse solve (it streams the factor once, so
+    /// 9 right-hand sides cost far less than three solves of 3).
+    ///
+    /// Per input and coordinate k:
+    /// * the stationarity residual ρ_k = b_k − Kδ_k − (Cᵀλ)_k is refined by
+    ///   y_k = K⁻¹ρ_k when it exceeds the rounding of the terms it was
+    ///   computed from (1e-13 of them); this recovers the digits lost to
+    ///   cancellation in δ0 − Yλ when the mass term is small (K is then
+    ///   ill-conditioned in its affine modes). Only coordinates that need it
+    ///   enter the solve;
+    /// * a constraint error above 1e-12 of the targets is projected out
+    ///   through S⁺ (no sparse solve). Errors along the directions S⁺
+    ///   dropped (contradictory equations) stay: they are the least-squares
+    ///   answer's own residual, which no refinement changes.
+    fn refined_deltas(&mut self, inputs: &[Inputs], cxs: &[&[f64]]) -> Vec<Vec<DVec3>> {
         let n = self.dim();
-        // ρ = b − K δ − Cᵀ λ, per coordinate.
-        let mut rho = Mat::<f64>::zeros(n, 3);
-        for (l, f) in self.loads.iter().zip(&inputs.forces) {
-            let row = &self.rows[l.col];
-            for (&i, &w) in row.indices.iter().zip(&row.weights) {
-                for k in 0..3 {
-                    rho[(i, k)] += w * f[k];
-                }
-            }
-        }
-        for (eq, lam) in self.eqs.iter().zip(&lambda) {
-            for t in &eq.terms {
-                let row = &self.rows[t.col];
-                for (&i, &w) in row.indices.iter().zip(&row.weights) {
-                    rho[(i, t.k)] -= t.coef * lam * w;
-                }
-            }
-        }
-        let max_abs = |m: &Mat<f64>| {
-            (0..m.ncols())
-                .flat_map(|k| m.col_as_slice(k).iter())
-                .fold(0.0f64, |a, &b| a.max(b.abs()))
-        };
-        let mut scale = max_abs(&rho);
-        for k in 0..3 {
-            let x: Vec<f64> = delta.iter().map(|d| d[k]).collect();
-            for (i, v) in self.stiffness().mul(&x).into_iter().enumerate() {
-                scale = scale.max(v.abs());
-                rho[(i, k)] -= v;
-            }
-        }
-        // Already accurate (the usual case when the mass term is not tiny):
-        // skip the extra sparse solve.
-        let worst = max_abs(&rho);
-        let cd: Vec<f64> = {
-            let applied: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&delta)).collect();
-            self.eqs
-                .iter()
-                .map(|eq| eq.terms.iter().map(|t| t.coef * applied[t.col][t.k]).sum())
-                .collect()
-        };
-        let target_scale = inputs
-            .targets
-            .iter()
-            .chain(cx)
-            .fold(1.0f64, |m, x| m.max(x.abs()));
-        let constraint_error = self
-            .eqs
-            .iter()
-            .enumerate()
-            .map(|(e, _)| (cd[e] + cx[e] - inputs.targets[e]).abs())
-            .fold(0.0f64, f64::max);
-        if worst <= 1e-13 * scale.max(1e-300) && constraint_error <= 1e-12 * target_scale {
-            return delta;
-        }
-        // y = K⁻¹ ρ, then project onto the constraints as in `delta`.
-        self.factor.solve_in_place(rho.as_mut());
-        let y: Vec<DVec3> = (0..n)
-            .map(|i| DVec3::new(rho[(i, 0)], rho[(i, 1)], rho[(i, 2)]))
-            .collect();
-        let applied: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&delta)).collect();
-        let applied_y: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&y)).collect();
-        let m = self.eqs.len();
-        let r: Vec<f64> = self
-            .eqs
-            .iter()
-            .enumerate()
-            .map(|(e, eq)| {
-                let c = |a: &[DVec3]| eq.terms.iter().map(|t| t.coef * a[t.col][t.k]).sum::<f64>();
-                // r' = C y − σ with σ = d − C P_ref − C δ.
-                c(&applied_y) - (inputs.targets[e] - cx[e] - c(&applied))
-            })
-            .collect();
-        let mut w = vec![DVec3::ZERO; self.rows.len()];
-        for (e, eq) in self.eqs.iter().enumerate() {
-            let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
-            for t in &eq.terms {
-                w[t.col][t.k] -= t.coef * lam;
-            }
-        }
-        for (d, yi) in delta.iter_mut().zip(&y) {
-            *d += *yi;
-        }
-        for (c, wc) in w.iter().enumerate() {
-            if *wc == DVec3::ZERO {
+        let mut deltas = Vec::with_capacity(inputs.len());
+        let mut pending: Vec<Pending> = Vec::new();
+        for (inputs, cx) in inputs.iter().zip(cxs) {
+            let (lambda, w) = self.lambda_weights(inputs, cx);
+            let mut delta = vec![DVec3::ZERO; n];
+            self.add_columns(&mut delta, &w);
+            if self.eqs.is_empty() && self.loads.is_empty() {
+                deltas.push(delta);
+                pending.push((Vec::new(), [None, None, None]));
                 continue;
             }
-            for (d, &zi) in delta.iter_mut().zip(self.z.col_as_slice(c)) {
-                *d += *wc * zi;
+            // ρ = b − Cᵀλ − K δ.
+            let mut rho = vec![DVec3::ZERO; n];
+            for (l, f) in self.loads.iter().zip(&inputs.forces) {
+                let row = &self.rows[l.col];
+                for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                    rho[i] += *f * w;
+                }
+            }
+            for (eq, lam) in self.eqs.iter().zip(&lambda) {
+                for t in &eq.terms {
+                    let row = &self.rows[t.col];
+                    for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                        rho[i][t.k] -= t.coef * lam * w;
+                    }
+                }
+            }
+            // The size of the terms whose rounding makes up ρ, per coordinate.
+            let mut computed = rho.iter().fold(DVec3::ZERO, |m, r| m.max(r.abs()));
+            let mut k_delta = vec![DVec3::ZERO; n];
+            self.stiffness().mul_points(&delta, &mut k_delta);
+            for (r, kd) in rho.iter_mut().zip(&k_delta) {
+                computed = computed.max(kd.abs());
+                *r -= *kd;
+            }
+            let worst = rho.iter().fold(DVec3::ZERO, |m, r| m.max(r.abs()));
+            let refine: [Option<Vec<f64>>; 3] = std::array::from_fn(|k| {
+                (worst[k] > 1e-13 * computed[k].max(1e-300))
+                    .then(|| rho.iter().map(|r| r[k]).collect())
+            });
+            let applied: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&delta)).collect();
+            // σ = d − C P_ref − C δ: what the constraints still ask.
+            let sigma: Vec<f64> = self
+                .eqs
+                .iter()
+                .enumerate()
+                .map(|(e, eq)| {
+                    let cd: f64 = eq.terms.iter().map(|t| t.coef * applied[t.col][t.k]).sum();
+                    inputs.targets[e] - cx[e] - cd
+                })
+                .collect();
+            deltas.push(delta);
+            pending.push((sigma, refine));
+        }
+        // One sparse solve for every coordinate of every input that asks.
+        let columns: Vec<(usize, usize)> = pending
+            .iter()
+            .enumerate()
+            .flat_map(|(p, (_, refine))| {
+                (0..3)
+                    .filter(move |&k| refine[k].is_some())
+                    .map(move |k| (p, k))
+            })
+            .collect();
+        let mut y = Mat::<f64>::zeros(n, columns.len());
+        for (c, &(p, k)) in columns.iter().enumerate() {
+            if let Some(rho) = &pending[p].1[k] {
+                y.col_mut(c).copy_from(faer::ColRef::from_slice(rho));
             }
         }
-        delta
+        if !columns.is_empty() {
+            self.factor.solve_in_place(y.as_mut());
+        }
+        for (p, ((sigma, _), (inputs, cx))) in
+            pending.iter().zip(inputs.iter().zip(cxs)).enumerate()
+        {
+            if self.eqs.is_empty() && self.loads.is_empty() {
+                continue;
+            }
+            let delta = &mut deltas[p];
+            let mut correction = vec![DVec3::ZERO; n];
+            let mut refined = false;
+            for (c, &(q, k)) in columns.iter().enumerate() {
+                if q == p {
+                    refined = true;
+                    for (d, &v) in correction.iter_mut().zip(y.col_as_slice(c)) {
+                        d[k] = v;
+                    }
+                }
+            }
+            let target_scale = inputs
+                .targets
+                .iter()
+                .chain(cx.iter())
+                .fold(1.0f64, |m, x| m.max(x.abs()));
+            let constraint_error = sigma.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            if !refined && constraint_error <= 1e-12 * target_scale {
+                continue;
+            }
+            // Project onto the constraints as in `delta`: r' = C y − σ.
+            let y_rows: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&correction)).collect();
+            let r: Vec<f64> = self
+                .eqs
+                .iter()
+                .enumerate()
+                .map(|(e, eq)| {
+                    let cy: f64 = eq.terms.iter().map(|t| t.coef * y_rows[t.col][t.k]).sum();
+                    cy - sigma[e]
+                })
+                .collect();
+            let m = self.eqs.len();
+            let mut w = vec![DVec3::ZERO; self.rows.len()];
+            for (e, eq) in self.eqs.iter().enumerate() {
+                let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
+                for t in &eq.terms {
+                    w[t.col][t.k] -= t.coef * lam;
+                }
+            }
+            for (d, c) in delta.iter_mut().zip(&correction) {
+                *d += *c;
+            }
+            self.add_columns(delta, &w);
+        }
+        deltas
     }
 
     /// The report of `out` with group `shifted`'s drag input at `t`.
@@ -687,6 +742,10 @@ impl Solver {
         }
     }
 }
+
+/// One input of a batched refinement: σ = d − C P_ref − C δ, and per
+/// coordinate the stationarity residual ρ_k when it needs a refinement step.
+type Pending = (Vec<f64>, [Option<Vec<f64>>; 3]);
 
 struct Inputs {
     targets: Vec<f64>,
@@ -770,6 +829,9 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
         })
         .collect();
     let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
+    if let Some(inverse) = well_conditioned_inverse(&scaled, &scale) {
+        return Ok((inverse, 0));
+    }
     let evd = scaled
         .self_adjoint_eigen(faer::Side::Lower)
         .map_err(|e| SolveError::Factor(format!("eigendecomposition of S: {e:?}")))?;
@@ -778,23 +840,100 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
     let lam: Vec<f64> = (0..m).map(|i| lam[i]).collect();
     let max = lam.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     let cut = max * 1e-12;
-    let mut out = vec![0.0; m * m];
-    let mut dropped = 0;
-    for (k, &l) in lam.iter().enumerate() {
-        if l <= cut || !l.is_finite() {
-            dropped += 1;
-            continue;
+    let kept: Vec<usize> = (0..m)
+        .filter(|&k| lam[k] > cut && lam[k].is_finite())
+        .collect();
+    // S⁺ = W Wᵀ with W = D^-½ U_kept Λ_kept^-½: one dense product (gemm).
+    let w = Mat::<f64>::from_fn(m, kept.len(), |i, c| {
+        let k = kept[c];
+        u[(i, k)] * scale[i] / lam[k].sqrt()
+    });
+    let product = &w * w.transpose();
+    // Symmetric: row-major and column-major agree.
+    let out = (0..m)
+        .flat_map(|i| (0..m).map(move |j| (i, j)))
+        .map(|(i, j)| product[(i, j)])
+        .collect();
+    Ok((out, m - kept.len()))
+}
+
+/// Bound on the 2-norm condition number of Ŝ below which S is inverted by
+/// Cholesky instead of an eigendecomposition (a fraction of the cost). A
+/// decade below the eigenvalue cut-off (1e12): no eigen-direction the
+/// pseudo-inverse would drop can take this path, so both give the same S⁺.
+const CHOLESKY_CONDITION_LIMIT: f64 = 1e11;
+
+/// S⁻¹ = D^-½ Ŝ⁻¹ D^-½ (row-major) when Ŝ is provably well conditioned:
+/// for a symmetric matrix ‖·‖₂ ≤ ‖·‖∞, so ‖Ŝ‖∞ · ‖Ŝ⁻¹‖∞ bounds cond₂(Ŝ)
+/// from above. `None` (use the eigendecomposition) when the Cholesky
+/// factorisation fails, a row of S is zero, or the bound exceeds
+/// [`CHOLESKY_CONDITION_LIMIT`]. Then the inverse equals the pseudo-inverse.
+fn well_conditioned_inverse(scaled: &Mat<f64>, scale: &[f64]) -> Option<Vec<f64>> {
+    use faer::linalg::solvers::DenseSolveCore;
+    if scale.contains(&0.0) {
+        return None;
+    }
+    let m = scaled.nrows();
+    let inf_norm = |a: &Mat<f64>| {
+        (0..m)
+            .map(|i| (0..m).map(|j| a[(i, j)].abs()).sum::<f64>())
+            .fold(0.0f64, f64::max)
+    };
+    let inverse = scaled.llt(faer::Side::Lower).ok()?.inverse();
+    let bound = inf_norm(scaled) * inf_norm(&inverse);
+    if !(bound.is_finite() && bound < CHOLESKY_CONDITION_LIMIT) {
+        return None;
+    }
+    Some(
+        (0..m)
+            .flat_map(|i| (0..m).map(move |j| (i, j)))
+            .map(|(i, j)| 0.5 * (inverse[(i, j)] + inverse[(j, i)]) * scale[i] * scale[j])
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A well-conditioned SPD matrix (Cholesky path) and a singular one
+    /// (eigendecomposition path): S S⁺ S = S and S⁺ symmetric in both, the
+    /// inverse exact in the first, the dependent direction dropped in the
+    /// second.
+    #[test]
+    fn pseudo_inverse_takes_the_fast_path_only_when_it_is_exact() {
+        let m = 12;
+        let b = Mat::<f64>::from_fn(m, m, |i, j| {
+            ((i * 7 + j * 3) % 5) as f64 - 2.0 + (i == j) as u8 as f64 * 6.0
+        });
+        let spd = &b * b.transpose();
+        // Two equal rows/columns: rank m − 1.
+        let mut singular = spd.clone();
+        for j in 0..m {
+            singular[(m - 1, j)] = singular[(0, j)];
         }
-        let inv = 1.0 / l;
         for i in 0..m {
-            let a = u[(i, k)] * inv * scale[i];
-            if a == 0.0 {
-                continue;
-            }
-            for j in 0..m {
-                out[i * m + j] += a * u[(j, k)] * scale[j];
+            singular[(i, m - 1)] = singular[(i, 0)];
+        }
+        singular[(m - 1, m - 1)] = singular[(0, 0)];
+        for (s, rank_drop) in [(&spd, 0), (&singular, 1)] {
+            let scale: Vec<f64> = (0..m).map(|i| 1.0 / s[(i, i)].sqrt()).collect();
+            let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
+            assert_eq!(
+                well_conditioned_inverse(&scaled, &scale).is_some(),
+                rank_drop == 0
+            );
+            let (p, dropped) = pseudo_inverse(s).unwrap();
+            assert_eq!(dropped, rank_drop);
+            let p = Mat::<f64>::from_fn(m, m, |i, j| p[i * m + j]);
+            let sps = s * &p * s;
+            let norm = (0..m).map(|i| s[(i, i)]).fold(0.0f64, f64::max);
+            for i in 0..m {
+                for j in 0..m {
+                    assert!((sps[(i, j)] - s[(i, j)]).abs() < 1e-9 * norm, "S S⁺ S ≠ S");
+                    assert!((p[(i, j)] - p[(j, i)]).abs() < 1e-9 * p[(i, i)].abs().max(1e-9));
+                }
             }
         }
     }
-    Ok((out, dropped))
 }
