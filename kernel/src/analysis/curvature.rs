@@ -34,20 +34,52 @@ pub struct SurfaceCurvature {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Degenerate;
 
-/// Mean, Gaussian and principal curvatures from the derivatives at a point.
-pub fn surface_curvature(d: &SurfaceDerivs) -> Result<SurfaceCurvature, Degenerate> {
+/// The unit normal, mean and Gaussian curvature at a point — what a
+/// tessellation shades with — without the principal directions: the same
+/// values as [`surface_curvature`] at a fraction of the cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingCurvature {
+    /// The unit normal n = w_u × w_v / |w_u × w_v|.
+    pub normal: DVec3,
+    /// Mean curvature H.
+    pub mean: f64,
+    /// Gaussian curvature K.
+    pub gauss: f64,
+}
+
+/// Normal, mean and Gaussian curvature from the derivatives at a point
+/// (first and second fundamental forms; sign convention above).
+#[inline]
+pub fn shading_curvature(d: &SurfaceDerivs) -> Result<ShadingCurvature, Degenerate> {
     let e = d.u.dot(d.u);
     let f = d.u.dot(d.v);
     let g = d.v.dot(d.v);
     let det = e * g - f * f;
-    let cross = d.u.cross(d.v);
     if !det.is_finite() || det <= 1e-24 * (e * g).max(1e-300) {
         return Err(Degenerate);
     }
-    let n = cross / cross.length();
+    // |w_u × w_v|² = EG − F² (Lagrange's identity).
+    let n = d.u.cross(d.v) * det.sqrt().recip();
     let (l, m, nn) = (d.uu.dot(n), d.uv.dot(n), d.vv.dot(n));
-    let gauss = (l * nn - m * m) / det;
-    let mean = (e * nn - 2.0 * f * m + g * l) / (2.0 * det);
+    let inv = det.recip();
+    Ok(ShadingCurvature {
+        normal: n,
+        mean: (e * nn - 2.0 * f * m + g * l) * 0.5 * inv,
+        gauss: (l * nn - m * m) * inv,
+    })
+}
+
+/// Mean, Gaussian and principal curvatures from the derivatives at a point.
+pub fn surface_curvature(d: &SurfaceDerivs) -> Result<SurfaceCurvature, Degenerate> {
+    let ShadingCurvature {
+        normal: n,
+        mean,
+        gauss,
+    } = shading_curvature(d)?;
+    let e = d.u.dot(d.u);
+    let f = d.u.dot(d.v);
+    let g = d.v.dot(d.v);
+    let (l, m, nn) = (d.uu.dot(n), d.uv.dot(n), d.vv.dot(n));
     let disc = (mean * mean - gauss).max(0.0).sqrt();
     let (k1, k2) = (mean + disc, mean - disc);
     // Principal directions: (L − κE) a + (M − κF) b = 0 (or the second row).

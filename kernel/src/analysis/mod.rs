@@ -4,7 +4,10 @@
 mod curvature;
 mod tessellate;
 
-pub use curvature::{Degenerate, SurfaceCurvature, curve_curvature, surface_curvature};
+pub use curvature::{
+    Degenerate, ShadingCurvature, SurfaceCurvature, curve_curvature, shading_curvature,
+    surface_curvature,
+};
 pub use tessellate::{
     CurveTessellation, Tessellation, Tessellator, samples_for, tessellate, tessellate_curve,
 };

@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 
-use super::{Degenerate, curve_curvature, surface_curvature};
+use super::{Degenerate, curve_curvature, shading_curvature};
 use crate::bspline::{BSplineCurve, BSplineSurface, SurfaceDerivs, basis_derivs};
 
 /// A triangle mesh of a surface with per-vertex attributes (f32, ready for
@@ -168,7 +168,7 @@ impl Tessellator {
                 let idx = a * sv + b;
                 out.positions[idx] = f3(d.p);
                 out.uvs[idx] = [self.us[a] as f32, self.vs[b] as f32];
-                match surface_curvature(&d) {
+                match shading_curvature(&d) {
                     Ok(c) => {
                         out.normals[idx] = f3(c.normal);
                         out.mean[idx] = c.mean as f32;
