@@ -19,7 +19,7 @@ use glam::DVec3;
 use thiserror::Error;
 
 use crate::analysis::{Tessellation, tessellate};
-use crate::bspline::{BSplineSurface, GeometryError};
+use crate::bspline::{BSplineSurface, BasisDerivs, GeometryError, basis_derivs_into};
 use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
 use crate::icon::{
     Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, centroid, icon_group,
@@ -132,6 +132,8 @@ pub struct Design {
     revision: u64,
     /// The previous control points, reused as the next solve's output buffer.
     scratch: Vec<DVec3>,
+    /// Basis scratch (u, v) for re-placing icons without allocating.
+    basis: (BasisDerivs, BasisDerivs),
 }
 
 impl Design {
@@ -156,6 +158,7 @@ impl Design {
             drag: None,
             revision: 0,
             scratch: Vec::new(),
+            basis: Default::default(),
         })
     }
 
@@ -675,15 +678,23 @@ impl Design {
         Ok(report)
     }
 
+    /// Every icon's position (the centroid of its samples) on the solved
+    /// surface; allocation-free, it runs on every drag frame.
     fn replace_icons(&mut self) {
         let surface = &self.surface;
+        let (bu, bv) = &mut self.basis;
         for icon in self.icons.values_mut() {
-            let pts: Vec<DVec3> = icon
-                .samples
-                .iter()
-                .map(|&(u, v)| surface.point(u, v))
-                .collect();
-            icon.xyz = centroid(&pts);
+            if icon.samples.is_empty() {
+                icon.xyz = DVec3::ZERO;
+                continue;
+            }
+            let mut sum = DVec3::ZERO;
+            for &(u, v) in &icon.samples {
+                basis_derivs_into(surface.u_knots(), u, 0, bu);
+                basis_derivs_into(surface.v_knots(), v, 0, bv);
+                sum += surface.combine(bu, bv, 0).p;
+            }
+            icon.xyz = sum / icon.samples.len() as f64;
         }
     }
 
