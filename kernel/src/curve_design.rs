@@ -3,6 +3,8 @@
 //! same semantics as [`crate::design::Design`] (plastic loads, passive
 //! constraints holding, sleeping icons inert and re-placed), with the curve
 //! energy ∫ α|w_u|² + β|w_uu|² of the displacement from a reference curve.
+//! A curve design is a value too: [`CurveDesign::snapshot`] and
+//! [`CurveDesign::restore`] serve undo, redo and commit as for surfaces.
 
 use std::collections::BTreeMap;
 
@@ -11,7 +13,7 @@ use glam::DVec3;
 use crate::bspline::BSplineCurve;
 use crate::design::DesignError;
 use crate::energy::{CurveMaterial, Stiffness};
-use crate::icon::{IconId, IconState, curve_row};
+use crate::icon::{IconId, IconState, SensorId, curve_row};
 use crate::solve::{Equation, Group, Load, Problem, SolveReport, Solver};
 use crate::spring::{Adaptation, Spring};
 
@@ -45,6 +47,25 @@ pub struct CurveIcon {
     pub xyz: DVec3,
     /// A load's attachment point.
     pub attach: DVec3,
+    /// The device sensors driving it.
+    pub sensors: Vec<SensorId>,
+}
+
+/// A curve design as a value: everything that makes it, nothing cached.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurveDesignSnapshot {
+    /// The current curve.
+    pub curve: BSplineCurve,
+    /// The reference shape (control points) the energy is measured from.
+    pub reference: Vec<DVec3>,
+    /// The material.
+    pub material: CurveMaterial,
+    /// The icons, by id.
+    pub icons: Vec<CurveIcon>,
+    /// The next icon id.
+    pub next_id: u64,
+    /// The spring coefficient κ.
+    pub kappa: f64,
 }
 
 /// A sculptable curve.
@@ -80,9 +101,78 @@ impl CurveDesign {
         })
     }
 
+    /// A design from a snapshot (its icons must lie on the curve).
+    pub fn from_snapshot(s: &CurveDesignSnapshot) -> Result<Self, DesignError> {
+        let mut d = Self::new(s.curve.clone(), s.material)?;
+        if s.reference.len() != s.curve.points().len() || s.reference.iter().any(|p| !p.is_finite())
+        {
+            return Err(DesignError::NotFinite("reference shape"));
+        }
+        d.reference = s.reference.clone();
+        d.spring =
+            Spring::new(s.kappa, d.spring.size()).map_err(|e| DesignError::Unsupported(e.0))?;
+        d.next_id = s.next_id;
+        for icon in &s.icons {
+            if !d.curve.knots().contains(icon.t) {
+                return Err(DesignError::OutOfDomain(icon.t, 0.0));
+            }
+            if !(icon.target.is_finite() && icon.attach.is_finite()) {
+                return Err(DesignError::NotFinite("icon"));
+            }
+            d.next_id = d.next_id.max(icon.id.0 + 1);
+            let mut icon = icon.clone();
+            icon.xyz = d.curve.point(icon.t);
+            d.icons.insert(icon.id, icon);
+        }
+        Ok(d)
+    }
+
+    /// The design as a value.
+    pub fn snapshot(&self) -> CurveDesignSnapshot {
+        let mut icons: Vec<CurveIcon> = self.icons.values().cloned().collect();
+        // A running drag is part of the value: its icon's target is where
+        // the pointer is.
+        if let Some((id, origin, t)) = self.drag
+            && let Some(i) = icons.iter_mut().find(|i| i.id == id)
+            && i.role != CurveRole::Load
+        {
+            i.target = origin + t;
+        }
+        CurveDesignSnapshot {
+            curve: self.curve.clone(),
+            reference: self.reference.clone(),
+            material: self.material,
+            icons,
+            next_id: self.next_id,
+            kappa: self.spring.kappa(),
+        }
+    }
+
+    /// Replaces the design by `snapshot` (undo, redo, revert). The
+    /// factorisation is kept when knots and material are unchanged. On
+    /// error nothing changes.
+    pub fn restore(&mut self, snapshot: &CurveDesignSnapshot) -> Result<(), DesignError> {
+        let mut next = Self::from_snapshot(snapshot)?;
+        if next.curve.knots() == self.curve.knots() && next.material == self.material {
+            next.solver = self.solver.take();
+        }
+        *self = next;
+        Ok(())
+    }
+
     /// The current curve.
     pub fn curve(&self) -> &BSplineCurve {
         &self.curve
+    }
+
+    /// The reference curve's control points.
+    pub fn reference(&self) -> &[DVec3] {
+        &self.reference
+    }
+
+    /// Every icon, by id.
+    pub fn icons(&self) -> impl Iterator<Item = &CurveIcon> {
+        self.icons.values()
     }
 
     /// One icon.
@@ -130,10 +220,86 @@ impl CurveDesign {
                 target: self.current(role, t),
                 xyz: p,
                 attach: p,
+                sensors: Vec::new(),
             },
         );
         self.dirty = true;
         Ok(id)
+    }
+
+    /// Deletes an icon (ending its drag).
+    pub fn remove_icon(&mut self, id: IconId) -> Result<CurveIcon, DesignError> {
+        let icon = self.icons.remove(&id).ok_or(DesignError::UnknownIcon(id))?;
+        if self.drag.is_some_and(|d| d.0 == id) {
+            self.drag = None;
+        }
+        self.dirty = true;
+        Ok(icon)
+    }
+
+    /// Moves an icon along the curve to parameter `t`; it then holds (or
+    /// pulls from) the curve as it is there.
+    pub fn set_parameter(&mut self, id: IconId, t: f64) -> Result<(), DesignError> {
+        if !t.is_finite() || !self.curve.knots().contains(t) {
+            return Err(DesignError::OutOfDomain(t, 0.0));
+        }
+        let role = self
+            .icons
+            .get(&id)
+            .ok_or(DesignError::UnknownIcon(id))?
+            .role;
+        self.finish_drag_of(id);
+        let (target, p) = (self.current(role, t), self.curve.point(t));
+        if let Some(icon) = self.icons.get_mut(&id) {
+            icon.t = t;
+            icon.target = target;
+            icon.xyz = p;
+            icon.attach = p;
+        }
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Folds a running drag of `id` into its target.
+    fn finish_drag_of(&mut self, id: IconId) {
+        if let Some((d, origin, t)) = self.drag
+            && d == id
+        {
+            self.drag = None;
+            if let Some(i) = self.icons.get_mut(&id) {
+                i.target = origin + t;
+            }
+            self.dirty = true;
+        }
+    }
+
+    /// Binds a sensor; the icon becomes driving.
+    pub fn bind_sensor(&mut self, id: IconId, sensor: SensorId) -> Result<(), DesignError> {
+        let icon = self
+            .icons
+            .get_mut(&id)
+            .ok_or(DesignError::UnknownIcon(id))?;
+        if !icon.sensors.contains(&sensor) {
+            icon.sensors.push(sensor);
+        }
+        if icon.state != IconState::Driving {
+            icon.state = IconState::Driving;
+            self.dirty = true;
+        }
+        Ok(())
+    }
+
+    /// Unbinds a sensor; an icon left with none is released (passive).
+    pub fn unbind_sensor(&mut self, id: IconId, sensor: &SensorId) -> Result<(), DesignError> {
+        let icon = self
+            .icons
+            .get_mut(&id)
+            .ok_or(DesignError::UnknownIcon(id))?;
+        icon.sensors.retain(|s| s != sensor);
+        if icon.sensors.is_empty() && icon.state == IconState::Driving {
+            self.release(id)?;
+        }
+        Ok(())
     }
 
     /// Switches an icon's role; it starts from the curve as it is.
@@ -152,12 +318,27 @@ impl CurveDesign {
         Ok(())
     }
 
-    /// Switches an icon's state.
+    /// Switches an icon's state, with the paper's semantics: an icon
+    /// leaving the driving state is released (a load's pull is kept as
+    /// shape); going to sleep or waking up, it holds the curve as it is now.
     pub fn set_state(&mut self, id: IconId, state: IconState) -> Result<(), DesignError> {
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        let (was, role, t) = (icon.state, icon.role, icon.t);
+        if was == state {
+            return Ok(());
+        }
+        if was == IconState::Driving {
+            self.release(id)?;
+        }
+        let (target, p) = (self.current(role, t), self.curve.point(t));
         let icon = self
             .icons
             .get_mut(&id)
             .ok_or(DesignError::UnknownIcon(id))?;
+        if state == IconState::Sleeping || was == IconState::Sleeping {
+            icon.target = target;
+            icon.attach = p;
+        }
         icon.state = state;
         self.dirty = true;
         Ok(())
@@ -309,20 +490,16 @@ impl CurveDesign {
             .get(&id)
             .ok_or(DesignError::UnknownIcon(id))?
             .role;
-        if let Some((d, origin, t)) = self.drag
-            && d == id
-        {
-            self.drag = None;
-            if let Some(i) = self.icons.get_mut(&id) {
-                i.target = origin + t;
-            }
-        }
+        self.finish_drag_of(id);
         if role == CurveRole::Load {
             self.reference = self.curve.points().to_vec();
         }
         let p = self.curve.point(self.icons[&id].t);
         if let Some(i) = self.icons.get_mut(&id) {
-            i.state = IconState::Passive;
+            if i.state == IconState::Driving {
+                i.state = IconState::Passive;
+            }
+            i.sensors.clear();
             if role == CurveRole::Load {
                 i.attach = p;
                 i.target = p;

@@ -4,7 +4,7 @@ use glam::DVec3;
 use vsculpt_kernel::bspline::{BSplineCurve, KnotVector};
 use vsculpt_kernel::curve_design::{CurveDesign, CurveRole};
 use vsculpt_kernel::energy::CurveMaterial;
-use vsculpt_kernel::icon::IconState;
+use vsculpt_kernel::icon::{IconId, IconState};
 
 fn batten(beta: f64) -> CurveDesign {
     let kv = KnotVector::clamped_uniform(3, 12).unwrap();
@@ -78,4 +78,113 @@ fn a_load_bends_the_batten_toward_the_hand_and_the_spring_adapts() {
             "plastic"
         );
     }
+}
+
+fn max_gap(a: &BSplineCurve, b: &BSplineCurve) -> f64 {
+    (0..=40)
+        .map(|k| (a.point(k as f64 / 40.0) - b.point(k as f64 / 40.0)).length())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_curve_design_is_a_value_snapshot_and_restore_round_trip() {
+    let mut d = batten(1.0);
+    d.add_icon(0.0, CurveRole::Position).unwrap();
+    d.add_icon(1.0, CurveRole::Position).unwrap();
+    let load = d.add_icon(0.5, CurveRole::Load).unwrap();
+    d.solve().unwrap();
+    let before = d.snapshot();
+    // Sculpt: a load drag, released (plastic), and a new tangent icon.
+    d.drag(load, DVec3::new(2.0, 0.8, 0.0)).unwrap();
+    d.release(load).unwrap();
+    d.add_icon(0.25, CurveRole::Tangent).unwrap();
+    d.solve().unwrap();
+    let after = d.snapshot();
+    assert_ne!(after, before);
+    assert!(
+        max_gap(&after.curve, &before.curve) > 0.05,
+        "the load moved the curve"
+    );
+    // Undo: exactly the old value, and solving it again keeps the old shape.
+    d.restore(&before).unwrap();
+    assert_eq!(d.snapshot(), before);
+    d.solve().unwrap();
+    assert!(max_gap(d.curve(), &before.curve) < 1e-12);
+    // Redo.
+    d.restore(&after).unwrap();
+    assert_eq!(d.snapshot(), after);
+    assert_eq!(d.icons().count(), 4);
+    // A fresh design from the snapshot is the same value.
+    let e = CurveDesign::from_snapshot(&after).unwrap();
+    assert_eq!(e.snapshot(), after);
+    // Bad snapshots are refused and change nothing.
+    let mut bad = after.clone();
+    bad.icons[0].t = 7.0;
+    assert!(CurveDesign::from_snapshot(&bad).is_err());
+    assert!(d.restore(&bad).is_err());
+    let mut bad = after.clone();
+    bad.reference[3].x = f64::NAN;
+    assert!(d.restore(&bad).is_err());
+    assert_eq!(d.snapshot(), after);
+}
+
+#[test]
+fn removing_or_moving_an_icon_releases_what_it_held() {
+    let mut d = batten(1.0);
+    d.add_icon(0.0, CurveRole::Position).unwrap();
+    d.add_icon(1.0, CurveRole::Position).unwrap();
+    let pin = d.add_icon(0.5, CurveRole::Position).unwrap();
+    let reference = d.curve().clone();
+    d.set_target(pin, DVec3::new(2.0, 1.0, 0.0)).unwrap();
+    d.solve().unwrap();
+    assert!((d.curve().point(0.5) - DVec3::new(2.0, 1.0, 0.0)).length() < 1e-9);
+    // Moved along the curve, the pin holds the curve where it now is.
+    d.set_parameter(pin, 0.3).unwrap();
+    let held = d.curve().point(0.3);
+    d.solve().unwrap();
+    assert!((d.curve().point(0.3) - held).length() < 1e-9);
+    assert!((d.icon(pin).unwrap().xyz - held).length() < 1e-9);
+    assert!(d.set_parameter(pin, 1.5).is_err());
+    assert!(d.set_parameter(pin, f64::NAN).is_err());
+    // Deleted, nothing holds the displacement: the curve relaxes to its
+    // reference (a constraint's pull is elastic; only loads are plastic).
+    let removed = d.remove_icon(pin).unwrap();
+    assert_eq!(removed.id, pin);
+    d.solve().unwrap();
+    assert!(max_gap(d.curve(), &reference) < 1e-9);
+    assert!(d.remove_icon(pin).is_err());
+}
+
+#[test]
+fn sensors_drive_icons_and_states_keep_the_papers_semantics() {
+    use vsculpt_kernel::icon::SensorId;
+    let mut d = batten(1.0);
+    d.add_icon(0.0, CurveRole::Position).unwrap();
+    d.add_icon(1.0, CurveRole::Position).unwrap();
+    let pin = d.add_icon(0.5, CurveRole::Position).unwrap();
+    let glove = SensorId("glove-1".into());
+    d.bind_sensor(pin, glove.clone()).unwrap();
+    assert_eq!(d.icon(pin).unwrap().state, IconState::Driving);
+    assert_eq!(d.icon(pin).unwrap().sensors, vec![glove.clone()]);
+    d.drag(pin, DVec3::new(2.0, 0.6, 0.0)).unwrap();
+    d.unbind_sensor(pin, &glove).unwrap();
+    // Released: passive, no sensors, and it still holds where it was put.
+    let icon = d.icon(pin).unwrap();
+    assert_eq!(icon.state, IconState::Passive);
+    assert!(icon.sensors.is_empty());
+    d.solve().unwrap();
+    assert!((d.curve().point(0.5) - DVec3::new(2.0, 0.6, 0.0)).length() < 1e-9);
+    // A passive load follows the curve; going to sleep, an icon holds
+    // nothing and its target is re-taken from the curve.
+    let load = d.add_icon(0.8, CurveRole::Load).unwrap();
+    d.set_target(pin, DVec3::new(2.0, 0.9, 0.0)).unwrap();
+    d.solve().unwrap();
+    assert!((d.icon(load).unwrap().xyz - d.curve().point(0.8)).length() < 1e-12);
+    let shape = d.curve().clone();
+    d.set_state(pin, IconState::Sleeping).unwrap();
+    assert!((d.icon(pin).unwrap().target - d.curve().point(0.5)).length() < 1e-12);
+    d.solve().unwrap();
+    // Nothing else pulls: the curve relaxes to its reference, not held at 0.9.
+    assert!((d.curve().point(0.5) - shape.point(0.5)).length() > 0.1);
+    assert!(d.bind_sensor(IconId(99), glove.clone()).is_err());
 }
