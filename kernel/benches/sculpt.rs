@@ -3,7 +3,10 @@
 //! point load (paper 003, Table 2). Measures:
 //!
 //! * `drag_frame` — one drag frame: solve + re-place every icon;
-//! * `constraint_change` — an icon switched (sleeping → passive) and solved;
+//! * `constraint_change` — an icon switched (sleeping ↔ passive) and solved
+//!   (the switched icon's column is kept while it sleeps);
+//! * `add_icon` — a position icon added at a new place and solved (its
+//!   column is a new sparse solve), then removed outside the timing;
 //! * `refactor` — a material change: numeric refactorisation + solve;
 //! * `tessellate` — the client tessellation at the paper's polygon count;
 //! * `full_frame` — drag frame + tessellation with normals and curvature.
@@ -129,6 +132,33 @@ fn benches(c: &mut Criterion) {
                 };
                 sc.design.set_state(sc.switch, state).unwrap();
                 black_box(sc.design.solve().unwrap())
+            })
+        });
+        let mut fresh = 0u64;
+        group.bench_function(BenchmarkId::new("add_icon", &id), |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for _ in 0..iters {
+                    fresh += 1;
+                    // A parameter never used before: its column is not cached.
+                    let u = 0.2 + 0.6 * ((fresh as f64 * 0.618_033_988_75) % 1.0);
+                    let v = 0.4 + 0.2 * ((fresh as f64 * 0.414_213_562_37) % 1.0);
+                    let start = std::time::Instant::now();
+                    let icon = sc
+                        .design
+                        .add_icon(IconSpec {
+                            anchor: Anchor::Point { u, v },
+                            role: Role::Position,
+                            state: IconState::Passive,
+                            target: None,
+                        })
+                        .unwrap();
+                    black_box(sc.design.solve().unwrap());
+                    spent += start.elapsed();
+                    sc.design.remove_icon(icon).unwrap();
+                    sc.design.solve().unwrap();
+                }
+                spent
             })
         });
         group.bench_function(BenchmarkId::new("refactor", &id), |b| {

@@ -377,3 +377,78 @@ fn clamped_plate_under_central_load_converges_to_kirchhoff() {
         }
     }
 }
+
+#[test]
+fn a_constraint_switched_off_and_on_reuses_its_column() {
+    let s = plate(14);
+    let m = material(0.1, 1.0, 1e-3);
+    let pins = |with_switch: bool| Problem {
+        groups: [
+            Some(position(&s, 1, 0.1, 0.1, s.point(0.1, 0.1))),
+            Some(position(&s, 2, 0.9, 0.9, s.point(0.9, 0.9))),
+            Some(position(
+                &s,
+                3,
+                0.5,
+                0.5,
+                s.point(0.5, 0.5) + DVec3::Z * 0.2,
+            )),
+            with_switch.then(|| position(&s, 4, 0.3, 0.7, s.point(0.3, 0.7) - DVec3::Z * 0.1)),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
+    };
+    let mut solver = solver_for(&s, &m);
+    let mut out = vec![DVec3::ZERO; s.points().len()];
+    solver.set_problem(pins(true)).unwrap();
+    let first = solver.columns_solved();
+    assert_eq!(first, 4, "one column per new row, solved in one batch");
+    solver.solve(s.points(), &mut out).unwrap();
+    let with = out.clone();
+    // Off, then on again: no new column either way.
+    let solved = solver.columns_solved();
+    solver.set_problem(pins(false)).unwrap();
+    assert_eq!(
+        solver.columns_solved(),
+        solved,
+        "dropping a row solves nothing"
+    );
+    solver.solve(s.points(), &mut out).unwrap();
+    assert!(
+        (out[s.index(5, 9)] - with[s.index(5, 9)]).length() > 1e-3,
+        "the switch matters"
+    );
+    let before = solver.columns_solved();
+    solver.set_problem(pins(true)).unwrap();
+    assert_eq!(
+        solver.columns_solved(),
+        before,
+        "the retired column came back"
+    );
+    solver.solve(s.points(), &mut out).unwrap();
+    // The same answer as a solver that never saw the switch.
+    let mut fresh = solver_for(&s, &m);
+    fresh.set_problem(pins(true)).unwrap();
+    let mut want = vec![DVec3::ZERO; s.points().len()];
+    fresh.solve(s.points(), &mut want).unwrap();
+    let gap = out
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(gap < 1e-12, "{gap}");
+    // A new material invalidates every column: they are solved again.
+    solver
+        .refactor(Stiffness::surface(s.u_knots(), s.v_knots(), &material(0.2, 1.0, 1e-3)).unwrap())
+        .unwrap();
+    let after = solver.columns_solved();
+    solver.set_problem(pins(false)).unwrap();
+    solver.set_problem(pins(true)).unwrap();
+    assert_eq!(
+        solver.columns_solved(),
+        after,
+        "retired after the refactor, reused"
+    );
+    assert!(after >= before + 4, "the refactor solved the columns again");
+}

@@ -31,6 +31,8 @@ pub struct Factor {
     solve_mem: MemBuffer,
     /// How many right-hand sides `solve_mem` is sized for.
     solve_cols: usize,
+    /// Right-hand sides solved so far.
+    solved: u64,
 }
 
 impl std::fmt::Debug for Factor {
@@ -74,6 +76,7 @@ impl Factor {
             factor_mem,
             solve_mem,
             solve_cols: INITIAL_SOLVE_COLS,
+            solved: 0,
         };
         this.numeric(None)?;
         Ok(this)
@@ -115,6 +118,11 @@ impl Factor {
         &self.stiffness
     }
 
+    /// Right-hand sides solved so far.
+    pub fn columns_solved(&self) -> u64 {
+        self.solved
+    }
+
     /// The number of unknowns.
     pub fn dim(&self) -> usize {
         self.stiffness.dim()
@@ -124,6 +132,7 @@ impl Factor {
     /// scratch grows (once) when k exceeds every earlier batch.
     pub fn solve_in_place(&mut self, rhs: MatMut<'_, f64>) {
         let k = rhs.ncols();
+        self.solved += k as u64;
         if k > self.solve_cols {
             self.solve_mem =
                 MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq));

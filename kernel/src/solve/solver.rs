@@ -22,7 +22,7 @@
 //! coordinates when projected equations exist) and every later frame costs
 //! 3N multiply-adds: no sparse solve, no allocation.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
 
 use faer::Mat;
@@ -140,6 +140,10 @@ pub struct Solver {
     /// when a new problem keeps a row: a constraint change costs only the
     /// new rows' solves.
     z: Vec<Arc<[f64]>>,
+    /// Columns of rows that left the problem, kept for when they come back
+    /// (an icon switched off and on again, an undo): oldest first, at most
+    /// [`RETIRED_BYTES`] of them. Valid until the stiffness changes.
+    retired: VecDeque<(RowKey, Arc<[f64]>)>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -158,6 +162,7 @@ impl Solver {
             problem: Problem::default(),
             rows: Vec::new(),
             z: Vec::new(),
+            retired: VecDeque::new(),
             g: Vec::new(),
             eqs: Vec::new(),
             loads: Vec::new(),
@@ -171,6 +176,12 @@ impl Solver {
     /// The number of control points.
     pub fn dim(&self) -> usize {
         self.factor.dim()
+    }
+
+    /// How many right-hand sides the factor has solved for so far (new
+    /// constraint columns, refinement steps): what a problem change cost.
+    pub fn columns_solved(&self) -> u64 {
+        self.factor.columns_solved()
     }
 
     /// The factored stiffness.
@@ -193,6 +204,7 @@ impl Solver {
         let problem = std::mem::take(&mut self.problem);
         self.rows.clear();
         self.z.clear();
+        self.retired.clear();
         if let Err(e) = self.set_problem(problem.clone()) {
             // Only reachable if the problem was valid before and S fails now:
             // go back to the old stiffness so nothing changes.
@@ -278,10 +290,21 @@ impl Solver {
             .enumerate()
             .map(|(c, r)| (row_key(r), c))
             .collect();
-        let mut z: Vec<Option<Arc<[f64]>>> = vec![None; rows.len()];
-        let missing: Vec<usize> = (0..rows.len())
-            .filter(|c| !old.contains_key(&row_key(&rows[*c])))
+        let mut z: Vec<Option<Arc<[f64]>>> = rows
+            .iter()
+            .map(|r| {
+                let key = row_key(r);
+                match old.get(&key) {
+                    Some(&oc) => Some(Arc::clone(&self.z[oc])),
+                    None => self
+                        .retired
+                        .iter()
+                        .find(|(k, _)| *k == key)
+                        .map(|(_, col)| Arc::clone(col)),
+                }
+            })
             .collect();
+        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].is_none()).collect();
         if !missing.is_empty() {
             let mut rhs = Mat::<f64>::zeros(n, missing.len());
             for (m, &c) in missing.iter().enumerate() {
@@ -292,11 +315,6 @@ impl Solver {
             self.factor.solve_in_place(rhs.as_mut());
             for (m, &c) in missing.iter().enumerate() {
                 z[c] = Some(rhs.col_as_slice(m).into());
-            }
-        }
-        for (c, r) in rows.iter().enumerate() {
-            if let Some(&oc) = old.get(&row_key(r)) {
-                z[c] = Some(Arc::clone(&self.z[oc]));
             }
         }
         let z: Vec<Arc<[f64]>> = z.into_iter().flatten().collect();
@@ -331,6 +349,7 @@ impl Solver {
             }
         }
         let (s_pinv, rank_deficiency) = pseudo_inverse(&s)?;
+        self.retire(&z);
         self.problem = problem;
         self.rows = rows;
         self.z = z;
@@ -342,6 +361,25 @@ impl Solver {
         self.base = None;
         self.response = None;
         Ok(())
+    }
+
+    /// Keeps the columns of the current rows that `rows` drops for later,
+    /// forgets retired columns `rows` uses again, and evicts the oldest past
+    /// [`RETIRED_BYTES`].
+    fn retire(&mut self, z: &[Arc<[f64]>]) {
+        let kept: std::collections::HashSet<*const f64> = z.iter().map(|c| c.as_ptr()).collect();
+        self.retired
+            .retain(|(_, col)| !kept.contains(&col.as_ptr()));
+        for (r, col) in self.rows.iter().zip(&self.z) {
+            if !kept.contains(&col.as_ptr()) {
+                self.retired.push_back((row_key(r), Arc::clone(col)));
+            }
+        }
+        let per_column = (self.dim() * std::mem::size_of::<f64>()).max(1);
+        let keep = RETIRED_BYTES / per_column;
+        while self.retired.len() > keep {
+            self.retired.pop_front();
+        }
     }
 
     /// Solves with the problem's targets and forces (every drag input zero):
@@ -856,6 +894,9 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
         .collect();
     Ok((out, m - kept.len()))
 }
+
+/// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
+const RETIRED_BYTES: usize = 16 << 20;
 
 /// Bound on the 2-norm condition number of Ŝ below which S is inverted by
 /// Cholesky instead of an eigendecomposition (a fraction of the cost). A
