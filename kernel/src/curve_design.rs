@@ -1,5 +1,8 @@
-//! A deformable B-spline curve sculpted by point icons — the batten of
-//! spline lofting, and paper 003's curve sculpting. The same solver and the
+//! A deformable B-spline curve sculpted by icons — the batten of spline
+//! lofting, and paper 003's curve sculpting. Point icons (load, position, R,
+//! R2) act at one parameter; interval icons (load, position) along a span of
+//! the curve, as curve icons do on a surface: a constraint keeps the span's
+//! shape (moved rigidly by its target), a load pulls the whole span. The same solver and the
 //! same semantics as [`crate::design::Design`] (plastic loads, passive
 //! constraints holding, sleeping icons inert and re-placed), with the curve
 //! energy ∫ α|w_u|² + β|w_uu|² of the displacement from a reference curve.
@@ -13,7 +16,7 @@ use glam::DVec3;
 use crate::bspline::BSplineCurve;
 use crate::design::DesignError;
 use crate::energy::{CurveMaterial, Stiffness};
-use crate::icon::{IconId, IconState, SensorId, curve_row};
+use crate::icon::{IconId, IconState, SensorId, centroid, curve_row};
 use crate::solve::{Equation, Group, Load, Problem, SolveReport, Solver};
 use crate::spring::{Adaptation, Spring};
 
@@ -30,22 +33,31 @@ pub enum CurveRole {
     Second,
 }
 
-/// An icon on a curve at parameter `t`.
+/// An icon on a curve at parameter `t`, or along the span `span`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurveIcon {
     /// Its id.
     pub id: IconId,
-    /// Its parameter on the curve.
+    /// Its parameter on the curve (an interval icon's middle).
     pub t: f64,
+    /// An interval icon's parameter range; `None` for a point icon.
+    pub span: Option<(f64, f64)>,
+    /// The parameters it acts at: `[t]`, or samples along the span.
+    pub samples: Vec<f64>,
+    /// The curve at `samples` when the icon last took hold: a constraint
+    /// keeps this shape, moved by `target − centroid(shape)`.
+    pub shape: Vec<DVec3>,
     /// What it does.
     pub role: CurveRole,
     /// Driving, passive or sleeping.
     pub state: IconState,
-    /// Position, derivative vector or a load's pull point.
+    /// Position (of the shape's centroid), derivative vector or a load's
+    /// pull point.
     pub target: DVec3,
-    /// Its position on the curve, recomputed after every solve.
+    /// Its position on the curve (the centroid of its samples), recomputed
+    /// after every solve.
     pub xyz: DVec3,
-    /// A load's attachment point.
+    /// A load's attachment point (the shape's centroid).
     pub attach: DVec3,
     /// The device sensors driving it.
     pub sensors: Vec<SensorId>,
@@ -113,15 +125,27 @@ impl CurveDesign {
             Spring::new(s.kappa, d.spring.size()).map_err(|e| DesignError::Unsupported(e.0))?;
         d.next_id = s.next_id;
         for icon in &s.icons {
-            if !d.curve.knots().contains(icon.t) {
-                return Err(DesignError::OutOfDomain(icon.t, 0.0));
+            if let Some(&t) = std::iter::once(&icon.t)
+                .chain(&icon.samples)
+                .find(|&&t| !d.curve.knots().contains(t))
+            {
+                return Err(DesignError::OutOfDomain(t, 0.0));
             }
-            if !(icon.target.is_finite() && icon.attach.is_finite()) {
+            if !(icon.target.is_finite()
+                && icon.attach.is_finite()
+                && icon.shape.iter().all(|p| p.is_finite()))
+            {
                 return Err(DesignError::NotFinite("icon"));
+            }
+            if icon.samples.is_empty() || icon.shape.len() != icon.samples.len() {
+                return Err(DesignError::Unsupported(format!(
+                    "icon {:?}: shape does not match its samples",
+                    icon.id
+                )));
             }
             d.next_id = d.next_id.max(icon.id.0 + 1);
             let mut icon = icon.clone();
-            icon.xyz = d.curve.point(icon.t);
+            icon.xyz = d.centroid_at(&icon.samples);
             d.icons.insert(icon.id, icon);
         }
         Ok(d)
@@ -193,38 +217,123 @@ impl CurveDesign {
         Ok(())
     }
 
-    fn current(&self, role: CurveRole, t: f64) -> DVec3 {
-        let d = self.curve.derivs(t);
+    /// The centroid of the curve at `samples`.
+    fn centroid_at(&self, samples: &[f64]) -> DVec3 {
+        centroid(
+            &samples
+                .iter()
+                .map(|&t| self.curve.point(t))
+                .collect::<Vec<_>>(),
+        )
+    }
+
+    /// The parameters an icon acts at: `[t]`, or uniform samples of the span
+    /// (one per knot span it crosses, plus one; 2 to 48).
+    fn samples_of(&self, t: f64, span: Option<(f64, f64)>) -> Result<Vec<f64>, DesignError> {
+        let inside = |t: f64| t.is_finite() && self.curve.knots().contains(t);
+        let Some((a, b)) = span else {
+            return if inside(t) {
+                Ok(vec![t])
+            } else {
+                Err(DesignError::OutOfDomain(t, 0.0))
+            };
+        };
+        if let Some(bad) = [a, b].into_iter().find(|&x| !inside(x)) {
+            return Err(DesignError::OutOfDomain(bad, 0.0));
+        }
+        if b - a < 1e-9 {
+            return Err(DesignError::Degenerate("interval has no length"));
+        }
+        let (t0, t1) = self.curve.domain();
+        let spans = self.curve.knots().spans().len().max(1) as f64;
+        let n = (((b - a) / (t1 - t0) * spans).ceil() as usize + 1).clamp(2, 48);
+        Ok((0..n)
+            .map(|k| a + (b - a) * k as f64 / (n - 1) as f64)
+            .collect())
+    }
+
+    /// What `role` holds at an icon now: the centroid of `shape` for a
+    /// position or load, the derivative at `t` otherwise.
+    fn current(&self, role: CurveRole, t: f64, shape: &[DVec3]) -> DVec3 {
         match role {
-            CurveRole::Load | CurveRole::Position => d.p,
-            CurveRole::Tangent => d.d1,
-            CurveRole::Second => d.d2,
+            CurveRole::Load | CurveRole::Position => centroid(shape),
+            CurveRole::Tangent => self.curve.derivs(t).d1,
+            CurveRole::Second => self.curve.derivs(t).d2,
         }
     }
 
-    /// Adds an icon at `t`; its target is the curve's current value.
-    pub fn add_icon(&mut self, t: f64, role: CurveRole) -> Result<IconId, DesignError> {
-        if !self.curve.knots().contains(t) {
-            return Err(DesignError::OutOfDomain(t, 0.0));
+    /// Makes `id` hold (or pull from) the curve as it is now: shape,
+    /// attachment and target from the current curve.
+    fn take_hold(&mut self, id: IconId) {
+        let Some(icon) = self.icons.get(&id) else {
+            return;
+        };
+        let shape: Vec<DVec3> = icon.samples.iter().map(|&t| self.curve.point(t)).collect();
+        let target = self.current(icon.role, icon.t, &shape);
+        if let Some(icon) = self.icons.get_mut(&id) {
+            icon.attach = centroid(&shape);
+            icon.xyz = icon.attach;
+            icon.target = target;
+            icon.shape = shape;
         }
+    }
+
+    fn check_role(span: Option<(f64, f64)>, role: CurveRole) -> Result<(), DesignError> {
+        if span.is_some() && matches!(role, CurveRole::Tangent | CurveRole::Second) {
+            return Err(DesignError::Unsupported(
+                "derivative constraints need a point icon".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn insert(
+        &mut self,
+        t: f64,
+        span: Option<(f64, f64)>,
+        role: CurveRole,
+    ) -> Result<IconId, DesignError> {
+        Self::check_role(span, role)?;
+        let samples = self.samples_of(t, span)?;
         let id = IconId(self.next_id);
         self.next_id += 1;
-        let p = self.curve.point(t);
         self.icons.insert(
             id,
             CurveIcon {
                 id,
                 t,
+                span,
+                samples,
+                shape: Vec::new(),
                 role,
                 state: IconState::Passive,
-                target: self.current(role, t),
-                xyz: p,
-                attach: p,
+                target: DVec3::ZERO,
+                xyz: DVec3::ZERO,
+                attach: DVec3::ZERO,
                 sensors: Vec::new(),
             },
         );
+        self.take_hold(id);
         self.dirty = true;
         Ok(id)
+    }
+
+    /// Adds a point icon at `t`; its target is the curve's current value.
+    pub fn add_icon(&mut self, t: f64, role: CurveRole) -> Result<IconId, DesignError> {
+        self.insert(t, None, role)
+    }
+
+    /// Adds an interval icon along `[t0, t1]` (a position constraint that
+    /// keeps the span's shape, or a load that pulls the whole span); it
+    /// starts from the curve as it is.
+    pub fn add_interval(
+        &mut self,
+        t0: f64,
+        t1: f64,
+        role: CurveRole,
+    ) -> Result<IconId, DesignError> {
+        let (a, b) = (t0.min(t1), t0.max(t1));
+        self.insert(0.5 * (a + b), Some((a, b)), role)
     }
 
     /// Deletes an icon (ending its drag).
@@ -237,25 +346,22 @@ impl CurveDesign {
         Ok(icon)
     }
 
-    /// Moves an icon along the curve to parameter `t`; it then holds (or
-    /// pulls from) the curve as it is there.
+    /// Moves an icon along the curve so that its parameter (an interval's
+    /// middle) is `t`; it then holds (or pulls from) the curve as it is there.
     pub fn set_parameter(&mut self, id: IconId, t: f64) -> Result<(), DesignError> {
-        if !t.is_finite() || !self.curve.knots().contains(t) {
+        if !t.is_finite() {
             return Err(DesignError::OutOfDomain(t, 0.0));
         }
-        let role = self
-            .icons
-            .get(&id)
-            .ok_or(DesignError::UnknownIcon(id))?
-            .role;
+        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
+        let span = icon.span.map(|(a, b)| (a + t - icon.t, b + t - icon.t));
+        let samples = self.samples_of(t, span)?;
         self.finish_drag_of(id);
-        let (target, p) = (self.current(role, t), self.curve.point(t));
         if let Some(icon) = self.icons.get_mut(&id) {
             icon.t = t;
-            icon.target = target;
-            icon.xyz = p;
-            icon.attach = p;
+            icon.span = span;
+            icon.samples = samples;
         }
+        self.take_hold(id);
         self.dirty = true;
         Ok(())
     }
@@ -304,16 +410,17 @@ impl CurveDesign {
 
     /// Switches an icon's role; it starts from the curve as it is.
     pub fn set_role(&mut self, id: IconId, role: CurveRole) -> Result<(), DesignError> {
-        let t = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?.t;
-        let target = self.current(role, t);
-        let p = self.curve.point(t);
-        let icon = self
+        let span = self
             .icons
-            .get_mut(&id)
-            .ok_or(DesignError::UnknownIcon(id))?;
-        icon.role = role;
-        icon.target = target;
-        icon.attach = p;
+            .get(&id)
+            .ok_or(DesignError::UnknownIcon(id))?
+            .span;
+        Self::check_role(span, role)?;
+        self.finish_drag_of(id);
+        if let Some(icon) = self.icons.get_mut(&id) {
+            icon.role = role;
+        }
+        self.take_hold(id);
         self.dirty = true;
         Ok(())
     }
@@ -322,24 +429,23 @@ impl CurveDesign {
     /// leaving the driving state is released (a load's pull is kept as
     /// shape); going to sleep or waking up, it holds the curve as it is now.
     pub fn set_state(&mut self, id: IconId, state: IconState) -> Result<(), DesignError> {
-        let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
-        let (was, role, t) = (icon.state, icon.role, icon.t);
+        let was = self
+            .icons
+            .get(&id)
+            .ok_or(DesignError::UnknownIcon(id))?
+            .state;
         if was == state {
             return Ok(());
         }
         if was == IconState::Driving {
             self.release(id)?;
         }
-        let (target, p) = (self.current(role, t), self.curve.point(t));
-        let icon = self
-            .icons
-            .get_mut(&id)
-            .ok_or(DesignError::UnknownIcon(id))?;
         if state == IconState::Sleeping || was == IconState::Sleeping {
-            icon.target = target;
-            icon.attach = p;
+            self.take_hold(id);
         }
-        icon.state = state;
+        if let Some(icon) = self.icons.get_mut(&id) {
+            icon.state = state;
+        }
         self.dirty = true;
         Ok(())
     }
@@ -372,16 +478,27 @@ impl CurveDesign {
                     key: i.id.0,
                     ..Group::default()
                 };
+                // A span shares its pull, or keeps its shape moved rigidly.
+                let share = 1.0 / i.samples.len().max(1) as f64;
+                let shift = base - centroid(&i.shape);
                 match i.role {
-                    CurveRole::Load => g.loads.push(Load {
-                        row: curve_row(&self.curve, i.t, 0),
-                        force: (base - i.attach) * k,
-                        drag_gain: k,
-                    }),
-                    CurveRole::Position => g.equations.push(Equation::Vector {
-                        row: curve_row(&self.curve, i.t, 0),
-                        target: base,
-                    }),
+                    CurveRole::Load => {
+                        for &t in &i.samples {
+                            g.loads.push(Load {
+                                row: curve_row(&self.curve, t, 0),
+                                force: (base - i.attach) * k * share,
+                                drag_gain: k * share,
+                            });
+                        }
+                    }
+                    CurveRole::Position => {
+                        for (&t, &p) in i.samples.iter().zip(&i.shape) {
+                            g.equations.push(Equation::Vector {
+                                row: curve_row(&self.curve, t, 0),
+                                target: p + shift,
+                            });
+                        }
+                    }
                     CurveRole::Tangent => g.equations.push(Equation::Vector {
                         row: curve_row(&self.curve, i.t, 1),
                         target: base,
@@ -423,8 +540,15 @@ impl CurveDesign {
             None => solver.solve(&self.reference, &mut out)?,
         };
         self.curve.points_mut().copy_from_slice(&out);
-        for icon in self.icons.values_mut() {
-            icon.xyz = self.curve.point(icon.t);
+        let placed: Vec<(IconId, DVec3)> = self
+            .icons
+            .values()
+            .map(|i| (i.id, self.centroid_at(&i.samples)))
+            .collect();
+        for (id, xyz) in placed {
+            if let Some(icon) = self.icons.get_mut(&id) {
+                icon.xyz = xyz;
+            }
         }
         Ok(report)
     }
@@ -466,7 +590,7 @@ impl CurveDesign {
         };
         self.drag = Some((id, origin, target - origin));
         self.solve()?;
-        let actual = self.curve.point(icon.t);
+        let actual = self.icons.get(&id).map_or(icon.xyz, |i| i.xyz);
         if icon.role == CurveRole::Load {
             let (dx, dy) = (
                 (xyz - icon.attach).length(),
@@ -494,16 +618,14 @@ impl CurveDesign {
         if role == CurveRole::Load {
             self.reference = self.curve.points().to_vec();
         }
-        let p = self.curve.point(self.icons[&id].t);
+        if role == CurveRole::Load {
+            self.take_hold(id);
+        }
         if let Some(i) = self.icons.get_mut(&id) {
             if i.state == IconState::Driving {
                 i.state = IconState::Passive;
             }
             i.sensors.clear();
-            if role == CurveRole::Load {
-                i.attach = p;
-                i.target = p;
-            }
         }
         self.dirty = true;
         Ok(())

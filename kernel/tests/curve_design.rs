@@ -188,3 +188,89 @@ fn sensors_drive_icons_and_states_keep_the_papers_semantics() {
     assert!((d.curve().point(0.5) - shape.point(0.5)).length() > 0.1);
     assert!(d.bind_sensor(IconId(99), glove.clone()).is_err());
 }
+
+#[test]
+fn an_interval_constraint_keeps_its_span_and_an_interval_load_pulls_it() {
+    let mut d = batten(1.0);
+    d.add_icon(0.0, CurveRole::Position).unwrap();
+    d.add_icon(1.0, CurveRole::Position).unwrap();
+    let span = d.add_interval(0.55, 0.3, CurveRole::Position).unwrap();
+    let icon = d.icon(span).unwrap().clone();
+    assert_eq!(icon.span, Some((0.3, 0.55)));
+    assert!(icon.samples.len() >= 3, "{:?}", icon.samples);
+    assert_eq!(icon.shape.len(), icon.samples.len());
+    // Lift the span: every sample moves by the lift (the shape is kept).
+    let lift = DVec3::new(0.0, 0.5, 0.2);
+    d.set_target(span, icon.target + lift).unwrap();
+    let r = d.solve().unwrap();
+    assert!(r.constraint_residual < 1e-9, "{r:?}");
+    for (&t, &p) in icon.samples.iter().zip(&icon.shape) {
+        assert!((d.curve().point(t) - (p + lift)).length() < 1e-9, "t = {t}");
+    }
+    // Between samples the span follows nearly as well; outside it, the
+    // batten bends smoothly back to its pinned ends.
+    assert!((d.curve().point(0.42) - (icon_point(&icon, 0.42) + lift)).length() < 0.02);
+    assert!(d.curve().point(0.9).y < lift.y);
+    assert!((d.icon(span).unwrap().xyz - (icon.xyz + lift)).length() < 1e-9);
+
+    // An interval load pulls the whole span toward the hand, plastically.
+    let mut d = batten(1.0);
+    d.add_icon(0.0, CurveRole::Position).unwrap();
+    d.add_icon(1.0, CurveRole::Position).unwrap();
+    let load = d.add_interval(0.6, 0.8, CurveRole::Load).unwrap();
+    let grabbed = d.icon(load).unwrap().xyz;
+    let hand = grabbed + DVec3::new(0.0, 1.0, 0.0);
+    let reached = d.drag(load, hand).unwrap();
+    assert!(reached.y > 0.2, "pulled toward the hand: {reached}");
+    for t in [0.6, 0.65, 0.7, 0.75, 0.8] {
+        assert!(
+            d.curve().point(t).y > 0.1,
+            "t = {t}: {}",
+            d.curve().point(t)
+        );
+    }
+    assert!(d.curve().point(0.1).y < d.curve().point(0.7).y);
+    d.release(load).unwrap();
+    let kept = d.curve().clone();
+    d.solve().unwrap();
+    assert!(
+        max_gap(d.curve(), &kept) < 1e-9,
+        "released: the shape stays"
+    );
+    assert_eq!(d.reference(), kept.points());
+    // A value like any other.
+    let snap = d.snapshot();
+    let e = CurveDesign::from_snapshot(&snap).unwrap();
+    assert_eq!(e.snapshot(), snap);
+}
+
+/// Where an icon's span pointed before it moved: its shape, interpolated
+/// linearly between samples.
+fn icon_point(icon: &vsculpt_kernel::curve_design::CurveIcon, t: f64) -> DVec3 {
+    let k = icon.samples.iter().rposition(|&s| s <= t).unwrap();
+    let (t0, t1) = (icon.samples[k], icon.samples[k + 1]);
+    icon.shape[k].lerp(icon.shape[k + 1], (t - t0) / (t1 - t0))
+}
+
+#[test]
+fn bad_interval_icons_are_refused_and_change_nothing() {
+    let mut d = batten(1.0);
+    let snap = d.snapshot();
+    assert!(d.add_interval(0.2, 0.2, CurveRole::Position).is_err());
+    assert!(d.add_interval(0.2, 1.5, CurveRole::Load).is_err());
+    assert!(d.add_interval(f64::NAN, 0.5, CurveRole::Load).is_err());
+    assert!(d.add_interval(0.2, 0.4, CurveRole::Tangent).is_err());
+    assert_eq!(d.snapshot(), snap);
+    let span = d.add_interval(0.2, 0.4, CurveRole::Position).unwrap();
+    assert!(d.set_role(span, CurveRole::Second).is_err());
+    assert!(
+        d.set_parameter(span, 0.95).is_err(),
+        "the span would leave the curve"
+    );
+    d.set_parameter(span, 0.5).unwrap();
+    let (a, b) = d.icon(span).unwrap().span.unwrap();
+    assert!(
+        (a - 0.4).abs() < 1e-12 && (b - 0.6).abs() < 1e-12,
+        "({a}, {b})"
+    );
+}
