@@ -1,7 +1,8 @@
 // Browser measurement (not a test): the web client in headless Chromium
-// against the real server holding an 81×159 bicubic design, while a load
-// icon is dragged continuously:
+// against the real server holding an 81×159 bicubic design with a load icon:
 //
+//   idle    the editor page with nothing moving: how fast this machine
+//           draws the mesh at all (the ceiling for the two below);
 //   editor  the page drags the icon with its gizmo (mouse moves ~60 Hz);
 //   viewer  the page watches while another client (a page in its own
 //           browser context, no rendering) drags at 60 Hz over its WebSocket.
@@ -13,10 +14,19 @@
 // Worker message and pointer-event callback timed with performance.now (an
 // init script wraps them), per animation frame and per surface update. Work
 // in the tessellation worker runs on another thread and is not counted.
-// The same run measures this working tree and the client at a baseline git
-// revision (default: the last commit before the fast path), alternating.
+// The same run measures this working tree (tessellation in its Web Worker,
+// and with ?worker=0 the same fill on the main thread) and the client at a
+// baseline git revision (default: the last commit before the fast path),
+// alternating.
 //
 //   node bench/browser-fps.mjs [--before REV|none] [--seconds 5] [--rounds 2]
+//
+// Frame pacing is Chromium's own: headless on this machine it hands a page
+// anywhere from ~3 (idle) to ~30 animation frames per second depending on
+// input and network activity, not only on the page's work; so read the
+// animation rate against the idle line, and the JS cost per surface update
+// as the client's own cost. (--disable-frame-rate-limit was tried: the
+// unthrottled page floods the software GPU and the run stalls.)
 //
 // Needs the server binary (VSCULPT_SERVER_BIN, default target/release) and
 // /usr/bin/chromium (CHROMIUM). Chromium draws with SwiftShader (software
@@ -138,7 +148,7 @@ const sample = (page) =>
 function figures(a, b) {
   const s = (b.t - a.t) / 1000;
   const rafs = b.rafs - a.rafs;
-  if (b.perf) console.log(`  (client counters over ${s.toFixed(1)} s: ${b.perf.redraws - a.perf.redraws} full redraws, ${b.perf.submitted - a.perf.submitted} surfaces to the worker, ${b.perf.shown - a.perf.shown} shown${b.perf.workerFailed ? `; worker failed: ${b.perf.workerFailed}` : ''})`);
+  if (b.perf) console.log(`  (client counters over ${s.toFixed(1)} s: ${b.perf.redraws - a.perf.redraws} full redraws, ${b.perf.submitted - a.perf.submitted} surfaces submitted (worker or main thread), ${b.perf.shown - a.perf.shown} shown${b.perf.workerFailed ? `; worker failed: ${b.perf.workerFailed}` : ''})`);
   const shown = b.uploads - a.uploads;
   const js = b.js - a.js;
   const render = b.render - a.render;
@@ -214,13 +224,18 @@ async function measure(browser, variant) {
   const server = await startServer({ dataDir, dir: variant.dir, args: ['--no-demo'] });
   try {
     const design = await createDesign(server, dataDir);
-    const url = (token) => `${server.base}/?design=${design.id}&token=${token}`;
+    const url = (token) => `${server.base}/?design=${design.id}&token=${token}${variant.query || ''}`;
     const editor = await openClient(browser, url(design.tokens.editor), (p) => p.addInitScript(instrument));
     await timeRender(editor);
     const n = await editor.evaluate(() => window.vsculpt.state.icons.size);
     await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.5, v: 0.5 }, { kind: 'load' }));
     await editor.waitForFunction((k) => window.vsculpt.state.icons.size > k, n, { timeout: 20000 });
     const icon = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+    // Nothing moving: the rate at which this machine draws the 81×159 mesh at all (the ceiling).
+    await sleep(500);
+    const i0 = await sample(editor);
+    await sleep(Math.min(3, seconds) * 1000);
+    const idle = figures(i0, await sample(editor));
     const ed = await editorScenario(editor, icon);
     const errors = editor.errors;
     await editor.close();
@@ -230,14 +245,17 @@ async function measure(browser, variant) {
     errors.push(...viewerPage.errors);
     await viewerPage.close();
     if (errors.length) console.warn(`page errors (${variant.name}):`, errors);
-    return { editor: ed, viewer: vw };
+    return { idle, editor: ed, viewer: vw };
   } finally {
     await stopServer(server);
     rmSync(dataDir, { recursive: true, force: true });
   }
 }
 
-const variants = [{ name: 'this tree', dir: webDir }];
+const variants = [
+  { name: 'this tree', dir: webDir },
+  { name: 'this tree, ?worker=0', dir: webDir, query: '&worker=0' },
+];
 let baseline = null;
 if (before !== 'none') {
   baseline = clientAt(before);
@@ -261,21 +279,21 @@ try {
 }
 
 const mean = (xs) => xs.reduce((a, b) => a + b, 0) / xs.length;
-console.log(`\n${cpus().length} cores (${cpus()[0].model}); Chromium headless, SwiftShader software GL; ${seconds} s per scenario, ${rounds} rounds; means:`);
+console.log(`\n${cpus().length} cores (${cpus()[0].model}); Chromium headless, SwiftShader software GL, Chromium's own frame pacing; ${seconds} s per scenario, ${rounds} rounds; means:`);
 console.log('| client | scenario | animation fps | surface updates/s | frames received/s | main-thread JS / animation frame | of which renderer.render | client JS (all but render) / surface update | main thread in JS |');
 console.log('|---|---|---|---|---|---|---|---|---|');
 const avg = new Map();
 for (const [name, rs] of results) {
-  for (const scenario of ['editor', 'viewer']) {
+  for (const scenario of ['idle', 'editor', 'viewer']) {
     const f = Object.fromEntries(['fps', 'shown', 'received', 'jsPerFrame', 'renderPerFrame', 'clientPerSurface', 'busy'].map((k) => [k, mean(rs.map((x) => x[scenario][k]))]));
     avg.set(`${name}/${scenario}`, f);
     console.log(`| ${name} | ${scenario} | ${f.fps.toFixed(1)} | ${f.shown.toFixed(1)} | ${f.received.toFixed(1)} | ${f.jsPerFrame.toFixed(2)} ms | ${f.renderPerFrame.toFixed(2)} ms | ${f.clientPerSurface.toFixed(2)} ms | ${(100 * f.busy).toFixed(0)} % |`);
   }
 }
-if (baseline) {
+for (const name of baseline ? ['this tree', 'this tree, ?worker=0'] : []) {
   for (const scenario of ['editor', 'viewer']) {
     const o = avg.get(`baseline ${before}/${scenario}`);
-    const n = avg.get(`this tree/${scenario}`);
-    console.log(`${scenario}: animation fps ×${(n.fps / o.fps).toFixed(2)}, surface updates/s ×${(n.shown / o.shown).toFixed(2)}, client JS per surface update ÷${(o.clientPerSurface / n.clientPerSurface).toFixed(2)}, main-thread JS per animation frame ÷${(o.jsPerFrame / n.jsPerFrame).toFixed(2)}`);
+    const n = avg.get(`${name}/${scenario}`);
+    console.log(`${name} against the baseline, ${scenario}: animation fps ×${(n.fps / o.fps).toFixed(2)}, surface updates/s ×${(n.shown / o.shown).toFixed(2)}, client JS per surface update ÷${(o.clientPerSurface / n.clientPerSurface).toFixed(2)}, main-thread JS per animation frame ÷${(o.jsPerFrame / n.jsPerFrame).toFixed(2)}`);
   }
 }

@@ -211,7 +211,7 @@ function showNewestFrame() {
     return;
   }
   perf.submitted++;
-  if (!tessWorker.submit(surfaceSeq, s, state.tess)) {
+  if (!tessWorker || !tessWorker.submit(surfaceSeq, s, state.tess)) {
     state.tess.fill(s);
     surfaceShown(surfaceSeq, state.tess);
   }
@@ -227,7 +227,8 @@ function surfaceShown(seq, tess) {
   icons.move([...state.icons.values()].map((i) => ({ id: i.id, xyz: i.xyz })));
 }
 
-const tessWorker = new TessellationWorker({
+// `?worker=0` keeps the same fill on the main thread (compared in bench/browser-fps.mjs).
+const tessWorker = params.get('worker') === '0' ? null : new TessellationWorker({
   onFilled: surfaceShown,
   onFailure: (reason) => {
     perf.workerFailed = reason;

@@ -132,6 +132,7 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   const perf = await editor.evaluate(() => window.vsculpt.perf);
   assert.equal(perf.workerFailed, null);
   assert.ok(perf.shown > 0 && perf.shown <= perf.submitted, `worker frames shown: ${JSON.stringify(perf)}`);
+  assert.ok(editor.requests.some((u) => u.endsWith('/src/tess-worker.js')), 'the worker script was loaded');
   await editor.screenshot({ path: join(artifacts, 'editor-dragged.png') });
 
   // The viewer saw it live: same revision and control points.
@@ -293,6 +294,29 @@ test('after a gizmo drag the orbit controls hold no stale rotation: moving the m
   const orbited = await camera();
   assert.ok(moved(orbited, start), `an ordinary drag still orbits: ${start} → ${orbited}`);
   assert.equal(await page.evaluate(() => window.__orbitStarts), 1);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('?worker=0: geometry frames are tessellated on the main thread and shown', async () => {
+  const page = await open(`${links.editor}&worker=0`);
+  const before = await page.evaluate(() => window.vsculpt.state.icons.size);
+  await page.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.6, v: 0.4 }, { kind: 'load' }));
+  await page.waitForFunction((n) => window.vsculpt.state.icons.size > n, before, { timeout: 10000 });
+  const icon = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  const z0 = await page.evaluate(() => window.vsculpt.view.geometry.boundingBox.max.z);
+  await page.evaluate((id) => {
+    const { send, state } = window.vsculpt;
+    const xyz = state.icons.get(id).xyz;
+    send({ type: 'drag_start', icon: id });
+    for (let k = 1; k <= 5; k++) send({ type: 'drag', icon: id, xyz: [xyz[0], xyz[1], xyz[2] + 0.2 * k] });
+    send({ type: 'drag_end', icon: id });
+  }, icon);
+  await page.waitForFunction((z) => window.vsculpt.perf.shown > 0 && window.vsculpt.view.geometry.boundingBox.max.z > z + 1e-3, z0, { timeout: 10000 });
+  const perf = await page.evaluate(() => window.vsculpt.perf);
+  assert.equal(perf.workerFailed, null);
+  assert.ok(perf.shown <= perf.submitted, JSON.stringify(perf));
+  assert.ok(!page.requests.some((u) => u.endsWith('/src/tess-worker.js')), 'no worker was started');
   assert.deepEqual(page.errors, []);
   await page.close();
 });
