@@ -4,7 +4,10 @@
 //!
 //! * `drag_frame` — one drag frame: solve + re-place every icon;
 //! * `constraint_change` — an icon switched (sleeping ↔ passive) and solved
-//!   (the switched icon's column is kept while it sleeps);
+//!   (the switched icon's column is kept while it sleeps; it holds the
+//!   surface where it is, so the solver proves the shape unchanged);
+//! * `constraint_change_moving` — the same switch woken with a lifted
+//!   target, so both directions move the shape (a full, refined solve);
 //! * `add_icon` — a position icon added at a new place and solved (its
 //!   column is a new sparse solve), then removed outside the timing;
 //! * `refactor` — a material change: numeric refactorisation + solve;
@@ -131,6 +134,22 @@ fn benches(c: &mut Criterion) {
                     IconState::Sleeping
                 };
                 sc.design.set_state(sc.switch, state).unwrap();
+                black_box(sc.design.solve().unwrap())
+            })
+        });
+        // The same switch, but woken with a lifted target: the shape moves
+        // both ways (woken: pulled up; asleep: it relaxes), a full solve.
+        let lift = DVec3::Z * 0.01 * (nu.min(nv) as f64 / 10.0);
+        group.bench_function(BenchmarkId::new("constraint_change_moving", &id), |b| {
+            b.iter(|| {
+                k += 1;
+                if k.is_multiple_of(2) {
+                    sc.design.set_state(sc.switch, IconState::Passive).unwrap();
+                    let at = sc.design.icon(sc.switch).unwrap().target;
+                    sc.design.set_target(sc.switch, at + lift).unwrap();
+                } else {
+                    sc.design.set_state(sc.switch, IconState::Sleeping).unwrap();
+                }
                 black_box(sc.design.solve().unwrap())
             })
         });

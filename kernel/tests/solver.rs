@@ -452,3 +452,101 @@ fn a_constraint_switched_off_and_on_reuses_its_column() {
     );
     assert!(after >= before + 4, "the refactor solved the columns again");
 }
+
+#[test]
+fn a_change_the_shape_already_satisfies_costs_no_solve_and_others_are_solved() {
+    let s = plate(14);
+    let m = material(0.1, 1.0, 1e-3);
+    let base = vec![
+        position(&s, 1, 0.1, 0.1, s.point(0.1, 0.1)),
+        position(&s, 2, 0.9, 0.9, s.point(0.9, 0.9)),
+        position(&s, 3, 0.5, 0.5, s.point(0.5, 0.5) + DVec3::Z * 0.2),
+    ];
+    let mut solver = solver_for(&s, &m);
+    let mut out = vec![DVec3::ZERO; s.points().len()];
+    solver
+        .set_problem(Problem {
+            groups: base.clone(),
+        })
+        .unwrap();
+    solver.solve(s.points(), &mut out).unwrap();
+    let solved = {
+        let mut t = s.clone();
+        t.set_points(out.clone()).unwrap();
+        t
+    };
+    let fresh_solve = |groups: Vec<Group>| {
+        let mut f = solver_for(&s, &m);
+        f.set_problem(Problem { groups }).unwrap();
+        let mut o = vec![DVec3::ZERO; s.points().len()];
+        f.solve(s.points(), &mut o).unwrap();
+        o
+    };
+    let gap = |a: &[DVec3], b: &[DVec3]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (*p - *q).length())
+            .fold(0.0, f64::max)
+    };
+    // A pin where the solved surface already is: the shape is still the
+    // answer; only the pin's column is solved, no full solve follows.
+    let mut with_pin = base.clone();
+    with_pin.push(position(&s, 4, 0.3, 0.7, solved.point(0.3, 0.7)));
+    solver
+        .set_problem(Problem {
+            groups: with_pin.clone(),
+        })
+        .unwrap();
+    let before = solver.columns_solved();
+    let report = solver.solve(s.points(), &mut out).unwrap();
+    assert_eq!(solver.columns_solved(), before, "no sparse solve");
+    assert!(report.constraint_residual < 1e-9, "{report:?}");
+    assert!(gap(&out, &fresh_solve(with_pin.clone())) < 1e-10);
+    // Put to sleep again: it pulled with λ ≈ 0, so nothing to solve either.
+    solver
+        .set_problem(Problem {
+            groups: base.clone(),
+        })
+        .unwrap();
+    let before = solver.columns_solved();
+    solver.solve(s.points(), &mut out).unwrap();
+    assert_eq!(solver.columns_solved(), before);
+    assert!(gap(&out, &fresh_solve(base.clone())) < 1e-10);
+    // A pin that asks for a new place is solved, and holds.
+    let mut moved = base.clone();
+    moved.push(position(
+        &s,
+        4,
+        0.3,
+        0.7,
+        solved.point(0.3, 0.7) + DVec3::Z * 0.05,
+    ));
+    solver
+        .set_problem(Problem {
+            groups: moved.clone(),
+        })
+        .unwrap();
+    let report = solver.solve(s.points(), &mut out).unwrap();
+    assert!(report.constraint_residual < 1e-9);
+    assert!(gap(&out, &fresh_solve(moved)) < 1e-10);
+    // Dropping the lifted pin, which held the shape up, is solved too: the
+    // plate comes down.
+    let mut without = base[..2].to_vec();
+    without.push(position(
+        &s,
+        4,
+        0.3,
+        0.7,
+        solved.point(0.3, 0.7) + DVec3::Z * 0.05,
+    ));
+    solver
+        .set_problem(Problem {
+            groups: without.clone(),
+        })
+        .unwrap();
+    solver.solve(s.points(), &mut out).unwrap();
+    assert!(gap(&out, &fresh_solve(without)) < 1e-10);
+    let mut down = s.clone();
+    down.set_points(out.clone()).unwrap();
+    assert!(down.point(0.5, 0.5).z < solved.point(0.5, 0.5).z - 0.05);
+}

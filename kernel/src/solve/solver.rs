@@ -29,7 +29,7 @@ use faer::Mat;
 use glam::DVec3;
 
 use super::factor::Factor;
-use super::{Equation, GroupKey, Problem, ScalarRow, SolveError};
+use super::{Equation, Group, GroupKey, Problem, ScalarRow, SolveError};
 use crate::energy::Stiffness;
 
 /// What a solve achieved.
@@ -130,6 +130,16 @@ struct Base {
     start: Vec<DVec3>,
 }
 
+/// The last full solve, for [`Solver::still_optimal`].
+#[derive(Debug)]
+struct LastSolve {
+    reference: Vec<DVec3>,
+    out: Vec<DVec3>,
+    problem: Problem,
+    /// Per group: Σ |λ_e| · ‖K⁻¹ a_e‖∞, how far its multipliers move the shape.
+    pull: HashMap<GroupKey, f64>,
+}
+
 /// Solves the problem icons hand it, fast enough for drag frames.
 #[derive(Debug)]
 pub struct Solver {
@@ -151,6 +161,7 @@ pub struct Solver {
     rank_deficiency: usize,
     base: Option<Base>,
     response: Option<Response>,
+    last: Option<LastSolve>,
 }
 
 impl Solver {
@@ -170,6 +181,7 @@ impl Solver {
             rank_deficiency: 0,
             base: None,
             response: None,
+            last: None,
         })
     }
 
@@ -205,6 +217,7 @@ impl Solver {
         self.rows.clear();
         self.z.clear();
         self.retired.clear();
+        self.last = None;
         if let Err(e) = self.set_problem(problem.clone()) {
             // Only reachable if the problem was valid before and S fails now:
             // go back to the old stiffness so nothing changes.
@@ -390,8 +403,16 @@ impl Solver {
         out: &mut [DVec3],
     ) -> Result<SolveReport, SolveError> {
         self.check_io(reference, out)?;
+        if let Some(start) = self.still_optimal(reference) {
+            out.copy_from_slice(&start);
+            self.base = Some(Base {
+                reference: reference.to_vec(),
+                start,
+            });
+            return Ok(self.report(out, None, DVec3::ZERO));
+        }
         let cx = self.c_times(reference);
-        let delta = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
+        let (delta, lambda) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
         for ((o, r), d) in out.iter_mut().zip(reference).zip(&delta) {
             *o = *r + *d;
         }
@@ -399,7 +420,90 @@ impl Solver {
             reference: reference.to_vec(),
             start: out.to_vec(),
         });
+        self.last = Some(self.last_solve(reference, out, &lambda));
         Ok(self.report(out, None, DVec3::ZERO))
+    }
+
+    /// What [`Self::still_optimal`] needs of a full solve: its problem, its
+    /// answer, and per group the size of the pull its multipliers exert.
+    fn last_solve(&self, reference: &[DVec3], out: &[DVec3], lambda: &[f64]) -> LastSolve {
+        let norms: Vec<f64> = self
+            .z
+            .iter()
+            .map(|c| c.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+            .collect();
+        let mut pull: HashMap<GroupKey, f64> = HashMap::new();
+        for (eq, lam) in self.eqs.iter().zip(lambda) {
+            let key = self.problem.groups[eq.group].key;
+            let size: f64 = eq.terms.iter().map(|t| t.coef.abs() * norms[t.col]).sum();
+            *pull.entry(key).or_default() += lam.abs() * size;
+        }
+        LastSolve {
+            reference: reference.to_vec(),
+            out: out.to_vec(),
+            problem: self.problem.clone(),
+            pull,
+        }
+    }
+
+    /// The last full solution, when it is still the exact answer to the
+    /// current problem — the optimality (KKT) conditions hold unchanged:
+    /// same reference, same loads; every group that changed or left pulled
+    /// with multipliers whose effect on the shape is below 1e-13 of its size
+    /// (so λ = 0 for it is as exact as the solve); every new or changed
+    /// equation already satisfied (to 1e-12). Adding an icon where the
+    /// surface is, or waking or putting to sleep one that holds it where it
+    /// is, then costs no solve at all.
+    fn still_optimal(&self, reference: &[DVec3]) -> Option<Vec<DVec3>> {
+        let last = self.last.as_ref()?;
+        if last.reference != reference {
+            return None;
+        }
+        let extent = last
+            .out
+            .iter()
+            .fold(1.0f64, |m, p| m.max(p.abs().max_element()));
+        fn find(p: &Problem, key: GroupKey) -> Option<&Group> {
+            p.groups.iter().find(|g| g.key == key)
+        }
+        let no_force = |g: &Group| g.loads.iter().all(|l| l.force == DVec3::ZERO);
+        for old in &last.problem.groups {
+            if find(&self.problem, old.key) == Some(old) {
+                continue;
+            }
+            let pull = last.pull.get(&old.key).copied().unwrap_or(0.0);
+            if !no_force(old) || pull > 1e-13 * extent {
+                return None;
+            }
+        }
+        for new in &self.problem.groups {
+            if find(&last.problem, new.key) == Some(new) {
+                continue;
+            }
+            if !no_force(new) {
+                return None;
+            }
+            for eq in &new.equations {
+                let (error, scale) = match eq {
+                    Equation::Vector { row, target } => (
+                        (row.apply(&last.out) - *target).abs().max_element(),
+                        target.abs().max_element(),
+                    ),
+                    Equation::Projected {
+                        row,
+                        direction,
+                        target,
+                    } => (
+                        (row.apply(&last.out).dot(*direction) - *target).abs(),
+                        target.abs(),
+                    ),
+                };
+                if error > 1e-12 * scale.max(1.0) {
+                    return None;
+                }
+            }
+        }
+        Some(last.out.clone())
     }
 
     /// A drag frame: group `key`'s drag input set to `t`, everything else as
@@ -436,7 +540,7 @@ impl Solver {
             .ok_or(SolveError::UnknownGroup(key))?;
         if !cached {
             let cx = self.c_times(reference);
-            let delta = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
+            let (delta, _) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
             let start = reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect();
             self.base = Some(Base {
                 reference: reference.to_vec(),
@@ -447,7 +551,7 @@ impl Solver {
             let zero = vec![0.0; self.eqs.len()];
             let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
             let mut solved = self
-                .refined_deltas(&inputs, &[&zero, &zero, &zero])
+                .refined_deltas(&inputs, &[&zero, &zero, &zero], None)
                 .into_iter();
             let mut next = || solved.next().unwrap_or_default();
             let r = [next(), next(), next()];
@@ -605,10 +709,14 @@ impl Solver {
 
     /// δ with one step of iterative refinement on the optimality conditions
     /// K δ + Cᵀλ = b, C δ = d − C P_ref.
-    fn refined_delta(&mut self, inputs: &Inputs, cx: &[f64]) -> Vec<DVec3> {
-        self.refined_deltas(std::slice::from_ref(inputs), &[cx])
+    /// Also returns the Lagrange multipliers λ (one per scalar equation).
+    fn refined_delta(&mut self, inputs: &Inputs, cx: &[f64]) -> (Vec<DVec3>, Vec<f64>) {
+        let mut lambdas = Vec::new();
+        let delta = self
+            .refined_deltas(std::slice::from_ref(inputs), &[cx], Some(&mut lambdas))
             .pop()
-            .unwrap_or_default()
+            .unwrap_or_default();
+        (delta, lambdas.pop().unwrap_or_default())
     }
 
     /// [`Self::refined_delta`] for several inputs at once, their refinement
@@ -626,12 +734,19 @@ impl Solver {
     ///   through S⁺ (no sparse solve). Errors along the directions S⁺
     ///   dropped (contradictory equations) stay: they are the least-squares
     ///   answer's own residual, which no refinement changes.
-    fn refined_deltas(&mut self, inputs: &[Inputs], cxs: &[&[f64]]) -> Vec<Vec<DVec3>> {
+    fn refined_deltas(
+        &mut self,
+        inputs: &[Inputs],
+        cxs: &[&[f64]],
+        mut multipliers: Option<&mut Vec<Vec<f64>>>,
+    ) -> Vec<Vec<DVec3>> {
         let n = self.dim();
         let mut deltas = Vec::with_capacity(inputs.len());
+        let mut lambdas: Vec<Vec<f64>> = Vec::with_capacity(inputs.len());
         let mut pending: Vec<Pending> = Vec::new();
         for (inputs, cx) in inputs.iter().zip(cxs) {
             let (lambda, w) = self.lambda_weights(inputs, cx);
+            lambdas.push(lambda.clone());
             let mut delta = vec![DVec3::ZERO; n];
             self.add_columns(&mut delta, &w);
             if self.eqs.is_empty() && self.loads.is_empty() {
@@ -742,6 +857,7 @@ impl Solver {
             let mut w = vec![DVec3::ZERO; self.rows.len()];
             for (e, eq) in self.eqs.iter().enumerate() {
                 let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
+                lambdas[p][e] += lam;
                 for t in &eq.terms {
                     w[t.col][t.k] -= t.coef * lam;
                 }
@@ -750,6 +866,9 @@ impl Solver {
                 *d += *c;
             }
             self.add_columns(delta, &w);
+        }
+        if let Some(out) = multipliers.as_mut() {
+            **out = lambdas;
         }
         deltas
     }
