@@ -550,3 +550,114 @@ fn a_change_the_shape_already_satisfies_costs_no_solve_and_others_are_solved() {
     down.set_points(out.clone()).unwrap();
     assert!(down.point(0.5, 0.5).z < solved.point(0.5, 0.5).z - 0.05);
 }
+
+/// The KKT system [K Cᵀ; C 0] [δ; λ] = [b; d − C P_ref] of one coordinate,
+/// solved densely (LU with partial pivoting): an answer independent of the
+/// solver's Schur complement, cached columns, refinement and shortcuts.
+fn dense_kkt(k: &Stiffness, rows: &[(Vec<usize>, Vec<f64>, f64)], b: &[f64]) -> Vec<f64> {
+    use faer::linalg::solvers::Solve;
+    let n = k.dim();
+    let m = rows.len();
+    let mut a = faer::Mat::<f64>::zeros(n + m, n + m);
+    let lower = k.lower();
+    let (cp, ri, v) = (
+        lower.symbolic().col_ptr(),
+        lower.symbolic().row_idx(),
+        lower.val(),
+    );
+    for c in 0..n {
+        for e in cp[c]..cp[c + 1] {
+            a[(ri[e], c)] = v[e];
+            a[(c, ri[e])] = v[e];
+        }
+    }
+    let mut rhs = faer::Mat::<f64>::zeros(n + m, 1);
+    for (i, x) in b.iter().enumerate() {
+        rhs[(i, 0)] = *x;
+    }
+    for (e, (idx, w, target)) in rows.iter().enumerate() {
+        for (&i, &wi) in idx.iter().zip(w) {
+            a[(n + e, i)] = wi;
+            a[(i, n + e)] = wi;
+        }
+        rhs[(n + e, 0)] = *target;
+    }
+    let x = a.partial_piv_lu().solve(&rhs);
+    (0..n).map(|i| x[(i, 0)]).collect()
+}
+
+#[test]
+fn solves_agree_with_a_dense_kkt_solve_in_every_coordinate() {
+    let s = plate(12);
+    let m = material(0.1, 1.0, 1e-3);
+    let k = Stiffness::surface(s.u_knots(), s.v_knots(), &m).unwrap();
+    let mut solver = solver_for(&s, &m);
+    // Pins, one lifted in z only (x and y barely take part), a derivative
+    // constraint, and a load pulling in z.
+    let mut groups: Vec<Group> = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(u, v))| position(&s, i as u64 + 1, u, v, s.point(u, v)))
+        .collect();
+    groups.push(position(
+        &s,
+        5,
+        0.5,
+        0.5,
+        s.point(0.5, 0.5) + DVec3::Z * 0.3,
+    ));
+    groups.push(Group {
+        key: 6,
+        equations: vec![Equation::Vector {
+            row: surface_row(&s, 0.25, 0.7, 1, 0),
+            target: s.derivs(0.25, 0.7).u + DVec3::new(0.1, 0.0, 0.4),
+        }],
+        loads: vec![],
+    });
+    let pull = DVec3::new(0.0, 0.0, -2.0);
+    groups.push(Group {
+        key: 7,
+        equations: vec![],
+        loads: vec![Load {
+            row: surface_row(&s, 0.7, 0.3, 0, 0),
+            force: pull,
+            drag_gain: 1.0,
+        }],
+    });
+    solver
+        .set_problem(Problem {
+            groups: groups.clone(),
+        })
+        .unwrap();
+    let mut out = vec![DVec3::ZERO; s.points().len()];
+    solver.solve(s.points(), &mut out).unwrap();
+    let load_row = surface_row(&s, 0.7, 0.3, 0, 0);
+    for c in 0..3 {
+        // Constraint rows: row · (P_ref + δ) = target ⇒ row · δ = target − row · P_ref.
+        let rows: Vec<(Vec<usize>, Vec<f64>, f64)> = groups
+            .iter()
+            .flat_map(|g| g.equations.iter())
+            .map(|eq| match eq {
+                Equation::Vector { row, target } => (
+                    row.indices.clone(),
+                    row.weights.clone(),
+                    target[c] - row.apply(s.points())[c],
+                ),
+                Equation::Projected { .. } => unreachable!(),
+            })
+            .collect();
+        // Minimising δᵀKδ − 2δ·b: b = row ⊗ force.
+        let mut b = vec![0.0; s.points().len()];
+        for (&i, &w) in load_row.indices.iter().zip(&load_row.weights) {
+            b[i] += w * pull[c];
+        }
+        let delta = dense_kkt(&k, &rows, &b);
+        for (i, d) in delta.iter().enumerate() {
+            let got = out[i][c] - s.points()[i][c];
+            assert!(
+                (got - d).abs() < 1e-9,
+                "coordinate {c}, point {i}: {got} vs {d}"
+            );
+        }
+    }
+}

@@ -130,6 +130,29 @@ struct Base {
     start: Vec<DVec3>,
 }
 
+/// The largest coordinate magnitude of a shape (at least 1).
+fn max_extent(points: &[DVec3]) -> f64 {
+    points
+        .iter()
+        .fold(1.0f64, |m, p| m.max(p.abs().max_element()))
+}
+
+/// One column z = K⁻¹a of Z, shared between problems, and ‖z‖∞.
+#[derive(Clone, Debug)]
+struct Column {
+    values: Arc<[f64]>,
+    norm: f64,
+}
+
+impl Column {
+    fn new(values: &[f64]) -> Self {
+        Self {
+            norm: values.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+            values: values.into(),
+        }
+    }
+}
+
 /// The last full solve, for [`Solver::still_optimal`].
 #[derive(Debug)]
 struct LastSolve {
@@ -149,11 +172,11 @@ pub struct Solver {
     /// Z = K⁻¹[a_c], one column per row. Columns are shared, not copied,
     /// when a new problem keeps a row: a constraint change costs only the
     /// new rows' solves.
-    z: Vec<Arc<[f64]>>,
+    z: Vec<Column>,
     /// Columns of rows that left the problem, kept for when they come back
     /// (an icon switched off and on again, an undo): oldest first, at most
     /// [`RETIRED_BYTES`] of them. Valid until the stiffness changes.
-    retired: VecDeque<(RowKey, Arc<[f64]>)>,
+    retired: VecDeque<(RowKey, Column)>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -303,17 +326,17 @@ impl Solver {
             .enumerate()
             .map(|(c, r)| (row_key(r), c))
             .collect();
-        let mut z: Vec<Option<Arc<[f64]>>> = rows
+        let mut z: Vec<Option<Column>> = rows
             .iter()
             .map(|r| {
                 let key = row_key(r);
                 match old.get(&key) {
-                    Some(&oc) => Some(Arc::clone(&self.z[oc])),
+                    Some(&oc) => Some(self.z[oc].clone()),
                     None => self
                         .retired
                         .iter()
                         .find(|(k, _)| *k == key)
-                        .map(|(_, col)| Arc::clone(col)),
+                        .map(|(_, col)| col.clone()),
                 }
             })
             .collect();
@@ -327,17 +350,17 @@ impl Solver {
             }
             self.factor.solve_in_place(rhs.as_mut());
             for (m, &c) in missing.iter().enumerate() {
-                z[c] = Some(rhs.col_as_slice(m).into());
+                z[c] = Some(Column::new(rhs.col_as_slice(m)));
             }
         }
-        let z: Vec<Arc<[f64]>> = z.into_iter().flatten().collect();
+        let z: Vec<Column> = z.into_iter().flatten().collect();
         debug_assert_eq!(z.len(), rows.len());
         // G = Aᵀ Z.
         let nc = rows.len();
         let mut g = vec![0.0; nc * nc];
         for (a, row) in rows.iter().enumerate() {
             for b in 0..nc {
-                let zb = &z[b];
+                let zb = &z[b].values;
                 g[a * nc + b] = row
                     .indices
                     .iter()
@@ -379,13 +402,14 @@ impl Solver {
     /// Keeps the columns of the current rows that `rows` drops for later,
     /// forgets retired columns `rows` uses again, and evicts the oldest past
     /// [`RETIRED_BYTES`].
-    fn retire(&mut self, z: &[Arc<[f64]>]) {
-        let kept: std::collections::HashSet<*const f64> = z.iter().map(|c| c.as_ptr()).collect();
+    fn retire(&mut self, z: &[Column]) {
+        let kept: std::collections::HashSet<*const f64> =
+            z.iter().map(|c| c.values.as_ptr()).collect();
         self.retired
-            .retain(|(_, col)| !kept.contains(&col.as_ptr()));
+            .retain(|(_, col)| !kept.contains(&col.values.as_ptr()));
         for (r, col) in self.rows.iter().zip(&self.z) {
-            if !kept.contains(&col.as_ptr()) {
-                self.retired.push_back((row_key(r), Arc::clone(col)));
+            if !kept.contains(&col.values.as_ptr()) {
+                self.retired.push_back((row_key(r), col.clone()));
             }
         }
         let per_column = (self.dim() * std::mem::size_of::<f64>()).max(1);
@@ -412,7 +436,8 @@ impl Solver {
             return Ok(self.report(out, None, DVec3::ZERO));
         }
         let cx = self.c_times(reference);
-        let (delta, lambda) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
+        let extent = max_extent(reference);
+        let (delta, lambda) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx, extent);
         for ((o, r), d) in out.iter_mut().zip(reference).zip(&delta) {
             *o = *r + *d;
         }
@@ -427,11 +452,7 @@ impl Solver {
     /// What [`Self::still_optimal`] needs of a full solve: its problem, its
     /// answer, and per group the size of the pull its multipliers exert.
     fn last_solve(&self, reference: &[DVec3], out: &[DVec3], lambda: &[f64]) -> LastSolve {
-        let norms: Vec<f64> = self
-            .z
-            .iter()
-            .map(|c| c.iter().fold(0.0f64, |m, x| m.max(x.abs())))
-            .collect();
+        let norms: Vec<f64> = self.z.iter().map(|c| c.norm).collect();
         let mut pull: HashMap<GroupKey, f64> = HashMap::new();
         for (eq, lam) in self.eqs.iter().zip(lambda) {
             let key = self.problem.groups[eq.group].key;
@@ -540,7 +561,8 @@ impl Solver {
             .ok_or(SolveError::UnknownGroup(key))?;
         if !cached {
             let cx = self.c_times(reference);
-            let (delta, _) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx);
+            let extent = max_extent(reference);
+            let (delta, _) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx, extent);
             let start = reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect();
             self.base = Some(Base {
                 reference: reference.to_vec(),
@@ -551,7 +573,8 @@ impl Solver {
             let zero = vec![0.0; self.eqs.len()];
             let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
             let mut solved = self
-                .refined_deltas(&inputs, &[&zero, &zero, &zero], None)
+                // A response is δ per unit of drag input: its scale is 1.
+                .refined_deltas(&inputs, &[&zero, &zero, &zero], &[1.0; 3], None)
                 .into_iter();
             let mut next = || solved.next().unwrap_or_default();
             let r = [next(), next(), next()];
@@ -701,7 +724,7 @@ impl Solver {
             if *wc == DVec3::ZERO {
                 continue;
             }
-            for (d, &zi) in delta.iter_mut().zip(self.z[c].iter()) {
+            for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
                 *d += *wc * zi;
             }
         }
@@ -710,10 +733,21 @@ impl Solver {
     /// δ with one step of iterative refinement on the optimality conditions
     /// K δ + Cᵀλ = b, C δ = d − C P_ref.
     /// Also returns the Lagrange multipliers λ (one per scalar equation).
-    fn refined_delta(&mut self, inputs: &Inputs, cx: &[f64]) -> (Vec<DVec3>, Vec<f64>) {
+    /// `extent` is the size of the shape δ displaces (max |P_ref|).
+    fn refined_delta(
+        &mut self,
+        inputs: &Inputs,
+        cx: &[f64],
+        extent: f64,
+    ) -> (Vec<DVec3>, Vec<f64>) {
         let mut lambdas = Vec::new();
         let delta = self
-            .refined_deltas(std::slice::from_ref(inputs), &[cx], Some(&mut lambdas))
+            .refined_deltas(
+                std::slice::from_ref(inputs),
+                &[cx],
+                &[extent],
+                Some(&mut lambdas),
+            )
             .pop()
             .unwrap_or_default();
         (delta, lambdas.pop().unwrap_or_default())
@@ -729,7 +763,10 @@ impl Solver {
     ///   computed from (1e-13 of them); this recovers the digits lost to
     ///   cancellation in δ0 − Yλ when the mass term is small (K is then
     ///   ill-conditioned in its affine modes). Only coordinates that need it
-    ///   enter the solve;
+    ///   enter the solve: a coordinate whose weights barely reach the
+    ///   columns (Σ_c |w_c,k| ‖z_c‖∞ ≤ 1e-9 of `extent`) cannot carry an
+    ///   error above 1e-12 of the shape's size even at u·cond(K) = 1e-3,
+    ///   and is left as it is;
     /// * a constraint error above 1e-12 of the targets is projected out
     ///   through S⁺ (no sparse solve). Errors along the directions S⁺
     ///   dropped (contradictory equations) stay: they are the least-squares
@@ -738,14 +775,20 @@ impl Solver {
         &mut self,
         inputs: &[Inputs],
         cxs: &[&[f64]],
+        extents: &[f64],
         mut multipliers: Option<&mut Vec<Vec<f64>>>,
     ) -> Vec<Vec<DVec3>> {
         let n = self.dim();
         let mut deltas = Vec::with_capacity(inputs.len());
         let mut lambdas: Vec<Vec<f64>> = Vec::with_capacity(inputs.len());
         let mut pending: Vec<Pending> = Vec::new();
-        for (inputs, cx) in inputs.iter().zip(cxs) {
+        for ((inputs, cx), &extent) in inputs.iter().zip(cxs).zip(extents) {
             let (lambda, w) = self.lambda_weights(inputs, cx);
+            // How strongly each coordinate's δ = Σ w_c z_c leans on Z.
+            let reach = w
+                .iter()
+                .zip(&self.z)
+                .fold(DVec3::ZERO, |m, (wc, col)| m + wc.abs() * col.norm);
             lambdas.push(lambda.clone());
             let mut delta = vec![DVec3::ZERO; n];
             self.add_columns(&mut delta, &w);
@@ -780,7 +823,7 @@ impl Solver {
             }
             let worst = rho.iter().fold(DVec3::ZERO, |m, r| m.max(r.abs()));
             let refine: [Option<Vec<f64>>; 3] = std::array::from_fn(|k| {
-                (worst[k] > 1e-13 * computed[k].max(1e-300))
+                (worst[k] > 1e-13 * computed[k].max(1e-300) && reach[k] > 1e-9 * extent)
                     .then(|| rho.iter().map(|r| r[k]).collect())
             });
             let applied: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&delta)).collect();
