@@ -9,12 +9,18 @@
 //!
 //! Every load and every equation is built from a [`ScalarRow`] a_c, so all
 //! of K⁻¹b and Y are combinations of the columns Z = K⁻¹[a_c], computed in
-//! one batched solve when the problem changes and cached by row, so adding
-//! one icon solves only for its new rows. S is assembled from the small Gram
-//! matrix G = Aᵀ Z. S⁺ is a pseudo-inverse by symmetric eigendecomposition:
-//! redundant equations (eigenvalues below 1e-11 of the largest) are dropped
-//! and contradictory ones get the least-squares compromise in the S-norm;
-//! the residual |C P − d| is reported, never NaN.
+//! one batched solve when the problem changes and cached by row (and kept a
+//! while after their row leaves), so adding one icon solves only for its new
+//! rows. S is assembled from the small Gram matrix G = Aᵀ Z. S⁻¹ is a
+//! Cholesky inverse when S is provably well conditioned, else a
+//! pseudo-inverse by symmetric eigendecomposition: redundant equations
+//! (eigenvalues below 1e-12 of the largest) are dropped and contradictory
+//! ones get the least-squares compromise in the S-norm; the residual
+//! |C P − d| is reported, never NaN.
+//!
+//! A full solve is refined once (see `refined_deltas`), and skipped when the
+//! last solution still meets the new problem's optimality conditions (see
+//! `still_optimal`).
 //!
 //! A drag frame moves one group's input t (targets and forces, see
 //! [`super::problem`]); δ is affine in t, δ(t) = δ_base + R t, so the first
