@@ -3,6 +3,8 @@
 //! point load (paper 003, Table 2). Measures:
 //!
 //! * `drag_frame` — one drag frame: solve + re-place every icon;
+//! * `first_frame` — the first frame of a new drag (a grab after a release):
+//!   the drag's base solve and response columns, then the frame;
 //! * `constraint_change` — an icon switched (sleeping ↔ passive) and solved
 //!   (the switched icon's column is kept while it sleeps; it holds the
 //!   surface where it is, so the solver proves the shape unchanged);
@@ -125,6 +127,24 @@ fn benches(c: &mut Criterion) {
             })
         });
         sc.design.release(sc.load).unwrap();
+        // A grab: the first frame of a new drag (after a release baked the
+        // shape) computes the drag's base and its response columns.
+        group.bench_function(BenchmarkId::new("first_frame", &id), |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for _ in 0..iters {
+                    k += 1;
+                    let at = sc.design.icon(sc.load).unwrap().xyz;
+                    let lift = DVec3::Z * 0.001 * (1 + k % 3) as f64;
+                    let start = std::time::Instant::now();
+                    sc.design.drag_start(sc.load).unwrap();
+                    black_box(sc.design.drag(sc.load, at + lift).unwrap());
+                    spent += start.elapsed();
+                    sc.design.release(sc.load).unwrap();
+                }
+                spent
+            })
+        });
         group.bench_function(BenchmarkId::new("constraint_change", &id), |b| {
             b.iter(|| {
                 k += 1;

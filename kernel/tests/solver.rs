@@ -661,3 +661,79 @@ fn solves_agree_with_a_dense_kkt_solve_in_every_coordinate() {
         }
     }
 }
+
+#[test]
+fn a_grab_at_rest_solves_nothing_and_matches_a_fresh_solver() {
+    let s = plate(14);
+    let m = material(0.1, 1.0, 1e-3);
+    let load_row = surface_row(&s, 0.6, 0.4, 0, 0);
+    // Pins where the reference already is and a load that does not pull
+    // yet: the reference itself is the answer (the state after a bake).
+    let problem = |force: DVec3, lift: f64| Problem {
+        groups: vec![
+            position(&s, 1, 0.1, 0.1, s.point(0.1, 0.1)),
+            position(&s, 2, 0.9, 0.2, s.point(0.9, 0.2) + DVec3::Z * lift),
+            Group {
+                key: 3,
+                equations: vec![],
+                loads: vec![Load {
+                    row: load_row.clone(),
+                    force,
+                    drag_gain: 2.0,
+                }],
+            },
+        ],
+    };
+    let n = s.points().len();
+    let mut solver = solver_for(&s, &m);
+    solver.set_problem(problem(DVec3::ZERO, 0.0)).unwrap();
+    let mut out = vec![DVec3::ZERO; n];
+    let after_columns = solver.columns_solved();
+    solver.solve(s.points(), &mut out).unwrap();
+    assert_eq!(out, s.points(), "at rest: δ = 0 exactly");
+    assert_eq!(
+        solver.columns_solved(),
+        after_columns,
+        "and no sparse solve"
+    );
+    // The first drag frame computes the response (one batched solve) …
+    let t = DVec3::new(0.0, 0.1, 0.3);
+    solver.drag(3, t, s.points(), &mut out).unwrap();
+    let first = out.clone();
+    // … a problem that differs only in targets and forces keeps it.
+    solver.set_problem(problem(DVec3::ZERO, 0.0)).unwrap();
+    let before = solver.columns_solved();
+    solver.drag(3, t, s.points(), &mut out).unwrap();
+    assert_eq!(solver.columns_solved(), before, "the response was kept");
+    assert_eq!(out, first);
+    // A changed target: the base is solved again, the response still kept,
+    // and the frame equals a fresh solver's.
+    solver.set_problem(problem(DVec3::ZERO, 0.05)).unwrap();
+    solver.drag(3, t, s.points(), &mut out).unwrap();
+    let mut fresh = solver_for(&s, &m);
+    fresh.set_problem(problem(DVec3::ZERO, 0.05)).unwrap();
+    let mut want = vec![DVec3::ZERO; n];
+    fresh.drag(3, t, s.points(), &mut want).unwrap();
+    let gap = out
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(gap < 1e-10, "{gap}");
+    // A different gain is another structure: the response is recomputed.
+    let mut other = problem(DVec3::ZERO, 0.05);
+    other.groups[2].loads[0].drag_gain = 3.0;
+    solver.set_problem(other.clone()).unwrap();
+    let before = solver.columns_solved();
+    solver.drag(3, t, s.points(), &mut out).unwrap();
+    assert!(solver.columns_solved() > before);
+    let mut fresh = solver_for(&s, &m);
+    fresh.set_problem(other).unwrap();
+    fresh.drag(3, t, s.points(), &mut want).unwrap();
+    let gap = out
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(gap < 1e-10, "{gap}");
+}

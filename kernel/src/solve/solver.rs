@@ -51,7 +51,7 @@ pub struct SolveReport {
 }
 
 /// One term α · (a_col applied to coordinate k).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Term {
     k: usize,
     col: usize,
@@ -391,6 +391,28 @@ impl Solver {
             }
         }
         let (s_pinv, rank_deficiency) = pseudo_inverse(&s)?;
+        // A drag response depends on the equations' and loads' structure
+        // (rows, columns, gains), not on their targets and forces: a new
+        // problem of the same structure (a drag started, a load's spring
+        // re-attached) keeps it.
+        let same_structure = self.eqs.len() == eqs.len()
+            && self.loads.len() == loads.len()
+            && self
+                .eqs
+                .iter()
+                .zip(&eqs)
+                .all(|(a, b)| a.terms == b.terms && a.group == b.group && a.shift == b.shift)
+            && self
+                .loads
+                .iter()
+                .zip(&loads)
+                .all(|(a, b)| a.col == b.col && a.gain == b.gain && a.group == b.group)
+            && self.z.len() == z.len()
+            && self
+                .z
+                .iter()
+                .zip(&z)
+                .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
         self.retire(&z);
         self.problem = problem;
         self.rows = rows;
@@ -401,7 +423,9 @@ impl Solver {
         self.s_pinv = s_pinv;
         self.rank_deficiency = rank_deficiency;
         self.base = None;
-        self.response = None;
+        if !same_structure {
+            self.response = None;
+        }
         Ok(())
     }
 
@@ -443,7 +467,12 @@ impl Solver {
         }
         let cx = self.c_times(reference);
         let extent = max_extent(reference);
-        let (delta, lambda) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx, extent);
+        let inputs = self.inputs(None, DVec3::ZERO);
+        let (delta, lambda) = if self.at_rest(&inputs, &cx) {
+            (vec![DVec3::ZERO; self.dim()], vec![0.0; self.eqs.len()])
+        } else {
+            self.refined_delta(&inputs, &cx, extent)
+        };
         for ((o, r), d) in out.iter_mut().zip(reference).zip(&delta) {
             *o = *r + *d;
         }
@@ -568,8 +597,13 @@ impl Solver {
         if !cached {
             let cx = self.c_times(reference);
             let extent = max_extent(reference);
-            let (delta, _) = self.refined_delta(&self.inputs(None, DVec3::ZERO), &cx, extent);
-            let start = reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect();
+            let inputs = self.inputs(None, DVec3::ZERO);
+            let start = if self.at_rest(&inputs, &cx) {
+                reference.to_vec()
+            } else {
+                let (delta, _) = self.refined_delta(&inputs, &cx, extent);
+                reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect()
+            };
             self.base = Some(Base {
                 reference: reference.to_vec(),
                 start,
@@ -734,6 +768,19 @@ impl Solver {
                 *d += *wc * zi;
             }
         }
+    }
+
+    /// Whether δ = 0, λ = 0 solves the problem exactly: no load pulls and
+    /// the reference already meets every equation (to 1e-12 of its scale).
+    /// That is the state after every bake (a released load), so a grab
+    /// starts without a solve.
+    fn at_rest(&self, inputs: &Inputs, cx: &[f64]) -> bool {
+        inputs.forces.iter().all(|f| *f == DVec3::ZERO)
+            && inputs
+                .targets
+                .iter()
+                .zip(cx)
+                .all(|(d, c)| (d - c).abs() <= 1e-12 * d.abs().max(c.abs()).max(1.0))
     }
 
     /// δ with one step of iterative refinement on the optimality conditions
