@@ -86,6 +86,32 @@ fn position(s: &BSplineSurface, key: u64, u: f64, v: f64, target: DVec3) -> Grou
     }
 }
 
+/// The largest distance between corresponding points.
+fn max_gap(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max)
+}
+
+/// A solver that saw nothing but `problem`: its full solve of the plate
+/// `s` (or, with `drag`, its frame of that group's drag).
+fn fresh(
+    s: &BSplineSurface,
+    m: &SurfaceMaterial,
+    problem: Problem,
+    drag: Option<(u64, DVec3)>,
+) -> Vec<DVec3> {
+    let mut solver = solver_for(s, m);
+    solver.set_problem(problem).unwrap();
+    let mut out = vec![DVec3::ZERO; s.points().len()];
+    match drag {
+        Some((key, t)) => solver.drag(key, t, s.points(), &mut out).unwrap(),
+        None => solver.solve(s.points(), &mut out).unwrap(),
+    };
+    out
+}
+
 #[test]
 fn constraints_hold_and_redundancy_is_harmless() {
     let s = plate(12);
@@ -428,15 +454,7 @@ fn a_constraint_switched_off_and_on_reuses_its_column() {
     );
     solver.solve(s.points(), &mut out).unwrap();
     // The same answer as a solver that never saw the switch.
-    let mut fresh = solver_for(&s, &m);
-    fresh.set_problem(pins(true)).unwrap();
-    let mut want = vec![DVec3::ZERO; s.points().len()];
-    fresh.solve(s.points(), &mut want).unwrap();
-    let gap = out
-        .iter()
-        .zip(&want)
-        .map(|(a, b)| (*a - *b).length())
-        .fold(0.0, f64::max);
+    let gap = max_gap(&out, &fresh(&s, &m, pins(true), None));
     assert!(gap < 1e-12, "{gap}");
     // A new material invalidates every column: they are solved again.
     solver
@@ -475,19 +493,8 @@ fn a_change_the_shape_already_satisfies_costs_no_solve_and_others_are_solved() {
         t.set_points(out.clone()).unwrap();
         t
     };
-    let fresh_solve = |groups: Vec<Group>| {
-        let mut f = solver_for(&s, &m);
-        f.set_problem(Problem { groups }).unwrap();
-        let mut o = vec![DVec3::ZERO; s.points().len()];
-        f.solve(s.points(), &mut o).unwrap();
-        o
-    };
-    let gap = |a: &[DVec3], b: &[DVec3]| {
-        a.iter()
-            .zip(b)
-            .map(|(p, q)| (*p - *q).length())
-            .fold(0.0, f64::max)
-    };
+    let fresh_solve = |groups: Vec<Group>| fresh(&s, &m, Problem { groups }, None);
+    let gap = max_gap;
     // A pin where the solved surface already is: the shape is still the
     // answer; only the pin's column is solved, no full solve follows.
     let mut with_pin = base.clone();
@@ -710,15 +717,10 @@ fn a_grab_at_rest_solves_nothing_and_matches_a_fresh_solver() {
     // and the frame equals a fresh solver's.
     solver.set_problem(problem(DVec3::ZERO, 0.05)).unwrap();
     solver.drag(3, t, s.points(), &mut out).unwrap();
-    let mut fresh = solver_for(&s, &m);
-    fresh.set_problem(problem(DVec3::ZERO, 0.05)).unwrap();
-    let mut want = vec![DVec3::ZERO; n];
-    fresh.drag(3, t, s.points(), &mut want).unwrap();
-    let gap = out
-        .iter()
-        .zip(&want)
-        .map(|(a, b)| (*a - *b).length())
-        .fold(0.0, f64::max);
+    let gap = max_gap(
+        &out,
+        &fresh(&s, &m, problem(DVec3::ZERO, 0.05), Some((3, t))),
+    );
     assert!(gap < 1e-10, "{gap}");
     // A different gain is another structure: the response is recomputed.
     let mut other = problem(DVec3::ZERO, 0.05);
@@ -727,13 +729,6 @@ fn a_grab_at_rest_solves_nothing_and_matches_a_fresh_solver() {
     let before = solver.columns_solved();
     solver.drag(3, t, s.points(), &mut out).unwrap();
     assert!(solver.columns_solved() > before);
-    let mut fresh = solver_for(&s, &m);
-    fresh.set_problem(other).unwrap();
-    fresh.drag(3, t, s.points(), &mut want).unwrap();
-    let gap = out
-        .iter()
-        .zip(&want)
-        .map(|(a, b)| (*a - *b).length())
-        .fold(0.0, f64::max);
+    let gap = max_gap(&out, &fresh(&s, &m, other, Some((3, t))));
     assert!(gap < 1e-10, "{gap}");
 }
