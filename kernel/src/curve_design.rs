@@ -145,7 +145,7 @@ impl CurveDesign {
             }
             d.next_id = d.next_id.max(icon.id.0 + 1);
             let mut icon = icon.clone();
-            icon.xyz = d.centroid_at(&icon.samples);
+            icon.xyz = centroid_on(&d.curve, &icon.samples);
             d.icons.insert(icon.id, icon);
         }
         Ok(d)
@@ -215,16 +215,6 @@ impl CurveDesign {
             Spring::new(kappa, self.spring.size()).map_err(|e| DesignError::Unsupported(e.0))?;
         self.dirty = true;
         Ok(())
-    }
-
-    /// The centroid of the curve at `samples`.
-    fn centroid_at(&self, samples: &[f64]) -> DVec3 {
-        centroid(
-            &samples
-                .iter()
-                .map(|&t| self.curve.point(t))
-                .collect::<Vec<_>>(),
-        )
     }
 
     /// The parameters an icon acts at: `[t]`, or uniform samples of the span
@@ -540,15 +530,9 @@ impl CurveDesign {
             None => solver.solve(&self.reference, &mut out)?,
         };
         self.curve.points_mut().copy_from_slice(&out);
-        let placed: Vec<(IconId, DVec3)> = self
-            .icons
-            .values()
-            .map(|i| (i.id, self.centroid_at(&i.samples)))
-            .collect();
-        for (id, xyz) in placed {
-            if let Some(icon) = self.icons.get_mut(&id) {
-                icon.xyz = xyz;
-            }
+        let curve = &self.curve;
+        for icon in self.icons.values_mut() {
+            icon.xyz = centroid_on(curve, &icon.samples);
         }
         Ok(report)
     }
@@ -630,4 +614,9 @@ impl CurveDesign {
         self.dirty = true;
         Ok(())
     }
+}
+
+/// The centroid of `curve` at the parameters `samples`.
+fn centroid_on(curve: &BSplineCurve, samples: &[f64]) -> DVec3 {
+    centroid(&samples.iter().map(|&t| curve.point(t)).collect::<Vec<_>>())
 }

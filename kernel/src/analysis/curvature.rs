@@ -47,10 +47,20 @@ pub struct ShadingCurvature {
     pub gauss: f64,
 }
 
-/// Normal, mean and Gaussian curvature from the derivatives at a point
-/// (first and second fundamental forms; sign convention above).
+/// The first fundamental form (E, F, G), the unit normal and the second
+/// fundamental form (L, M, N) at a point, with H and K from them.
+struct Forms {
+    e: f64,
+    f: f64,
+    g: f64,
+    l: f64,
+    m: f64,
+    nn: f64,
+    shading: ShadingCurvature,
+}
+
 #[inline]
-pub fn shading_curvature(d: &SurfaceDerivs) -> Result<ShadingCurvature, Degenerate> {
+fn forms(d: &SurfaceDerivs) -> Result<Forms, Degenerate> {
     let e = d.u.dot(d.u);
     let f = d.u.dot(d.v);
     let g = d.v.dot(d.v);
@@ -62,24 +72,44 @@ pub fn shading_curvature(d: &SurfaceDerivs) -> Result<ShadingCurvature, Degenera
     let n = d.u.cross(d.v) * det.sqrt().recip();
     let (l, m, nn) = (d.uu.dot(n), d.uv.dot(n), d.vv.dot(n));
     let inv = det.recip();
-    Ok(ShadingCurvature {
-        normal: n,
-        mean: (e * nn - 2.0 * f * m + g * l) * 0.5 * inv,
-        gauss: (l * nn - m * m) * inv,
+    Ok(Forms {
+        e,
+        f,
+        g,
+        l,
+        m,
+        nn,
+        shading: ShadingCurvature {
+            normal: n,
+            mean: (e * nn - 2.0 * f * m + g * l) * 0.5 * inv,
+            gauss: (l * nn - m * m) * inv,
+        },
     })
+}
+
+/// Normal, mean and Gaussian curvature from the derivatives at a point
+/// (first and second fundamental forms; sign convention above).
+#[inline]
+pub fn shading_curvature(d: &SurfaceDerivs) -> Result<ShadingCurvature, Degenerate> {
+    forms(d).map(|f| f.shading)
 }
 
 /// Mean, Gaussian and principal curvatures from the derivatives at a point.
 pub fn surface_curvature(d: &SurfaceDerivs) -> Result<SurfaceCurvature, Degenerate> {
-    let ShadingCurvature {
-        normal: n,
-        mean,
-        gauss,
-    } = shading_curvature(d)?;
-    let e = d.u.dot(d.u);
-    let f = d.u.dot(d.v);
-    let g = d.v.dot(d.v);
-    let (l, m, nn) = (d.uu.dot(n), d.uv.dot(n), d.vv.dot(n));
+    let Forms {
+        e,
+        f,
+        g,
+        l,
+        m,
+        nn,
+        shading:
+            ShadingCurvature {
+                normal: n,
+                mean,
+                gauss,
+            },
+    } = forms(d)?;
     let disc = (mean * mean - gauss).max(0.0).sqrt();
     let (k1, k2) = (mean + disc, mean - disc);
     // Principal directions: (L − κE) a + (M − κF) b = 0 (or the second row).

@@ -466,12 +466,11 @@ impl Solver {
             return Ok(self.report(out, None, DVec3::ZERO));
         }
         let cx = self.c_times(reference);
-        let extent = max_extent(reference);
         let inputs = self.inputs(None, DVec3::ZERO);
         let (delta, lambda) = if self.at_rest(&inputs, &cx) {
             (vec![DVec3::ZERO; self.dim()], vec![0.0; self.eqs.len()])
         } else {
-            self.refined_delta(&inputs, &cx, extent)
+            self.refined_delta(&inputs, &cx, max_extent(reference))
         };
         for ((o, r), d) in out.iter_mut().zip(reference).zip(&delta) {
             *o = *r + *d;
@@ -487,11 +486,14 @@ impl Solver {
     /// What [`Self::still_optimal`] needs of a full solve: its problem, its
     /// answer, and per group the size of the pull its multipliers exert.
     fn last_solve(&self, reference: &[DVec3], out: &[DVec3], lambda: &[f64]) -> LastSolve {
-        let norms: Vec<f64> = self.z.iter().map(|c| c.norm).collect();
         let mut pull: HashMap<GroupKey, f64> = HashMap::new();
         for (eq, lam) in self.eqs.iter().zip(lambda) {
             let key = self.problem.groups[eq.group].key;
-            let size: f64 = eq.terms.iter().map(|t| t.coef.abs() * norms[t.col]).sum();
+            let size: f64 = eq
+                .terms
+                .iter()
+                .map(|t| t.coef.abs() * self.z[t.col].norm)
+                .sum();
             *pull.entry(key).or_default() += lam.abs() * size;
         }
         LastSolve {
@@ -515,10 +517,7 @@ impl Solver {
         if last.reference != reference {
             return None;
         }
-        let extent = last
-            .out
-            .iter()
-            .fold(1.0f64, |m, p| m.max(p.abs().max_element()));
+        let extent = max_extent(&last.out);
         fn find(p: &Problem, key: GroupKey) -> Option<&Group> {
             p.groups.iter().find(|g| g.key == key)
         }
@@ -596,12 +595,11 @@ impl Solver {
             .ok_or(SolveError::UnknownGroup(key))?;
         if !cached {
             let cx = self.c_times(reference);
-            let extent = max_extent(reference);
             let inputs = self.inputs(None, DVec3::ZERO);
             let start = if self.at_rest(&inputs, &cx) {
                 reference.to_vec()
             } else {
-                let (delta, _) = self.refined_delta(&inputs, &cx, extent);
+                let (delta, _) = self.refined_delta(&inputs, &cx, max_extent(reference));
                 reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect()
             };
             self.base = Some(Base {
@@ -614,9 +612,9 @@ impl Solver {
             let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
             let mut solved = self
                 // A response is δ per unit of drag input: its scale is 1.
-                .refined_deltas(&inputs, &[&zero, &zero, &zero], &[1.0; 3], None)
+                .refined_deltas(&inputs, &[&zero, &zero, &zero], &[1.0; 3])
                 .into_iter();
-            let mut next = || solved.next().unwrap_or_default();
+            let mut next = || solved.next().map(|(delta, _)| delta).unwrap_or_default();
             let r = [next(), next(), next()];
             self.response = Some(Response {
                 group,
@@ -793,17 +791,9 @@ impl Solver {
         cx: &[f64],
         extent: f64,
     ) -> (Vec<DVec3>, Vec<f64>) {
-        let mut lambdas = Vec::new();
-        let delta = self
-            .refined_deltas(
-                std::slice::from_ref(inputs),
-                &[cx],
-                &[extent],
-                Some(&mut lambdas),
-            )
+        self.refined_deltas(std::slice::from_ref(inputs), &[cx], &[extent])
             .pop()
-            .unwrap_or_default();
-        (delta, lambdas.pop().unwrap_or_default())
+            .unwrap_or_default()
     }
 
     /// [`Self::refined_delta`] for several inputs at once, their refinement
@@ -829,8 +819,7 @@ impl Solver {
         inputs: &[Inputs],
         cxs: &[&[f64]],
         extents: &[f64],
-        mut multipliers: Option<&mut Vec<Vec<f64>>>,
-    ) -> Vec<Vec<DVec3>> {
+    ) -> Vec<(Vec<DVec3>, Vec<f64>)> {
         let n = self.dim();
         let mut deltas = Vec::with_capacity(inputs.len());
         let mut lambdas: Vec<Vec<f64>> = Vec::with_capacity(inputs.len());
@@ -879,16 +868,13 @@ impl Solver {
                 (worst[k] > 1e-13 * computed[k].max(1e-300) && reach[k] > 1e-9 * extent)
                     .then(|| rho.iter().map(|r| r[k]).collect())
             });
-            let applied: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&delta)).collect();
             // σ = d − C P_ref − C δ: what the constraints still ask.
             let sigma: Vec<f64> = self
-                .eqs
+                .c_times(&delta)
                 .iter()
-                .enumerate()
-                .map(|(e, eq)| {
-                    let cd: f64 = eq.terms.iter().map(|t| t.coef * applied[t.col][t.k]).sum();
-                    inputs.targets[e] - cx[e] - cd
-                })
+                .zip(&inputs.targets)
+                .zip(cx.iter())
+                .map(|((cd, d), c)| d - c - cd)
                 .collect();
             deltas.push(delta);
             pending.push((sigma, refine));
@@ -939,15 +925,11 @@ impl Solver {
                 continue;
             }
             // Project onto the constraints as in `delta`: r' = C y − σ.
-            let y_rows: Vec<DVec3> = self.rows.iter().map(|r| r.apply(&correction)).collect();
             let r: Vec<f64> = self
-                .eqs
+                .c_times(&correction)
                 .iter()
-                .enumerate()
-                .map(|(e, eq)| {
-                    let cy: f64 = eq.terms.iter().map(|t| t.coef * y_rows[t.col][t.k]).sum();
-                    cy - sigma[e]
-                })
+                .zip(sigma)
+                .map(|(cy, s)| cy - s)
                 .collect();
             let m = self.eqs.len();
             let mut w = vec![DVec3::ZERO; self.rows.len()];
@@ -963,10 +945,7 @@ impl Solver {
             }
             self.add_columns(delta, &w);
         }
-        if let Some(out) = multipliers.as_mut() {
-            **out = lambdas;
-        }
-        deltas
+        deltas.into_iter().zip(lambdas).collect()
     }
 
     /// The report of `out` with group `shifted`'s drag input at `t`.
