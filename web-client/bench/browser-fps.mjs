@@ -28,7 +28,8 @@
 // as the client's own cost. (--disable-frame-rate-limit was tried: the
 // unthrottled page floods the software GPU and the run stalls.)
 //
-// Needs the server binary (VSCULPT_SERVER_BIN, default target/release) and
+// Needs the server binary (VSCULPT_SERVER_BIN, default the release build in
+// cargo's target directory, as `cargo metadata` reports it) and
 // /usr/bin/chromium (CHROMIUM). Chromium draws with SwiftShader (software
 // GL on the CPU), so the frame rate is that of the CPU, shared with the
 // server: a machine with a GPU renders far faster.
@@ -37,7 +38,7 @@ import { execSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync, symlinkSync } from 'node:fs';
 import { tmpdir, cpus } from 'node:os';
 import { join } from 'node:path';
-import { webDir, startServer, stopServer, launchChromium, openClient, gizmoZArrow } from '../tests/harness.mjs';
+import { webDir, serverBinProblem, startServer, stopServer, launchChromium, openClient, gizmoZArrow } from '../tests/harness.mjs';
 import { BASELINE_REV } from './tessellate.mjs';
 
 const arg = (name, fallback) => {
@@ -260,6 +261,11 @@ let baseline = null;
 if (before !== 'none') {
   baseline = clientAt(before);
   variants.unshift({ name: `baseline ${before}`, dir: baseline.dir });
+}
+const problem = serverBinProblem();
+if (problem) {
+  console.error(problem);
+  process.exit(2);
 }
 const browser = await launchChromium();
 const results = new Map(variants.map((v) => [v.name, []]));

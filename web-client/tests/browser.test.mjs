@@ -7,10 +7,10 @@
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdtempSync, existsSync, mkdirSync, rmSync } from 'node:fs';
+import { mkdtempSync, mkdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { webDir, serverBin, startServer, stopServer, launchChromium, openClient, gizmoZArrow, isLocal } from './harness.mjs';
+import { webDir, serverBinProblem, startServer, stopServer, launchChromium, openClient, gizmoZArrow, isLocal } from './harness.mjs';
 
 const artifacts = join(webDir, 'test-artifacts');
 const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-web-'));
@@ -19,7 +19,8 @@ let links;
 let browser;
 
 before(async () => {
-  assert.ok(existsSync(serverBin), `server binary missing at ${serverBin}: run cargo build --release -p vsculpt-server`);
+  const problem = serverBinProblem();
+  assert.equal(problem, null, problem);
   mkdirSync(artifacts, { recursive: true });
   server = await startServer({ dataDir });
   links = server;

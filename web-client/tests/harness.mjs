@@ -2,13 +2,51 @@
 // server on a loopback port and launching headless Chromium (SwiftShader GL).
 // Not a test file itself (the runner picks only *.test.mjs).
 
-import { spawn } from 'node:child_process';
+import { execFileSync, spawn } from 'node:child_process';
+import { existsSync } from 'node:fs';
 import { dirname, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
 
 export const webDir = resolve(dirname(fileURLToPath(import.meta.url)), '..');
-export const serverBin = process.env.VSCULPT_SERVER_BIN || resolve(webDir, '../target/release/vsculpt-server');
+
+/**
+ * Cargo's target directory for this workspace, wherever cargo puts it
+ * (`CARGO_TARGET_DIR`, `build.target-dir` in a cargo config, or the
+ * default `target/`): asked of `cargo metadata`, never assumed.
+ */
+export function cargoTargetDir() {
+  const out = execFileSync('cargo', ['metadata', '--format-version', '1', '--no-deps'], {
+    cwd: resolve(webDir, '..'),
+    encoding: 'utf8',
+    stdio: ['ignore', 'pipe', 'inherit'],
+    maxBuffer: 64 << 20,
+  });
+  return JSON.parse(out).target_directory;
+}
+
+/**
+ * The server binary the tests start: `VSCULPT_SERVER_BIN` when set, else the
+ * release build in cargo's target directory, else its debug build.
+ */
+function locateServerBin() {
+  if (process.env.VSCULPT_SERVER_BIN) return process.env.VSCULPT_SERVER_BIN;
+  const target = cargoTargetDir();
+  const release = resolve(target, 'release', 'vsculpt-server');
+  const debug = resolve(target, 'debug', 'vsculpt-server');
+  return existsSync(release) || !existsSync(debug) ? release : debug;
+}
+
+export const serverBin = locateServerBin();
+
+/** Why the server binary cannot be started, naming the command that fixes it; null when it can. */
+export function serverBinProblem() {
+  if (existsSync(serverBin)) return null;
+  if (process.env.VSCULPT_SERVER_BIN) {
+    return `VSCULPT_SERVER_BIN=${serverBin} names no file: build the server with \`cargo build -p vsculpt-server\` and point VSCULPT_SERVER_BIN at the executable it reports, or unset VSCULPT_SERVER_BIN to use cargo's target directory`;
+  }
+  return `no server binary at ${serverBin}: run \`cargo build --release -p vsculpt-server\` (or \`scripts/test.sh\`, which builds it and runs these tests)`;
+}
 
 /**
  * Starts the server; resolves when it printed its links:
