@@ -7,4 +7,7 @@ cd "$(dirname "$0")/.."
 if [ -f web-client/package-lock.json ] && [ ! -d web-client/node_modules ]; then
   (cd web-client && npm ci --no-audit --no-fund --loglevel=error)
 fi
+# Brotli/gzip copies of the vendored modules (npm ci's postinstall writes
+# them; this catches a node_modules installed before that step existed).
+(cd web-client && node tools/precompress.mjs)
 exec cargo run --release --locked -p vsculpt-server -- "$@"

@@ -1,16 +1,36 @@
 //! The static web client: `/` (index.html) and the client's files from the
-//! web-client folder, `/vendor/three/` and `/vendor/iwer/` from its
-//! node_modules, and `/vendor/webxr-profiles/` (the VR controller profiles
-//! and glTF models of `@webxr-input-profiles/assets`, its `dist/profiles`),
-//! so the client fetches nothing from a CDN. When the client or its npm
-//! packages are missing, `/` answers a page that says how to install them.
+//! web-client folder, and its vendored npm packages from its node_modules —
+//! `/vendor/three/`, `/vendor/iwer/` and `/vendor/webxr-profiles/` (the VR
+//! controller profiles and glTF models of `@webxr-input-profiles/assets`,
+//! its `dist/profiles`) — so the client fetches nothing from a CDN. When the
+//! client or its npm packages are missing, `/` answers a page that says how
+//! to install them.
+//!
+//! What a cold load costs on a slow link is mostly bytes and round trips, so:
+//! - each vendored package is also served under a versioned prefix
+//!   (`/vendor/three@0.187.0/`, the version read from its package.json) with
+//!   `Cache-Control: immutable` for a year, and index.html is served with
+//!   its vendor URLs rewritten to those prefixes: a warm load asks nothing
+//!   of them again, and a package upgrade changes the URL;
+//! - vendored files are sent precompressed (`.br`, `.gz` written next to them
+//!   at install time by `web-client/tools/precompress.mjs`) to a browser
+//!   that accepts them, with `Vary: Accept-Encoding`;
+//! - the client's own files (small, and edited while the server runs) are
+//!   gzipped per request and revalidated by `ETag` (`Cache-Control:
+//!   no-cache`); so is index.html, which names every module of the page in
+//!   `modulepreload` hints so the browser fetches them in parallel.
 
 use axum::Router;
-use axum::http::{StatusCode, header};
+use axum::body::Body;
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
+use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use tower_http::compression::CompressionLayer;
 use tower_http::services::ServeDir;
+use tower_http::set_header::SetResponseHeaderLayer;
 
 /// The page served at `/` when the web client cannot be served.
 pub const MISSING_CLIENT_PAGE: &str = "<!doctype html>
@@ -24,45 +44,201 @@ starts the server), or run <code>npm ci</code> in <code>web-client/</code> and r
 </body></html>
 ";
 
+/// `Cache-Control` of the versioned vendor prefixes: their content never changes.
+pub const IMMUTABLE: &str = "public, max-age=31536000, immutable";
+
+/// `Cache-Control` of everything else: cache, but revalidate (by `ETag`) before use.
+pub const REVALIDATE: &str = "no-cache";
+
+/// A vendored npm package: its URL name under `/vendor/`, its folder in
+/// node_modules, and the sub-folder of it that is served.
+struct Vendored {
+    name: &'static str,
+    package: &'static str,
+    served: &'static str,
+}
+
+const VENDORED: [Vendored; 3] = [
+    Vendored {
+        name: "three",
+        package: "three",
+        served: "",
+    },
+    Vendored {
+        name: "iwer",
+        package: "iwer",
+        served: "",
+    },
+    Vendored {
+        name: "webxr-profiles",
+        package: "@webxr-input-profiles/assets",
+        served: "dist/profiles",
+    },
+];
+
 /// Whether the client in `web_dir` can be served (index.html and node_modules present).
 pub fn client_installed(web_dir: &Path) -> bool {
     web_dir.join("index.html").is_file() && web_dir.join("node_modules").is_dir()
 }
 
-async fn index(web_dir: PathBuf) -> Response {
+/// The installed version of an npm package in `modules` (its package.json's
+/// `version`), if it is installed and names one made of URL-safe characters.
+fn package_version(modules: &Path, package: &str) -> Option<String> {
+    let text = std::fs::read_to_string(modules.join(package).join("package.json")).ok()?;
+    let json: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let version = json.get("version")?.as_str()?;
+    let safe = !version.is_empty()
+        && version
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b".-+_".contains(&b));
+    safe.then(|| version.to_string())
+}
+
+/// index.html with every `/vendor/NAME/` URL pointed at its versioned prefix.
+pub fn versioned_index(html: &str, versions: &[(String, String)]) -> String {
+    let mut out = html.to_string();
+    for (name, version) in versions {
+        out = out.replace(
+            &format!("/vendor/{name}/"),
+            &format!("/vendor/{name}@{version}/"),
+        );
+    }
+    out
+}
+
+async fn index(
+    web_dir: Arc<PathBuf>,
+    versions: Arc<Vec<(String, String)>>,
+    request: HeaderMap,
+) -> Response {
     if !client_installed(&web_dir) {
         return (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response();
     }
-    match tokio::fs::read(web_dir.join("index.html")).await {
-        Ok(bytes) => (
-            [
-                (header::CONTENT_TYPE, "text/html; charset=utf-8"),
-                (header::CACHE_CONTROL, "no-cache"),
-            ],
-            bytes,
-        )
-            .into_response(),
+    let html = match tokio::fs::read_to_string(web_dir.join("index.html")).await {
+        Ok(html) => versioned_index(&html, &versions),
         Err(e) => {
             tracing::warn!("cannot read index.html: {e}");
-            (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response()
+            return (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response();
         }
-    }
+    };
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    html.hash(&mut hasher);
+    let etag = format!("\"{:016x}\"", hasher.finish());
+    let matches = request
+        .get(header::IF_NONE_MATCH)
+        .and_then(|v| v.to_str().ok())
+        .is_some_and(|v| {
+            v.split(',')
+                .any(|t| t.trim().trim_start_matches("W/") == etag)
+        });
+    let (status, body) = if matches {
+        (StatusCode::NOT_MODIFIED, Body::empty())
+    } else {
+        (StatusCode::OK, Body::from(html))
+    };
+    (
+        status,
+        [
+            (header::CONTENT_TYPE, "text/html; charset=utf-8".to_string()),
+            (header::CACHE_CONTROL, REVALIDATE.to_string()),
+            (header::ETAG, etag),
+        ],
+        body,
+    )
+        .into_response()
 }
 
 /// Routes for the static client. Merge this router last: its fallback
 /// serves any other path from `web_dir`.
 pub fn router<S: Clone + Send + Sync + 'static>(web_dir: &Path) -> Router<S> {
-    let dir = web_dir.to_path_buf();
-    let dir2 = dir.clone();
     let modules = web_dir.join("node_modules");
-    Router::new()
-        .route("/", get(move || index(dir.clone())))
-        .route("/index.html", get(move || index(dir2.clone())))
-        .nest_service("/vendor/three", ServeDir::new(modules.join("three")))
-        .nest_service("/vendor/iwer", ServeDir::new(modules.join("iwer")))
-        .nest_service(
-            "/vendor/webxr-profiles",
-            ServeDir::new(modules.join("@webxr-input-profiles/assets/dist/profiles")),
-        )
-        .fallback_service(ServeDir::new(web_dir).append_index_html_on_directories(false))
+    let mut versions = Vec::new();
+    let mut router = Router::new();
+    for v in &VENDORED {
+        let dir = modules.join(v.package).join(v.served);
+        let serve = || ServeDir::new(&dir).precompressed_br().precompressed_gzip();
+        let cache = |value: &'static str| {
+            SetResponseHeaderLayer::overriding(
+                header::CACHE_CONTROL,
+                HeaderValue::from_static(value),
+            )
+        };
+        router = router.nest_service(
+            &format!("/vendor/{}", v.name),
+            tower::ServiceBuilder::new()
+                .layer(cache(REVALIDATE))
+                .service(serve()),
+        );
+        if let Some(version) = package_version(&modules, v.package) {
+            router = router.nest_service(
+                &format!("/vendor/{}@{version}", v.name),
+                tower::ServiceBuilder::new()
+                    .layer(cache(IMMUTABLE))
+                    .service(serve()),
+            );
+            versions.push((v.name.to_string(), version));
+        }
+    }
+    let dir = Arc::new(web_dir.to_path_buf());
+    let versions = Arc::new(versions);
+    let page = {
+        let (dir, versions) = (dir.clone(), versions.clone());
+        move |headers: HeaderMap| index(dir.clone(), versions.clone(), headers)
+    };
+    let own = tower::ServiceBuilder::new()
+        .layer(SetResponseHeaderLayer::if_not_present(
+            header::CACHE_CONTROL,
+            HeaderValue::from_static(REVALIDATE),
+        ))
+        .layer(CompressionLayer::new())
+        .service(ServeDir::new(web_dir).append_index_html_on_directories(false));
+    router
+        .route("/", get(page.clone()))
+        .route("/index.html", get(page))
+        .fallback_service(own)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn index_vendor_urls_are_versioned_and_nothing_else_changes() {
+        let html = r#"{"three": "/vendor/three/build/three.module.js"} <link href="/vendor/three/a.js"> /vendor/threex/ /src/app.js"#;
+        let v = vec![("three".to_string(), "0.187.0".to_string())];
+        assert_eq!(
+            versioned_index(html, &v),
+            r#"{"three": "/vendor/three@0.187.0/build/three.module.js"} <link href="/vendor/three@0.187.0/a.js"> /vendor/threex/ /src/app.js"#
+        );
+    }
+
+    #[test]
+    fn a_package_version_is_read_only_when_it_is_url_safe() {
+        /// A scratch node_modules, removed when the test ends (also on failure).
+        struct Scratch(PathBuf);
+        impl Drop for Scratch {
+            fn drop(&mut self) {
+                let _ = std::fs::remove_dir_all(&self.0);
+            }
+        }
+        let dir = Scratch(
+            std::env::temp_dir().join(format!("vsculpt-web-versions-{}", std::process::id())),
+        );
+        let write = |pkg: &str, json: &str| {
+            std::fs::create_dir_all(dir.0.join(pkg)).unwrap();
+            std::fs::write(dir.0.join(pkg).join("package.json"), json).unwrap();
+        };
+        write("good", r#"{"version": "1.2.3-beta.1+b5"}"#);
+        write("route", r#"{"version": "1.0{id}"}"#);
+        write("path", r#"{"version": "../../etc"}"#);
+        write("none", r#"{"name": "x"}"#);
+        write("bad", "not json");
+        assert_eq!(
+            package_version(&dir.0, "good").as_deref(),
+            Some("1.2.3-beta.1+b5")
+        );
+        for pkg in ["route", "path", "none", "bad", "missing"] {
+            assert_eq!(package_version(&dir.0, pkg), None, "{pkg}");
+        }
+    }
 }

@@ -34,11 +34,10 @@
 // GL on the CPU), so the frame rate is that of the CPU, shared with the
 // server: a machine with a GPU renders far faster.
 
-import { execSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, rmSync, symlinkSync } from 'node:fs';
+import { mkdtempSync, rmSync } from 'node:fs';
 import { tmpdir, cpus } from 'node:os';
 import { join } from 'node:path';
-import { webDir, serverBinProblem, startServer, stopServer, launchChromium, openClient, gizmoZArrow } from '../tests/harness.mjs';
+import { webDir, serverBinProblem, createDesign, clientAt, startServer, stopServer, launchChromium, openClient, gizmoZArrow } from '../tests/harness.mjs';
 import { BASELINE_REV } from './tessellate.mjs';
 
 const arg = (name, fallback) => {
@@ -49,26 +48,6 @@ const seconds = Number(arg('seconds', 5));
 const rounds = Number(arg('rounds', 2));
 const before = arg('before', BASELINE_REV);
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-
-/** The web client at git revision `rev`, unpacked into a temporary folder sharing this tree's node_modules. */
-function clientAt(rev) {
-  const tmp = mkdtempSync(join(tmpdir(), 'vsculpt-client-'));
-  execSync(`git archive ${rev} web-client | tar -x -C ${tmp}`, { cwd: join(webDir, '..'), stdio: ['ignore', 'ignore', 'inherit'] });
-  symlinkSync(join(webDir, 'node_modules'), join(tmp, 'web-client', 'node_modules'));
-  return { dir: join(tmp, 'web-client'), cleanup: () => rmSync(tmp, { recursive: true, force: true }) };
-}
-
-/** A new 81×159 design on `server`: its id and tokens. */
-async function createDesign(server, dataDir) {
-  const admin = readFileSync(join(dataDir, 'admin-token'), 'utf8').trim();
-  const res = await fetch(`${server.base}/api/designs`, {
-    method: 'POST',
-    headers: { authorization: `Bearer ${admin}`, 'content-type': 'application/json' },
-    body: JSON.stringify({ name: 'fps', nu: 81, nv: 159 }),
-  });
-  if (res.status !== 201) throw new Error(`create design: ${res.status} ${await res.text()}`);
-  return res.json();
-}
 
 /**
  * Installed in the page before it loads: times every callback the client's
@@ -224,7 +203,7 @@ async function measure(browser, variant) {
   const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-fps-'));
   const server = await startServer({ dataDir, dir: variant.dir, args: ['--no-demo'] });
   try {
-    const design = await createDesign(server, dataDir);
+    const design = await createDesign(server, dataDir, { name: 'fps', nu: 81, nv: 159 });
     const url = (token) => `${server.base}/?design=${design.id}&token=${token}${variant.query || ''}`;
     const editor = await openClient(browser, url(design.tokens.editor), (p) => p.addInitScript(instrument));
     await timeRender(editor);

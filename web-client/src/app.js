@@ -42,6 +42,23 @@ function status(kind, text) {
   el.className = `status ${kind}`;
   el.textContent = text;
   if (kind === 'error') state.lastError = text;
+  if (!shellDone) {
+    $('shell-stage').textContent = kind === 'connected' ? 'receiving the design…' : text;
+    $('shell').classList.toggle('failed', kind === 'error');
+  }
+}
+
+/** The page shell (index.html) stays until the first shaded picture is on screen. */
+let shellDone = false;
+
+function shellDesign(info) {
+  if (!shellDone && info && info.name) $('shell-title').textContent = info.name;
+}
+
+function dismissShell() {
+  shellDone = true;
+  $('shell').classList.add('done');
+  setTimeout(() => $('shell').remove(), 400);
 }
 
 function surfaceFromSnapshot(s) {
@@ -70,8 +87,8 @@ function density(s) {
   return [su, sv];
 }
 
-/** Work counted for BENCHMARKS.md (bench/browser-fps.mjs reads it): full redraws, surfaces sent to the worker and shown. */
-const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null };
+/** Work counted for BENCHMARKS.md (bench/browser-fps.mjs reads it): full redraws, surfaces sent to the worker and shown; when the first picture was drawn (ms since navigation start). */
+const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null, firstPicture: null };
 
 /** Counts surface changes (frames, snapshots); what the mesh shows is `shownSeq`. */
 let surfaceSeq = 0;
@@ -130,6 +147,7 @@ function onMessage(msg) {
       state.access = msg.access;
       break;
     case 'snapshot':
+      shellDesign(msg.design);
       state.surface = surfaceFromSnapshot(msg.surface);
       surfaceSeq++;
       state.icons = new Map(msg.icons.map((i) => [i.id, i]));
@@ -468,6 +486,10 @@ view.renderer.setAnimationLoop(() => {
   xr.update();
   view.controls.update();
   view.render();
+  if (!shellDone && shownSeq > 0) {
+    perf.firstPicture = performance.now();
+    dismissShell();
+  }
 });
 
 window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr, perf };

@@ -2,9 +2,10 @@
 // server on a loopback port and launching headless Chromium (SwiftShader GL).
 // Not a test file itself (the runner picks only *.test.mjs).
 
-import { execFileSync, spawn } from 'node:child_process';
-import { existsSync } from 'node:fs';
-import { dirname, resolve } from 'node:path';
+import { execFileSync, execSync, spawn } from 'node:child_process';
+import { existsSync, mkdtempSync, readFileSync, rmSync, symlinkSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
 
@@ -51,10 +52,11 @@ export function serverBinProblem() {
 /**
  * Starts the server; resolves when it printed its links:
  * { child, base, editor, viewer } (editor / viewer of the demo design 1, null with --no-demo).
+ * `bin` is the server executable (default: `serverBin`).
  */
-export function startServer({ listen = '127.0.0.1:0', dataDir, dir = webDir, args = [] }) {
+export function startServer({ listen = '127.0.0.1:0', dataDir, dir = webDir, args = [], bin = serverBin }) {
   return new Promise((resolveStart, reject) => {
-    const child = spawn(serverBin, ['--listen', listen, '--data', dataDir, '--web-dir', dir, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
+    const child = spawn(bin, ['--listen', listen, '--data', dataDir, '--web-dir', dir, ...args], { stdio: ['ignore', 'pipe', 'pipe'] });
     let out = '';
     const demo = !args.includes('--no-demo');
     const timer = setTimeout(() => reject(new Error(`server did not print its links:\n${out}`)), 30000);
@@ -75,6 +77,26 @@ export function startServer({ listen = '127.0.0.1:0', dataDir, dir = webDir, arg
   });
 }
 
+/** The web client at git revision `rev`, unpacked into a temporary folder sharing this tree's node_modules; `cleanup()` removes it. */
+export function clientAt(rev) {
+  const tmp = mkdtempSync(join(tmpdir(), 'vsculpt-client-'));
+  execSync(`git archive ${rev} web-client | tar -x -C ${tmp}`, { cwd: join(webDir, '..'), stdio: ['ignore', 'ignore', 'inherit'] });
+  symlinkSync(join(webDir, 'node_modules'), join(tmp, 'web-client', 'node_modules'));
+  return { dir: join(tmp, 'web-client'), cleanup: () => rmSync(tmp, { recursive: true, force: true }) };
+}
+
+/** Creates a design through the REST API with the admin token of `dataDir`: its id and tokens. */
+export async function createDesign(server, dataDir, { name = 'design', nu = 20, nv = 15 } = {}) {
+  const admin = readFileSync(join(dataDir, 'admin-token'), 'utf8').trim();
+  const res = await fetch(`${server.base}/api/designs`, {
+    method: 'POST',
+    headers: { authorization: `Bearer ${admin}`, 'content-type': 'application/json' },
+    body: JSON.stringify({ name, nu, nv }),
+  });
+  if (res.status !== 201) throw new Error(`create design: ${res.status} ${await res.text()}`);
+  return res.json();
+}
+
 /** Stops a server from startServer and waits for it to exit. */
 export async function stopServer(server) {
   if (!server || server.child.exitCode !== null) return;
@@ -93,7 +115,7 @@ export function launchChromium() {
 
 /**
  * Opens `url` in a new page and waits until the client has its surface and
- * access; page.errors collects page errors, page.requests every URL the page
+ * access and the page shell has made way for the picture; page.errors collects page errors, page.requests every URL the page
  * requested, page.warnings its console warnings. `setup(page)` runs before
  * the page loads (e.g. to route requests).
  */
@@ -111,7 +133,11 @@ export async function openClient(browser, url, setup = async () => {}) {
   page.warnings = warnings;
   await setup(page);
   await page.goto(url);
-  await page.waitForFunction(() => window.vsculpt && window.vsculpt.state.surface && window.vsculpt.state.access, null, { timeout: 30000 });
+  await page.waitForFunction(
+    () => window.vsculpt && window.vsculpt.state.surface && window.vsculpt.state.access && !document.querySelector('#shell:not(.done)'),
+    null,
+    { timeout: 30000 },
+  );
   page.errors = errors;
   return page;
 }
