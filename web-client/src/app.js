@@ -32,6 +32,10 @@ const state = {
   frames: 0,
   material: null,
   lastError: null,
+  toasts: [],
+  online: null,
+  canUndo: false,
+  canRedo: false,
 };
 
 const view = new View($('viewport'));
@@ -42,6 +46,7 @@ function status(kind, text) {
   el.className = `status ${kind}`;
   el.textContent = text;
   if (kind === 'error') state.lastError = text;
+  setOnline(kind === 'connected');
   if (!shellDone) {
     $('shell-stage').textContent = kind === 'connected' ? 'receiving the design…' : text;
     $('shell').classList.toggle('failed', kind === 'error');
@@ -59,6 +64,46 @@ function dismissShell() {
   shellDone = true;
   $('shell').classList.add('done');
   setTimeout(() => $('shell').remove(), 400);
+}
+
+/**
+ * A transient message over the view (server errors, refused edits): it
+ * leaves the connection badge alone and goes after a few seconds or a click.
+ * The newest ones are kept in state.toasts for scripts and tests.
+ */
+function toast(text, kind = 'error') {
+  state.toasts.push({ text, kind });
+  if (state.toasts.length > 20) state.toasts.shift();
+  const el = document.createElement('div');
+  el.className = `toast ${kind}`;
+  el.setAttribute('role', 'alert');
+  el.textContent = text;
+  el.addEventListener('click', () => el.remove());
+  $('toasts').append(el);
+  while ($('toasts').children.length > 4) $('toasts').firstChild.remove();
+  setTimeout(() => el.remove(), 6000);
+}
+
+/**
+ * While the link is down nothing can be edited: every control of the editing
+ * panels is disabled and the gizmo let go, so no edit is made that could not
+ * be sent. Undo/redo come back as the server last said.
+ */
+function setOnline(online) {
+  if (state.online === online) return;
+  state.online = online;
+  document.body.classList.toggle('offline', !online);
+  for (const el of document.querySelectorAll('#panel .edit input, #panel .edit select, #panel .edit button, #panel [data-restore]')) {
+    el.disabled = !online;
+  }
+  if (online) {
+    $('undo').disabled = !state.canUndo;
+    $('redo').disabled = !state.canRedo;
+  } else if (dragging) {
+    dragging = false;
+    pendingDrag = null;
+  }
+  gizmo.enabled = online;
 }
 
 function surfaceFromSnapshot(s) {
@@ -155,8 +200,7 @@ function onMessage(msg) {
       state.presence = msg.presence;
       state.material = msg.material;
       state.revision = msg.revision;
-      $('undo').disabled = !msg.can_undo;
-      $('redo').disabled = !msg.can_redo;
+      setHistory(msg.can_undo, msg.can_redo);
       redraw();
       break;
     case 'icon_created':
@@ -182,16 +226,23 @@ function onMessage(msg) {
       state.presence = msg.clients;
       break;
     case 'history':
-      $('undo').disabled = !msg.can_undo;
-      $('redo').disabled = !msg.can_redo;
+      setHistory(msg.can_undo, msg.can_redo);
       break;
     case 'error':
-      status('error', `${msg.code}: ${msg.message}`);
+      state.lastError = `${msg.code}: ${msg.message}`;
+      toast(state.lastError);
       break;
     default:
       break;
   }
   renderPanels();
+}
+
+function setHistory(canUndo, canRedo) {
+  state.canUndo = canUndo;
+  state.canRedo = canRedo;
+  $('undo').disabled = !canUndo || !state.online;
+  $('redo').disabled = !canRedo || !state.online;
 }
 
 function onFrame(f) {
@@ -254,8 +305,13 @@ const tessWorker = params.get('worker') === '0' ? null : new TessellationWorker(
   },
 });
 
-const link = new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status });
-const send = (msg) => link.send(msg);
+
+/** Sends `msg`; when the link is down says so and returns null (nothing is sent, nothing is queued). */
+function send(msg) {
+  const req = link.send(msg);
+  if (req === null) toast(`not connected: ${msg.type.replace(/_/g, ' ')} was not sent`);
+  return req;
+}
 
 // --- editing ----------------------------------------------------------------
 
@@ -367,12 +423,14 @@ function pick(u, v) {
     createIcon({ kind: 'point', u, v }, role);
   } else if (mode === 'curve') {
     state.pending.push([u, v]);
-    $('pending').textContent = `${state.pending.length} curve points (finish to create)`;
+    $('pending').textContent = `${state.pending.length} curve points (finish to create, Esc cancels)`;
   } else if (mode === 'region') {
     state.pending.push([u, v]);
+    $('pending').textContent = 'first corner picked: click the opposite corner (Esc cancels)';
     if (state.pending.length === 2) {
       const [[u0, v0], [u1, v1]] = state.pending;
       state.pending = [];
+      $('pending').textContent = '';
       createIcon({ kind: 'region', u0, v0, u1, v1, inside: $('region-inside').checked }, role);
     }
   }
@@ -445,13 +503,88 @@ $('redo').addEventListener('click', () => send({ type: 'redo' }));
 $('revert').addEventListener('click', () => send({ type: 'revert' }));
 $('commit').addEventListener('submit', (e) => {
   e.preventDefault();
-  send({ type: 'commit', message: $('commit-message').value || 'commit' });
-  $('commit-message').value = '';
+  if (send({ type: 'commit', message: $('commit-message').value || 'commit' }) !== null) $('commit-message').value = '';
 });
 $('history').addEventListener('click', (e) => {
   const v = e.target.dataset.restore;
   if (v) send({ type: 'restore_version', version: Number(v) });
 });
+
+// --- keyboard -----------------------------------------------------------------------
+
+/** Cancels a curve or region being picked, else lets go of the selection. */
+function cancel() {
+  if (state.pending.length) {
+    state.pending = [];
+    $('pending').textContent = '';
+  } else if (state.selected != null) {
+    select(null);
+  }
+}
+
+/** The shortcuts, as the help overlay lists them: [keys, what, editor only]. */
+const SHORTCUTS = [
+  ['Ctrl+Z', 'undo', true],
+  ['Ctrl+Shift+Z, Ctrl+Y', 'redo', true],
+  ['Delete', 'delete the selected icon', true],
+  ['Esc', 'cancel the curve or region being picked, else deselect', false],
+  ['F', 'frame the selected icon (or the whole design)', false],
+  ['?', 'show or hide this help', false],
+];
+
+function keyAction(e) {
+  const k = e.key;
+  const mod = e.ctrlKey || e.metaKey;
+  if (mod && !e.shiftKey && k.toLowerCase() === 'z') return 'undo';
+  if (mod && ((e.shiftKey && k.toLowerCase() === 'z') || k.toLowerCase() === 'y')) return 'redo';
+  if (mod || e.altKey) return null;
+  if (k === 'Delete' || k === 'Backspace') return 'delete';
+  if (k === 'Escape') return 'cancel';
+  if (k === 'f' || k === 'F') return 'frame';
+  if (k === '?') return 'help';
+  return null;
+}
+
+document.addEventListener('keydown', (e) => {
+  const t = e.target;
+  if (t instanceof HTMLElement && (t.isContentEditable || ['INPUT', 'SELECT', 'TEXTAREA'].includes(t.tagName))) return;
+  const action = keyAction(e);
+  if (!action) return;
+  e.preventDefault();
+  const editing = ['undo', 'redo', 'delete'].includes(action);
+  if (editing && state.access !== 'editor') {
+    toast('view only: this link cannot edit', 'info');
+    return;
+  }
+  if (action === 'undo') send({ type: 'undo' });
+  else if (action === 'redo') send({ type: 'redo' });
+  else if (action === 'delete' && state.selected != null) send({ type: 'delete_icon', icon: state.selected });
+  else if (action === 'cancel') cancel();
+  else if (action === 'frame') frameSelection();
+  else if (action === 'help') $('help').hidden = !$('help').hidden;
+});
+
+/** Centres the view on the selected icon at a close distance, or fits the whole design. */
+function frameSelection() {
+  const icon = state.icons.get(state.selected);
+  if (!icon) {
+    view.fit();
+    return;
+  }
+  const at = new THREE.Vector3(...icon.xyz);
+  const offset = view.camera.position.clone().sub(view.controls.target);
+  const r = view.geometry.boundingSphere ? view.geometry.boundingSphere.radius : offset.length();
+  view.controls.target.copy(at);
+  view.camera.position.copy(at).add(offset.setLength(r * 0.8));
+  view.controls.update();
+}
+
+$('help-list').innerHTML = SHORTCUTS.map(([keys, what, edit]) => `<dt>${keys}</dt><dd>${what}${edit ? ' <small>(editor)</small>' : ''}</dd>`).join('');
+$('help-open').addEventListener('click', () => ($('help').hidden = false));
+$('help').addEventListener('click', (e) => {
+  if (e.target === $('help') || e.target.id === 'help-close') $('help').hidden = true;
+});
+$('panel-toggle').addEventListener('click', () => document.body.classList.toggle('panel-open'));
 
 // --- VR ---------------------------------------------------------------------------
 
@@ -476,6 +609,10 @@ $('enter-vr').addEventListener('click', () => {
   xr.enter().catch((e) => status('error', e.message));
 });
 
+// --- the link (last: its first status call reaches everything above) ------------
+
+const link = new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status });
+
 // --- loop ------------------------------------------------------------------------
 
 view.renderer.setAnimationLoop(() => {
@@ -492,4 +629,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr, perf };
+window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr, perf, toast };

@@ -72,12 +72,11 @@ export class Link {
     };
   }
 
-  /** Sends a message; returns its request number. */
+  /** Sends a message; returns its request number, or null when the link is down and nothing was sent. */
   send(msg) {
+    if (!this.open) return null;
     const req = ++this.req;
-    if (this.ws && this.ws.readyState === WebSocket.OPEN) {
-      this.ws.send(JSON.stringify({ ...msg, req }));
-    }
+    this.ws.send(JSON.stringify({ ...msg, req }));
     return req;
   }
 

@@ -1,0 +1,134 @@
+// The page as a designer and a customer use it (issue 16), in real headless
+// Chromium against the real server, each test failing on the client before
+// it: a phone-sized screen keeps a usable view and a visible status; a
+// server error is a toast that leaves the connection badge alone; while the
+// link is down the editing controls are disabled and an edit is refused
+// visibly (a commit keeps its message); the keyboard undoes, redoes,
+// deletes, cancels a pick and opens the help; a viewer sees it is view-only.
+
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { serverBinProblem, startServer, stopServer, launchChromium, openClient } from './harness.mjs';
+
+const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-ui-'));
+let server;
+let browser;
+
+before(async () => {
+  const problem = serverBinProblem();
+  assert.equal(problem, null, problem);
+  server = await startServer({ dataDir });
+  browser = await launchChromium();
+});
+
+after(async () => {
+  if (browser) await browser.close();
+  await stopServer(server);
+  rmSync(dataDir, { recursive: true, force: true });
+});
+
+const connected = (page) =>
+  page.waitForFunction(() => document.getElementById('status').className === 'status connected', null, { timeout: 20000 });
+
+test('on a phone (390 × 844) the view takes the width, the status shows, the panel opens on demand', async () => {
+  const page = await browser.newPage({ viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+  await page.goto(server.editor);
+  await page.waitForFunction(() => window.vsculpt && window.vsculpt.perf.firstPicture !== null, null, { timeout: 30000 });
+  const canvas = await page.evaluate(() => window.vsculpt.view.renderer.domElement.getBoundingClientRect().width);
+  assert.ok(canvas >= 380, `3D view ${canvas} px wide`);
+  const badgeOnTop = await page.evaluate(() => {
+    const r = document.getElementById('status').getBoundingClientRect();
+    return document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2)?.id;
+  });
+  assert.equal(badgeOnTop, 'status', 'the status badge is not covered');
+  const panelShown = () => page.evaluate(() => document.getElementById('panel').getBoundingClientRect().top < innerHeight - 10);
+  assert.equal(await panelShown(), false, 'the panel starts closed');
+  await page.click('#panel-toggle');
+  await page.waitForFunction(() => document.getElementById('panel').getBoundingClientRect().top < innerHeight / 2 + 20);
+  assert.equal(await panelShown(), true);
+  await page.close();
+});
+
+test('a server error is a toast; the connection badge still says connected', async () => {
+  const page = await openClient(browser, server.editor);
+  await connected(page);
+  await page.evaluate(() => window.vsculpt.send({ type: 'delete_icon', icon: 987654 }));
+  await page.waitForFunction(() => document.querySelector('#toasts .toast'), null, { timeout: 10000 });
+  const toast = await page.textContent('#toasts .toast');
+  assert.match(toast, /unknown/i, toast);
+  assert.equal(await page.getAttribute('#status', 'class'), 'status connected');
+  await page.close();
+});
+
+test('the keyboard: Delete deletes the selected icon, Ctrl+Z brings it back, Esc cancels a pick, ? opens the help', async () => {
+  const page = await openClient(browser, server.editor);
+  await connected(page);
+  const before = await page.evaluate(() => window.vsculpt.state.icons.size);
+  await page.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.31, v: 0.62 }, { kind: 'load' }));
+  await page.waitForFunction((n) => window.vsculpt.state.icons.size === n + 1, before, { timeout: 10000 });
+  const id = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  await page.evaluate((i) => window.vsculpt.select(i), id);
+  await page.locator('canvas').first().focus().catch(() => {});
+  await page.keyboard.press('Delete');
+  await page.waitForFunction((i) => !window.vsculpt.state.icons.has(i), id, { timeout: 10000 });
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction((i) => window.vsculpt.state.icons.has(i), id, { timeout: 10000 });
+  await page.evaluate(() => {
+    document.getElementById('create').value = 'region';
+    document.getElementById('create').dispatchEvent(new Event('change'));
+    window.vsculpt.pick(0.2, 0.2);
+  });
+  assert.match(await page.textContent('#pending'), /opposite corner/);
+  await page.keyboard.press('Escape');
+  assert.equal(await page.evaluate(() => window.vsculpt.state.pending.length), 0);
+  assert.equal(await page.textContent('#pending'), '');
+  assert.equal(await page.isVisible('#help'), false);
+  await page.keyboard.press('?');
+  assert.equal(await page.isVisible('#help'), true);
+  assert.match(await page.textContent('#help'), /Ctrl\+Z/);
+  await page.keyboard.press('?');
+  assert.equal(await page.isVisible('#help'), false);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a viewer is told it is view-only, and its keyboard edits are refused with a message', async () => {
+  const page = await openClient(browser, server.viewer);
+  await connected(page);
+  assert.equal(await page.isVisible('#view-only'), true);
+  const n = await page.evaluate(() => window.vsculpt.state.icons.size);
+  await page.keyboard.press('Control+z');
+  await page.waitForFunction(() => window.vsculpt.state.toasts.some((t) => /view only/.test(t.text)), null, { timeout: 5000 });
+  assert.equal(await page.evaluate(() => window.vsculpt.state.icons.size), n);
+  await page.close();
+});
+
+test('while the link is down, editing is disabled and a commit is refused visibly, keeping its message', async () => {
+  const page = await openClient(browser, server.editor);
+  await connected(page);
+  assert.equal(await page.isDisabled('#commit button'), false);
+  const port = new URL(server.base).port;
+  await stopServer(server);
+  try {
+    await page.waitForFunction(() => document.getElementById('status').className.includes('reconnecting'), null, { timeout: 10000 });
+    for (const sel of ['#commit button', '#commit-message', '#create', '#alpha', '#revert']) assert.equal(await page.isDisabled(sel), true, `${sel} disabled`);
+    // A commit attempted anyway (e.g. from a script or a stale form) is refused, and says so.
+    await page.evaluate(() => {
+      const m = document.getElementById('commit-message');
+      m.disabled = false;
+      m.value = 'keep me';
+      document.getElementById('commit').requestSubmit();
+    });
+    assert.equal(await page.inputValue('#commit-message'), 'keep me');
+    assert.ok(await page.evaluate(() => window.vsculpt.state.toasts.some((t) => /not connected: commit was not sent/.test(t.text))));
+    assert.equal(await page.evaluate(() => window.vsculpt.send({ type: 'undo' })), null);
+  } finally {
+    server = await startServer({ listen: `127.0.0.1:${port}`, dataDir });
+  }
+  await connected(page);
+  assert.equal(await page.isDisabled('#commit button'), false, 'enabled again once connected');
+  await page.close();
+});
