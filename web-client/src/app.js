@@ -629,4 +629,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, send, view, pick, select, createIcon, finishCurve, link, xr, perf, toast };
+window.vsculpt = { state, send, view, icons, pick, select, createIcon, finishCurve, link, xr, perf, toast };

@@ -2,7 +2,8 @@
 // green sphere = load, yellow sphere labelled R/V/R2/V2/RV = derivative
 // constraint, a 3D arrow along N = normal constraint, a polyline for a curve
 // icon (with its curvature comb), an outlined patch for a region icon; grey when sleeping, larger and
-// glowing while driving.
+// glowing while driving. A position constraint the surface does not meet shows its target as a
+// hollow marker joined to the surface, labelled with the miss.
 
 import * as THREE from 'three';
 import { surfaceDerivs } from './bspline.js';
@@ -11,20 +12,36 @@ import { curvatureSamples, combSegments } from './comb.js';
 const COLORS = { position: 0xe53935, load: 0x43a047, derivative: 0xfdd835, normal: 0x1e88e5 };
 const GREY = 0x8a8a8a;
 
-function label(text) {
+/**
+ * A text label that keeps its size on screen (about 20 px tall whatever the
+ * model's size or the zoom): light text on a dark rounded plate, drawn over
+ * the surface.
+ */
+function label(text, { color = '#fff', height = 0.03 } = {}) {
   const c = document.createElement('canvas');
-  c.width = 64;
-  c.height = 32;
+  const g0 = c.getContext('2d');
+  g0.font = 'bold 40px sans-serif';
+  c.width = Math.ceil(g0.measureText(text).width) + 24;
+  c.height = 56;
   const g = c.getContext('2d');
-  g.fillStyle = '#000';
-  g.font = 'bold 24px sans-serif';
+  g.fillStyle = 'rgba(20, 24, 30, 0.8)';
+  g.beginPath();
+  g.roundRect(0, 0, c.width, c.height, 12);
+  g.fill();
+  g.fillStyle = color;
+  g.font = 'bold 40px sans-serif';
   g.textAlign = 'center';
   g.textBaseline = 'middle';
-  g.fillText(text, 32, 16);
-  const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(c), depthTest: false }));
-  sprite.scale.set(0.16, 0.08, 1);
+  g.fillText(text, c.width / 2, c.height / 2 + 2);
+  const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: new THREE.CanvasTexture(c), depthTest: false, sizeAttenuation: false }));
+  sprite.scale.set((height * c.width) / c.height, height, 1);
+  sprite.renderOrder = 10;
+  sprite.userData.text = text;
   return sprite;
 }
+
+/** How far a point icon's surface point may be from its target before the miss is drawn, relative to the handle size. */
+export const MISS_SHOWN = 0.05;
 
 /** (u, v) points along a curve anchor, evaluated from its B-spline in the domain. */
 function curveUv(anchor, n = 48) {
@@ -95,9 +112,30 @@ export class IconLayer {
     handle.name = `icon-${icon.id}`;
     g.add(handle);
     if (kind === 'derivative') {
-      const l = label(icon.role.which);
+      const l = label(icon.role.which, { color: '#fdd835' });
       l.position.set(icon.xyz[0], icon.xyz[1], icon.xyz[2] + 2.2 * r);
       g.add(l);
+    }
+    // A position constraint the solve could not meet (contradictory icons):
+    // its target as a hollow marker, joined to where the surface is, with the miss.
+    if (kind === 'position' && icon.anchor.kind === 'point' && !sleeping) {
+      const at = new THREE.Vector3(...icon.xyz);
+      const target = new THREE.Vector3(...icon.target);
+      const miss = at.distanceTo(target);
+      if (miss > MISS_SHOWN * r) {
+        const marker = new THREE.Mesh(
+          new THREE.SphereGeometry(r * 1.2, 12, 8),
+          new THREE.MeshBasicMaterial({ color, wireframe: true }),
+        );
+        marker.position.copy(target);
+        marker.name = `target-${icon.id}`;
+        const line = new THREE.Line(new THREE.BufferGeometry().setFromPoints([at, target]), new THREE.LineDashedMaterial({ color, dashSize: r, gapSize: r / 2 }));
+        line.computeLineDistances();
+        const l = label(`misses by ${miss.toPrecision(3)}`, { color: '#ff8a80', height: 0.025 });
+        l.position.copy(target).add(new THREE.Vector3(0, 0, 2.5 * r));
+        l.name = `miss-${icon.id}`;
+        g.add(marker, line, l);
+      }
     }
     if (kind === 'normal') {
       const dir = new THREE.Vector3(...icon.target).normalize();

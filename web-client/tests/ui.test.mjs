@@ -132,3 +132,45 @@ test('while the link is down, editing is disabled and a commit is refused visibl
   assert.equal(await page.isDisabled('#commit button'), false, 'enabled again once connected');
   await page.close();
 });
+
+test('a position constraint the surface cannot meet shows its target and the miss; labels are readable; driving is not a choosable state', async () => {
+  const page = await openClient(browser, server.editor);
+  await connected(page);
+  const ids = async () => page.evaluate(() => [...window.vsculpt.state.icons.keys()]);
+  const known = new Set(await ids());
+  // Two position constraints at one point: dragging one away makes them contradictory.
+  for (const role of [{ kind: 'position' }, { kind: 'position' }, { kind: 'derivative', which: 'R' }]) {
+    const n = (await ids()).length;
+    await page.evaluate((r) => window.vsculpt.createIcon({ kind: 'point', u: 0.37, v: 0.41 }, r), role);
+    await page.waitForFunction((k) => window.vsculpt.state.icons.size === k + 1, n, { timeout: 10000 });
+  }
+  const [a, , d] = (await ids()).filter((i) => !known.has(i)).sort((x, y) => x - y);
+  const start = await page.evaluate((i) => window.vsculpt.state.icons.get(i).target, a);
+  await page.evaluate(
+    ([i, p]) => {
+      window.vsculpt.send({ type: 'drag_start', icon: i });
+      window.vsculpt.send({ type: 'drag', icon: i, xyz: [p[0], p[1], p[2] + 5] });
+      window.vsculpt.send({ type: 'drag_end', icon: i });
+    },
+    [a, start],
+  );
+  await page.waitForFunction((i) => window.vsculpt.icons.group.getObjectByName(`miss-${i}`), a, { timeout: 15000 });
+  const miss = await page.evaluate((i) => {
+    const icon = window.vsculpt.state.icons.get(i);
+    const dx = icon.target.map((t, k) => t - icon.xyz[k]);
+    return { text: window.vsculpt.icons.group.getObjectByName(`miss-${i}`).userData.text, gap: Math.hypot(...dx) };
+  }, a);
+  assert.ok(miss.gap > 0.5, `the two constraints contradict: gap ${miss.gap}`);
+  assert.equal(miss.text, `misses by ${miss.gap.toPrecision(3)}`);
+  // The derivative label keeps a readable size on screen, light on dark.
+  const px = await page.evaluate((i) => {
+    const obj = window.vsculpt.icons.objects.get(i);
+    const sprite = obj.children.find((c) => c.isSprite);
+    return sprite.material.sizeAttenuation === false ? sprite.scale.y * window.vsculpt.view.renderer.domElement.clientHeight : 0;
+  }, d);
+  assert.ok(px >= 16, `label ${px} px tall`);
+  await page.evaluate((i) => window.vsculpt.select(i), a);
+  assert.equal(await page.evaluate(() => document.querySelector('#sel-state option[value=driving]').disabled), true);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
