@@ -611,7 +611,17 @@ $('enter-vr').addEventListener('click', () => {
 
 // --- the link (last: its first status call reaches everything above) ------------
 
-const link = new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status });
+// Without a token this page is the bare server address: say what to open instead of failing to join.
+const link = token
+  ? new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status })
+  : { send: () => null, open: false };
+if (!token) {
+  $('shell-title').textContent = 'vsculpt';
+  $('shell-stage').innerHTML =
+    'This is the vsculpt server. Open the <b>editor</b> or <b>viewer</b> link it printed for a design ' +
+    '(it looks like <code>/?design=1&amp;token=…</code>), or ask the designer for one.';
+  $('shell').classList.add('failed');
+}
 
 // --- loop ------------------------------------------------------------------------
 

@@ -5,6 +5,14 @@
 
 import { decodeFrame, PROTOCOL_VERSION } from './frame.js';
 
+/** Why the server refused to let this page join, said so a person knows what to do; the link then stays closed. */
+export const REFUSALS = {
+  bad_token: (design) => `this link's token is not valid for design ${design}: ask the designer for a new link`,
+  unknown_design: (design) => `design ${design} does not exist on this server: check the link`,
+  bad_version: () => 'this page is older than the server: reload it (Ctrl+Shift+R)',
+  bad_handshake: () => 'the server did not accept this page\'s greeting: reload it',
+};
+
 export class Link {
   constructor({ design, token, name, onMessage, onFrame, onStatus }) {
     this.design = design;
@@ -17,6 +25,8 @@ export class Link {
     this.backoff = 250;
     this.ws = null;
     this.closedByServer = false;
+    this.refusal = null;
+    this.welcomed = false;
     this.connect();
   }
 
@@ -49,9 +59,11 @@ export class Link {
           this.backoff = 250;
           this.onStatus('connected', `connected as ${msg.access}`);
         }
-        if (msg.type === 'error' && (msg.code === 'bad_token' || msg.code === 'bad_version')) {
+        if (msg.type === 'error' && REFUSALS[msg.code] && !this.welcomed) {
           this.closedByServer = true;
+          this.refusal = msg.code;
         }
+        if (msg.type === 'welcome') this.welcomed = true;
         this.onMessage(msg);
       } else {
         try {
@@ -63,9 +75,10 @@ export class Link {
     };
     ws.onclose = () => {
       if (this.closedByServer) {
-        this.onStatus('error', 'the server refused this link (token or version); reload with a valid link');
+        this.onStatus('error', REFUSALS[this.refusal](this.design));
         return;
       }
+      this.welcomed = false;
       this.onStatus('reconnecting', `connection lost; reconnecting in ${Math.round(this.backoff)} ms`);
       setTimeout(() => this.connect(), this.backoff);
       this.backoff = Math.min(this.backoff * 2, 4000);

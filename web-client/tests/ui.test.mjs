@@ -174,3 +174,19 @@ test('a position constraint the surface cannot meet shows its target and the mis
   assert.deepEqual(page.errors, []);
   await page.close();
 });
+
+test('a bare server address and a bad token each say what to do, and the page stops trying', async () => {
+  const bare = await browser.newPage();
+  await bare.goto(server.base);
+  await bare.waitForFunction(() => /editor.*viewer.*link/s.test(document.getElementById('shell-stage').textContent), null, { timeout: 20000 });
+  await bare.close();
+  const bad = await browser.newPage();
+  const sockets = [];
+  bad.on('websocket', (ws) => sockets.push(ws.url()));
+  await bad.goto(`${server.base}/?design=1&token=not-a-token`);
+  await bad.waitForFunction(() => /not valid for design 1/.test(document.getElementById('shell-stage').textContent), null, { timeout: 20000 });
+  assert.match(await bad.textContent('#status'), /ask the designer for a new link/);
+  await new Promise((r) => setTimeout(r, 1500));
+  assert.equal(sockets.length, 1, 'no reconnect loop after a refusal');
+  await bad.close();
+});
