@@ -9,6 +9,7 @@ use crate::design::Hub;
 use crate::metrics::Metrics;
 use crate::shutdown::Shutdown;
 use crate::store::{DesignRecord, Store, StoreError};
+use axum::serve::ListenerExt;
 use std::future::IntoFuture;
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -149,7 +150,15 @@ impl Server {
         let router = app::router(self.shared.clone());
         let stop = shared.shutdown.clone();
         tracing::info!(addr = %self.addr, "serving");
-        let serving = axum::serve(self.listener, router)
+        // Replies and geometry frames are small writes that must leave at
+        // once: without TCP_NODELAY, Nagle holds each one until the peer's
+        // delayed ACK (~40 ms on Linux) when a previous write is unacked.
+        let listener = self.listener.tap_io(|tcp| {
+            if let Err(e) = tcp.set_nodelay(true) {
+                tracing::debug!("cannot set TCP_NODELAY on an accepted connection: {e}");
+            }
+        });
+        let serving = axum::serve(listener, router)
             .with_graceful_shutdown(async move { stop.wait().await })
             .into_future();
         // WebSocket tasks close on the signal; a client that does not answer
