@@ -365,11 +365,28 @@ async fn import(
             "IGES must be ASCII".into(),
         )
     })?;
-    let surfaces = cad::read_iges(text)
-        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "malformed", format!("IGES: {e}")))?;
+    let text = text.to_owned();
+    drop(body);
     let handle = s.hub.open(id).await?;
     let current = handle.state().await?;
-    let doc = crate::design::model::with_surface(&current.doc, &surfaces[0])?;
+    // Parsing and building the new surface are CPU work proportional to
+    // the file: off the async threads.
+    let doc = tokio::task::spawn_blocking(move || {
+        let surfaces = cad::read_iges(&text).map_err(|e| {
+            let code = match e {
+                cad::IgesError::TooLarge { .. } => "out_of_range",
+                _ => "malformed",
+            };
+            ApiError(StatusCode::BAD_REQUEST, code, format!("IGES: {e}"))
+        })?;
+        drop(text);
+        Ok::<_, ApiError>(crate::design::model::with_surface(
+            &current.doc,
+            &surfaces[0],
+        )?)
+    })
+    .await
+    .map_err(storage)??;
     handle.replace(doc).await?;
     let view = handle.state().await?;
     Ok(axum::Json(json!({ "id": id, "design": &*view.doc })).into_response())
