@@ -149,6 +149,23 @@ pub enum Inbound {
 /// Decodes the first message of a connection, which must be a hello with
 /// this server's protocol version.
 pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
+    // A hello of another version may carry fields this version does not
+    // know (or lack ones it requires): its version is read first, so it
+    // gets `bad_version`, not `malformed`.
+    if text.len() <= wire::limits::MAX_MESSAGE_BYTES
+        && let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
+        && v.get("type").and_then(|t| t.as_str()) == Some("hello")
+        && let Some(p) = v.get("protocol")
+        && p.as_u64() != Some(u64::from(wire::PROTOCOL_VERSION))
+    {
+        return Err(WireError::new(
+            ErrorCode::BadVersion,
+            format!(
+                "protocol version {p} is not supported; this server speaks {}",
+                wire::PROTOCOL_VERSION
+            ),
+        ));
+    }
     let env = wire::parse_client(text)?;
     match env.msg {
         ClientMessage::Hello {

@@ -42,6 +42,49 @@ struct Session {
     out: mpsc::Sender<Out>,
 }
 
+/// Close code 1007: a text message that is not UTF-8 (RFC 6455 §7.4.1).
+pub const CLOSE_INVALID_DATA: u16 = 1007;
+/// Close code 1008: policy violation (bad handshake, bad token).
+pub const CLOSE_POLICY: u16 = 1008;
+/// Close code 1009: a message too big to process.
+pub const CLOSE_TOO_BIG: u16 = 1009;
+/// Close code 1002: a WebSocket protocol error.
+pub const CLOSE_PROTOCOL: u16 = 1002;
+
+/// What to tell a client whose socket failed to read: the error it gets
+/// and the close code, or `None` when the connection is simply gone (reset,
+/// closed) and nothing can be sent.
+pub fn read_failure(e: axum::Error) -> Option<(WireError, u16)> {
+    use tungstenite::Error as E;
+    let inner = e.into_inner();
+    let Some(e) = inner.downcast_ref::<E>() else {
+        return None;
+    };
+    match e {
+        E::Utf8(detail) => Some((
+            WireError::malformed(format!(
+                "a text message is not valid UTF-8 ({detail}); closing"
+            )),
+            CLOSE_INVALID_DATA,
+        )),
+        E::Capacity(c) => Some((
+            WireError::new(
+                vsculpt_protocol::ErrorCode::TooLarge,
+                format!(
+                    "{c}; the hard limit is {} bytes; closing",
+                    super::HARD_MESSAGE_LIMIT
+                ),
+            ),
+            CLOSE_TOO_BIG,
+        )),
+        E::Protocol(p) => Some((
+            WireError::malformed(format!("WebSocket protocol error: {p}; closing")),
+            CLOSE_PROTOCOL,
+        )),
+        _ => None,
+    }
+}
+
 async fn send_now(socket: &mut WebSocket, text: axum::extract::ws::Utf8Bytes) {
     let _ = socket.send(Message::Text(text)).await;
 }
@@ -73,21 +116,44 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
             return refuse(
                 socket,
                 WireError::handshake("the first message must be a JSON hello"),
-                1008,
+                CLOSE_POLICY,
             )
             .await;
         }
+        Ok(Some(Err(e))) => {
+            return match read_failure(e) {
+                Some((err, code)) => {
+                    tracing::info!(
+                        code,
+                        "closing a connection before its hello: {}",
+                        err.message
+                    );
+                    refuse(socket, err, code).await
+                }
+                None => tracing::debug!("connection lost before its hello"),
+            };
+        }
         Ok(_) => return,
         Err(_) => {
-            return refuse(socket, WireError::handshake("no hello within 10 s"), 1008).await;
+            return refuse(
+                socket,
+                WireError::handshake("no hello within 10 s"),
+                CLOSE_POLICY,
+            )
+            .await;
         }
     };
     if text.len() > limit {
-        return refuse(socket, WireError::too_large(text.len(), limit), 1009).await;
+        return refuse(
+            socket,
+            WireError::too_large(text.len(), limit),
+            CLOSE_TOO_BIG,
+        )
+        .await;
     }
     let hello = match convert::decode_hello(text.as_str()) {
         Ok(h) => h,
-        Err(e) => return refuse(socket, e, 1008).await,
+        Err(e) => return refuse(socket, e, CLOSE_POLICY).await,
     };
     let design = hello.design;
     // A device link may carry its token in the URL (the banner's device
@@ -99,11 +165,11 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     };
     let role = match state.role_on(&token, design).await {
         Ok(Some(r)) => r,
-        _ => return refuse(socket, WireError::unauthorized(), 1008).await,
+        _ => return refuse(socket, WireError::unauthorized(), CLOSE_POLICY).await,
     };
     let handle = match state.hub.open(design).await {
         Ok(h) => h,
-        Err(e) => return refuse(socket, WireError::from(e), 1008).await,
+        Err(e) => return refuse(socket, WireError::from(e), CLOSE_POLICY).await,
     };
     let client = state.next_client.fetch_add(1, Ordering::Relaxed);
     let name = if hello.name.trim().is_empty() {
@@ -188,7 +254,32 @@ impl Session {
                 }
             };
             let text = match msg {
-                None | Some(Err(_)) => return,
+                None => return,
+                Some(Err(e)) => {
+                    // Invalid UTF-8, a frame over the hard limit or a
+                    // protocol violation: the stream cannot be trusted any
+                    // further. Say why, close with the matching code, log.
+                    match read_failure(e) {
+                        Some((err, code)) => {
+                            tracing::info!(
+                                design = self.handle.id,
+                                client = self.client,
+                                code,
+                                "closing the connection: {}",
+                                err.message
+                            );
+                            let reason = err.message.chars().take(100).collect();
+                            self.error(None, err).await;
+                            let _ = self.out.send(Out::Close(code, reason)).await;
+                        }
+                        None => tracing::debug!(
+                            design = self.handle.id,
+                            client = self.client,
+                            "connection lost"
+                        ),
+                    }
+                    return;
+                }
                 Some(Ok(Message::Close(_))) => return,
                 Some(Ok(Message::Ping(_) | Message::Pong(_))) => continue,
                 Some(Ok(Message::Binary(b))) => {
