@@ -2,9 +2,10 @@
 //! token checks, the WebSocket at `/ws` and the static web client. Tokens
 //! come as `Authorization: Bearer <token>` or `?token=`.
 
-use crate::cad::{self, IgesMeta, Mesh};
+use crate::cad;
 use crate::config::Config;
 use crate::design::{ErrorKind, Hub};
+use crate::export::MeshFormat;
 use crate::metrics::Metrics;
 use crate::store::{DesignId, DesignRecord, Role, Store};
 use axum::Router;
@@ -406,40 +407,28 @@ async fn export(
             format!("no resource {file}"),
         )
     })?;
-    if !matches!(ext, "igs" | "obj" | "stl" | "gltf") {
-        return Err(ApiError(
-            StatusCode::NOT_FOUND,
-            "unknown_message",
-            format!("unknown export format {ext} (igs, obj, stl, gltf)"),
-        ));
-    }
+    // None: IGES (the exact surface); Some: a mesh format.
+    let (ctype, format) = match ext {
+        "igs" => ("model/iges", None),
+        "obj" => ("model/obj", Some(MeshFormat::Obj)),
+        "stl" => ("model/stl", Some(MeshFormat::Stl)),
+        "gltf" => ("model/gltf+json", Some(MeshFormat::Gltf)),
+        _ => {
+            return Err(ApiError(
+                StatusCode::NOT_FOUND,
+                "unknown_message",
+                format!("unknown export format {ext} (igs, obj, stl, gltf)"),
+            ));
+        }
+    };
     let handle = s.hub.open(id).await?;
     let doc = handle.state().await?.doc.clone();
-    let name = doc.name.clone();
-    let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
-    if ext == "igs" {
-        let text = cad::write_iges(&doc.surface.to_iges(), &IgesMeta::now(&name, "vsculpt"))
-            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
-        return Ok((
-            [
-                (header::CONTENT_TYPE, "model/iges".to_string()),
-                (header::CONTENT_DISPOSITION, disposition),
-            ],
-            text,
-        )
-            .into_response());
+    let body = match format {
+        None => crate::export::iges(doc).await,
+        Some(f) => crate::export::mesh(doc, f, s.config.export_max_vertices).await,
     }
-    let m = handle.mesh(8).await?;
-    let mesh = Mesh::new(&m.positions, &m.normals, &m.indices)
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
-    let (ctype, body): (&str, Vec<u8>) = match ext {
-        "obj" => ("model/obj", cad::write_obj(&mesh, &name).into_bytes()),
-        "stl" => ("model/stl", cad::write_stl(&mesh, &name)),
-        _ => (
-            "model/gltf+json",
-            cad::write_gltf(&mesh, &name).into_bytes(),
-        ),
-    };
+    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
+    let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
     Ok((
         [
             (header::CONTENT_TYPE, ctype.to_string()),

@@ -25,6 +25,10 @@ pub struct Cli {
     /// Do not create the demo design on first start.
     #[arg(long)]
     pub no_demo: bool,
+    /// Most vertices one mesh export (OBJ, STL, glTF) may have; the
+    /// tessellation is coarsened to fit.
+    #[arg(long, default_value_t = crate::export::DEFAULT_MAX_EXPORT_VERTICES)]
+    pub export_max_vertices: usize,
 }
 
 /// Everything the server needs to run.
@@ -42,6 +46,8 @@ pub struct Config {
     pub max_body_bytes: usize,
     /// Delay after a change before the working state is written.
     pub persist_delay: std::time::Duration,
+    /// Vertex budget of one mesh export.
+    pub export_max_vertices: usize,
 }
 
 impl Config {
@@ -54,6 +60,7 @@ impl Config {
             max_message_bytes: 256 * 1024,
             max_body_bytes: 16 * 1024 * 1024,
             persist_delay: std::time::Duration::from_millis(500),
+            export_max_vertices: crate::export::DEFAULT_MAX_EXPORT_VERTICES,
         }
     }
 }
@@ -62,6 +69,7 @@ impl From<&Cli> for Config {
     fn from(cli: &Cli) -> Self {
         let mut c = Config::new(cli.data.clone(), cli.web_dir.clone());
         c.demo = !cli.no_demo;
+        c.export_max_vertices = cli.export_max_vertices;
         c
     }
 }

@@ -12,6 +12,7 @@ pub mod cad;
 pub mod config;
 pub mod convert;
 pub mod design;
+pub mod export;
 pub mod metrics;
 pub mod server;
 pub mod shutdown;
