@@ -41,7 +41,14 @@ pub struct Shared {
 pub type AppState = Arc<Shared>;
 
 /// An error response: status plus `{"error": {"code", "message"}}`.
-pub struct ApiError(StatusCode, &'static str, String);
+pub struct ApiError(
+    /// The HTTP status.
+    pub StatusCode,
+    /// The stable error code.
+    pub &'static str,
+    /// What went wrong.
+    pub String,
+);
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
@@ -454,6 +461,24 @@ pub fn router(state: AppState) -> Router {
         .route("/api/designs/{id}/import", post(import))
         .route("/api/designs/{id}/{file}", get(export))
         .layer(DefaultBodyLimit::max(limit))
+        .layer(axum::middleware::map_response(
+            crate::rejection::json_errors,
+        ))
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            crate::origin::check,
+        ))
         .with_state(state)
         .merge(web)
+        .layer(axum::middleware::map_response(no_referrer))
+}
+
+/// Every answer says `Referrer-Policy: no-referrer`, so no page of this
+/// server leaks its address (which may hold a token) to another site.
+async fn no_referrer(mut res: Response) -> Response {
+    res.headers_mut().insert(
+        header::REFERRER_POLICY,
+        axum::http::HeaderValue::from_static("no-referrer"),
+    );
+    res
 }

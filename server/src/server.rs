@@ -67,9 +67,14 @@ impl Server {
         let addr = listener.local_addr()?;
         let dir = config.data_dir.clone();
         let store = Arc::new(
-            tokio::task::spawn_blocking(move || Store::open(&dir))
-                .await
-                .map_err(|e| ServerError::Demo(e.to_string()))??,
+            tokio::task::spawn_blocking(move || {
+                crate::permissions::private_dir(&dir)?;
+                let store = Store::open(&dir)?;
+                crate::permissions::private_db_files(&dir)?;
+                Ok::<_, ServerError>(store)
+            })
+            .await
+            .map_err(|e| ServerError::Demo(e.to_string()))??,
         );
         let admin_token = read_or_create_admin_token(&config)?;
         let metrics = Arc::new(Metrics::new());
