@@ -267,13 +267,7 @@ async fn create_design(
     let req: CreateDesign = serde_json::from_slice(&body)
         .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "malformed", e.to_string()))?;
     let name = req.name.trim();
-    if name.is_empty() || name.len() > 200 {
-        return Err(ApiError(
-            StatusCode::BAD_REQUEST,
-            "out_of_range",
-            "name must have 1 to 200 characters".into(),
-        ));
-    }
+    crate::design::demo::check_name(name)?;
     let (nu, nv) = (req.nu.unwrap_or(16), req.nv.unwrap_or(12));
     if !(4..=200).contains(&nu) || !(4..=200).contains(&nv) {
         return Err(ApiError(

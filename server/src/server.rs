@@ -131,7 +131,9 @@ impl Server {
         let ws = format!("ws://{}", self.addr);
         let mut out = format!("vsculpt-server listening on {base}\nweb client: {base}/\n");
         for d in self.designs()? {
-            let (id, name) = (d.id, &d.name);
+            // Escaped (quotes, line breaks, control characters) so a name
+            // can neither end its quotes nor start a forged line.
+            let (id, name) = (d.id, d.name.escape_debug().to_string());
             out.push_str(&format!(
                 "design {id} \"{name}\" editor: {base}/?design={id}&token={}\n",
                 d.tokens.editor

@@ -172,10 +172,17 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         Err(e) => return refuse(socket, WireError::from(e), CLOSE_POLICY).await,
     };
     let client = state.next_client.fetch_add(1, Ordering::Relaxed);
-    let name = if hello.name.trim().is_empty() {
+    // The name is shown to every client of the design and becomes the
+    // author of commits: control characters are replaced by spaces.
+    let cleaned: String = hello
+        .name
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    let name = if cleaned.trim().is_empty() {
         format!("{role:?} {client}").to_lowercase()
     } else {
-        hello.name.trim().to_string()
+        cleaned.trim().to_string()
     };
     let info = ClientInfo {
         id: client,
@@ -351,7 +358,7 @@ impl Session {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                     return;
                 }
-                tracing::trace!(client = self.client, sensor, "device sample");
+                tracing::trace!(client = self.client, sensor = ?sensor, "device sample");
                 let _ = self
                     .handle
                     .send(crate::design::actor::Request::Pointer {
@@ -370,11 +377,13 @@ impl Session {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                     return;
                 }
+                // Debug formatting quotes and escapes the bridge's strings:
+                // a line break or escape sequence cannot forge a log line.
                 tracing::info!(
                     client = self.client,
-                    device,
+                    device = ?device,
                     condition,
-                    message,
+                    detail = ?message,
                     "device status"
                 );
                 self.ack(id).await;
@@ -431,13 +440,8 @@ impl Session {
             return self.error(id, WireError::from(forbidden(self.role))).await;
         }
         let name = name.trim().to_string();
-        if name.is_empty() || name.len() > 200 {
-            return self
-                .error(
-                    id,
-                    WireError::invalid("a design name has 1 to 200 characters"),
-                )
-                .await;
+        if let Err(e) = crate::design::demo::check_name(&name) {
+            return self.error(id, WireError::from(e)).await;
         }
         let doc = match crate::design::demo::plate(&name, 16, 12) {
             Ok(d) => d,
