@@ -318,7 +318,7 @@ impl Session {
                 self.error(id, WireError::handshake("already said hello"))
                     .await;
             }
-            Inbound::Ping => self.reply(convert::pong()).await,
+            Inbound::Ping => self.reply(convert::pong(id)).await,
             Inbound::Command(crate::design::Command::Drag { icon, xyz }) if id.is_none() => {
                 // Drag frames without a request number are fire-and-forget
                 // and coalesced by the actor; the role is checked here so a
@@ -389,7 +389,7 @@ impl Session {
                 self.ack(id).await;
             }
             Inbound::ListVersions => match self.handle.versions().await {
-                Ok(v) => self.reply(convert::versions(&v)).await,
+                Ok(v) => self.reply(convert::versions(id, &v)).await,
                 Err(e) => self.error(id, WireError::from(e)).await,
             },
             Inbound::ListDesigns => self.list(id).await,
@@ -424,7 +424,7 @@ impl Session {
             })
             .await;
         match listed {
-            Ok(Ok(visible)) => self.reply(convert::design_list(&visible)).await,
+            Ok(Ok(visible)) => self.reply(convert::design_list(id, &visible)).await,
             _ => {
                 self.error(
                     id,
@@ -448,7 +448,7 @@ impl Session {
             Err(e) => return self.error(id, WireError::from(e)).await,
         };
         match self.state.hub.create(doc, &self.name).await {
-            Ok(rec) => self.reply(convert::design_created(&rec)).await,
+            Ok(rec) => self.reply(convert::design_created(id, &rec)).await,
             Err(e) => self.error(id, WireError::from(e)).await,
         }
     }
