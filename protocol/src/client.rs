@@ -35,14 +35,18 @@ pub enum ClientMessage {
         token: String,
         /// The design to join.
         design: u64,
-        /// A display name for presence.
+        /// A display name for presence (optional; the server names the
+        /// client after its access and id when empty).
+        #[serde(default)]
         client_name: String,
-        /// What kind of program this is.
+        /// What kind of program this is (optional; `tool` when omitted).
+        #[serde(default)]
         client_kind: ClientKind,
     },
-    /// List the designs (answered with `designs`).
+    /// List the designs (answered with `designs`, carrying `req`).
     ListDesigns,
-    /// Create a design from the demo template (editors only; answered with `designs`).
+    /// Create a flat 16 × 12 plate design (editors only; answered with
+    /// `design_created`, carrying `req` and the new design's tokens).
     CreateDesign {
         /// Its name.
         name: String,
@@ -136,7 +140,8 @@ pub enum ClientMessage {
         /// Button bitmask.
         #[serde(default)]
         buttons: u32,
-        /// Device time, microseconds.
+        /// Device time, microseconds (optional, 0 when omitted).
+        #[serde(default)]
         time_us: u64,
     },
     /// A device's condition changed.
@@ -165,7 +170,7 @@ pub enum ClientMessage {
     Undo,
     /// Redo the last undone edit.
     Redo,
-    /// List the committed versions (answered with `versions`).
+    /// List the committed versions (answered with `versions`, carrying `req`).
     ListVersions,
     /// Make a committed version the working state.
     RestoreVersion {
@@ -178,7 +183,7 @@ pub enum ClientMessage {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         pointer: Option<Vec3>,
     },
-    /// Liveness check (answered with `pong`).
+    /// Liveness check (answered with `pong`, carrying `req`).
     Ping,
 }
 

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ErrorCode;
 use crate::types::{
-    Access, DesignInfo, Icon, Material, PresenceEntry, SurfaceData, Vec3, VersionInfo,
+    Access, DesignInfo, DesignTokens, Icon, Material, PresenceEntry, SurfaceData, Vec3, VersionInfo,
 };
 
 /// Everything the server tells a client.
@@ -27,6 +27,13 @@ pub enum ServerMessage {
     Ack {
         /// The request's `req`.
         req: u64,
+        /// The icon a `create_icon` created.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        icon: Option<u64>,
+        /// The version a `commit` created or a `revert` / `restore_version`
+        /// loaded.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        version: Option<u64>,
     },
     /// A request failed and changed nothing.
     Error {
@@ -84,13 +91,19 @@ pub enum ServerMessage {
         /// The new version.
         version: VersionInfo,
     },
-    /// The committed versions, oldest first.
+    /// The committed versions, oldest first (the answer to `list_versions`).
     Versions {
+        /// The request's `req`, if it had one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        req: Option<u64>,
         /// The versions.
         versions: Vec<VersionInfo>,
     },
-    /// The designs on the server.
+    /// The designs this client's token opens (the answer to `list_designs`).
     Designs {
+        /// The request's `req`, if it had one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        req: Option<u64>,
         /// The designs.
         designs: Vec<DesignInfo>,
     },
@@ -118,6 +131,21 @@ pub enum ServerMessage {
         /// Whether redo has something to redo.
         can_redo: bool,
     },
+    /// A design was created (the answer to `create_design`, to its sender
+    /// only): the links to open it need these tokens.
+    DesignCreated {
+        /// The request's `req`, if it had one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        req: Option<u64>,
+        /// The new design.
+        design: DesignInfo,
+        /// Its tokens.
+        tokens: DesignTokens,
+    },
     /// Answer to `ping`.
-    Pong,
+    Pong {
+        /// The request's `req`, if it had one.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        req: Option<u64>,
+    },
 }

@@ -219,15 +219,28 @@ pub enum Access {
 }
 
 /// What kind of program a client is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ClientKind {
     /// The web client.
     Browser,
     /// The device bridge.
     Bridge,
-    /// A script or test.
+    /// A script or test (the default).
+    #[default]
     Tool,
+}
+
+/// The three access tokens of a design (256 random bits each, hex).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignTokens {
+    /// Full access.
+    pub editor: String,
+    /// Sees everything, changes nothing.
+    pub viewer: String,
+    /// A device bridge: drags, sensors, role and state of icons.
+    pub device: String,
 }
 
 /// One connected client, for presence.

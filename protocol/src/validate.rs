@@ -47,6 +47,18 @@ fn nonempty(name: &str, s: &str) -> Result<(), ProtocolError> {
     string(name, s)
 }
 
+/// A name shown to people and written to logs: no control characters.
+fn name_text(name: &str, s: &str) -> Result<(), ProtocolError> {
+    nonempty(name, s)?;
+    if s.chars().any(char::is_control) {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            format!("{name} contains control characters"),
+        ));
+    }
+    Ok(())
+}
+
 fn uv_curve(c: &UvCurve) -> Result<(), ProtocolError> {
     if c.points.len() > MAX_CURVE_POINTS || c.knots.knots.len() > MAX_KNOTS {
         return Err(ProtocolError::new(
@@ -108,7 +120,7 @@ impl ClientMessage {
                 string("token", token)?;
                 string("client_name", client_name)
             }
-            CreateDesign { name } => nonempty("name", name),
+            CreateDesign { name } => name_text("name", name),
             CreateIcon { spec: s } => spec(s),
             EditIcon { anchor: a, .. } => anchor(a),
             MoveIcon { xyz, .. } | Drag { xyz, .. } => numbers("xyz", xyz),

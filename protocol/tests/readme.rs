@@ -70,6 +70,7 @@ fn every_server_example_parses_and_round_trips() {
         "committed",
         "versions",
         "designs",
+        "design_created",
         "presence",
         "icon_feedback",
         "history",

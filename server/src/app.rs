@@ -2,9 +2,10 @@
 //! token checks, the WebSocket at `/ws` and the static web client. Tokens
 //! come as `Authorization: Bearer <token>` or `?token=`.
 
-use crate::cad::{self, IgesMeta, Mesh};
+use crate::cad;
 use crate::config::Config;
 use crate::design::{ErrorKind, Hub};
+use crate::export::MeshFormat;
 use crate::metrics::Metrics;
 use crate::store::{DesignId, DesignRecord, Role, Store};
 use axum::Router;
@@ -40,7 +41,14 @@ pub struct Shared {
 pub type AppState = Arc<Shared>;
 
 /// An error response: status plus `{"error": {"code", "message"}}`.
-pub struct ApiError(StatusCode, &'static str, String);
+pub struct ApiError(
+    /// The HTTP status.
+    pub StatusCode,
+    /// The stable error code.
+    pub &'static str,
+    /// What went wrong.
+    pub String,
+);
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
@@ -259,13 +267,7 @@ async fn create_design(
     let req: CreateDesign = serde_json::from_slice(&body)
         .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "malformed", e.to_string()))?;
     let name = req.name.trim();
-    if name.is_empty() || name.len() > 200 {
-        return Err(ApiError(
-            StatusCode::BAD_REQUEST,
-            "out_of_range",
-            "name must have 1 to 200 characters".into(),
-        ));
-    }
+    crate::design::demo::check_name(name)?;
     let (nu, nv) = (req.nu.unwrap_or(16), req.nv.unwrap_or(12));
     if !(4..=200).contains(&nu) || !(4..=200).contains(&nv) {
         return Err(ApiError(
@@ -365,11 +367,28 @@ async fn import(
             "IGES must be ASCII".into(),
         )
     })?;
-    let surfaces = cad::read_iges(text)
-        .map_err(|e| ApiError(StatusCode::BAD_REQUEST, "malformed", format!("IGES: {e}")))?;
+    let text = text.to_owned();
+    drop(body);
     let handle = s.hub.open(id).await?;
     let current = handle.state().await?;
-    let doc = crate::design::model::with_surface(&current.doc, &surfaces[0])?;
+    // Parsing and building the new surface are CPU work proportional to
+    // the file: off the async threads.
+    let doc = tokio::task::spawn_blocking(move || {
+        let surfaces = cad::read_iges(&text).map_err(|e| {
+            let code = match e {
+                cad::IgesError::TooLarge { .. } => "out_of_range",
+                _ => "malformed",
+            };
+            ApiError(StatusCode::BAD_REQUEST, code, format!("IGES: {e}"))
+        })?;
+        drop(text);
+        Ok::<_, ApiError>(crate::design::model::with_surface(
+            &current.doc,
+            &surfaces[0],
+        )?)
+    })
+    .await
+    .map_err(storage)??;
     handle.replace(doc).await?;
     let view = handle.state().await?;
     Ok(axum::Json(json!({ "id": id, "design": &*view.doc })).into_response())
@@ -389,40 +408,28 @@ async fn export(
             format!("no resource {file}"),
         )
     })?;
-    if !matches!(ext, "igs" | "obj" | "stl" | "gltf") {
-        return Err(ApiError(
-            StatusCode::NOT_FOUND,
-            "unknown_message",
-            format!("unknown export format {ext} (igs, obj, stl, gltf)"),
-        ));
-    }
+    // None: IGES (the exact surface); Some: a mesh format.
+    let (ctype, format) = match ext {
+        "igs" => ("model/iges", None),
+        "obj" => ("model/obj", Some(MeshFormat::Obj)),
+        "stl" => ("model/stl", Some(MeshFormat::Stl)),
+        "gltf" => ("model/gltf+json", Some(MeshFormat::Gltf)),
+        _ => {
+            return Err(ApiError(
+                StatusCode::NOT_FOUND,
+                "unknown_message",
+                format!("unknown export format {ext} (igs, obj, stl, gltf)"),
+            ));
+        }
+    };
     let handle = s.hub.open(id).await?;
     let doc = handle.state().await?.doc.clone();
-    let name = doc.name.clone();
-    let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
-    if ext == "igs" {
-        let text = cad::write_iges(&doc.surface.to_iges(), &IgesMeta::now(&name, "vsculpt"))
-            .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
-        return Ok((
-            [
-                (header::CONTENT_TYPE, "model/iges".to_string()),
-                (header::CONTENT_DISPOSITION, disposition),
-            ],
-            text,
-        )
-            .into_response());
+    let body = match format {
+        None => crate::export::iges(doc).await,
+        Some(f) => crate::export::mesh(doc, f, s.config.export_max_vertices).await,
     }
-    let m = handle.mesh(8).await?;
-    let mesh = Mesh::new(&m.positions, &m.normals, &m.indices)
-        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
-    let (ctype, body): (&str, Vec<u8>) = match ext {
-        "obj" => ("model/obj", cad::write_obj(&mesh, &name).into_bytes()),
-        "stl" => ("model/stl", cad::write_stl(&mesh, &name)),
-        _ => (
-            "model/gltf+json",
-            cad::write_gltf(&mesh, &name).into_bytes(),
-        ),
-    };
+    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
+    let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
     Ok((
         [
             (header::CONTENT_TYPE, ctype.to_string()),
@@ -448,6 +455,24 @@ pub fn router(state: AppState) -> Router {
         .route("/api/designs/{id}/import", post(import))
         .route("/api/designs/{id}/{file}", get(export))
         .layer(DefaultBodyLimit::max(limit))
+        .layer(axum::middleware::map_response(
+            crate::rejection::json_errors,
+        ))
+        .layer(axum::middleware::from_fn_with_state(
+            state.clone(),
+            crate::origin::check,
+        ))
         .with_state(state)
         .merge(web)
+        .layer(axum::middleware::map_response(no_referrer))
+}
+
+/// Every answer says `Referrer-Policy: no-referrer`, so no page of this
+/// server leaks its address (which may hold a token) to another site.
+async fn no_referrer(mut res: Response) -> Response {
+    res.headers_mut().insert(
+        header::REFERRER_POLICY,
+        axum::http::HeaderValue::from_static("no-referrer"),
+    );
+    res
 }

@@ -25,6 +25,14 @@ pub struct Cli {
     /// Do not create the demo design on first start.
     #[arg(long)]
     pub no_demo: bool,
+    /// Most vertices one mesh export (OBJ, STL, glTF) may have; the
+    /// tessellation is coarsened to fit.
+    #[arg(long, default_value_t = crate::export::DEFAULT_MAX_EXPORT_VERTICES)]
+    pub export_max_vertices: usize,
+    /// A web origin (e.g. `https://review.example.com`) besides the
+    /// server's own whose pages may use the API and WebSocket; repeatable.
+    #[arg(long = "allow-origin")]
+    pub allow_origin: Vec<String>,
 }
 
 /// Everything the server needs to run.
@@ -42,6 +50,10 @@ pub struct Config {
     pub max_body_bytes: usize,
     /// Delay after a change before the working state is written.
     pub persist_delay: std::time::Duration,
+    /// Vertex budget of one mesh export.
+    pub export_max_vertices: usize,
+    /// Origins besides the server's own allowed to call `/ws` and the API.
+    pub allowed_origins: Vec<String>,
 }
 
 impl Config {
@@ -54,6 +66,8 @@ impl Config {
             max_message_bytes: 256 * 1024,
             max_body_bytes: 16 * 1024 * 1024,
             persist_delay: std::time::Duration::from_millis(500),
+            export_max_vertices: crate::export::DEFAULT_MAX_EXPORT_VERTICES,
+            allowed_origins: Vec::new(),
         }
     }
 }
@@ -62,6 +76,8 @@ impl From<&Cli> for Config {
     fn from(cli: &Cli) -> Self {
         let mut c = Config::new(cli.data.clone(), cli.web_dir.clone());
         c.demo = !cli.no_demo;
+        c.export_max_vertices = cli.export_max_vertices;
+        c.allowed_origins = cli.allow_origin.clone();
         c
     }
 }

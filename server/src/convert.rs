@@ -149,6 +149,23 @@ pub enum Inbound {
 /// Decodes the first message of a connection, which must be a hello with
 /// this server's protocol version.
 pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
+    // A hello of another version may carry fields this version does not
+    // know (or lack ones it requires): its version is read first, so it
+    // gets `bad_version`, not `malformed`.
+    if text.len() <= wire::limits::MAX_MESSAGE_BYTES
+        && let Ok(v) = serde_json::from_str::<serde_json::Value>(text)
+        && v.get("type").and_then(|t| t.as_str()) == Some("hello")
+        && let Some(p) = v.get("protocol")
+        && p.as_u64() != Some(u64::from(wire::PROTOCOL_VERSION))
+    {
+        return Err(WireError::new(
+            ErrorCode::BadVersion,
+            format!(
+                "protocol version {p} is not supported; this server speaks {}",
+                wire::PROTOCOL_VERSION
+            ),
+        ));
+    }
     let env = wire::parse_client(text)?;
     match env.msg {
         ClientMessage::Hello {
@@ -447,19 +464,27 @@ pub fn error(req: Option<u64>, e: &WireError) -> Utf8Bytes {
     })
 }
 
-/// `ack` for a request with a number; nothing for one without.
-pub fn ack(req: Option<u64>, _ack: &Ack) -> Option<Utf8Bytes> {
-    req.map(|req| text(&ServerMessage::Ack { req }))
+/// `ack` for a request with a number (with the icon it created or the
+/// version it made or loaded); nothing for one without.
+pub fn ack(req: Option<u64>, ack: &Ack) -> Option<Utf8Bytes> {
+    req.map(|req| {
+        text(&ServerMessage::Ack {
+            req,
+            icon: ack.created_icon,
+            version: ack.version,
+        })
+    })
 }
 
-/// `pong`.
-pub fn pong() -> Utf8Bytes {
-    text(&ServerMessage::Pong)
+/// `pong` (echoing `req`).
+pub fn pong(req: Option<u64>) -> Utf8Bytes {
+    text(&ServerMessage::Pong { req })
 }
 
-/// `designs`.
-pub fn design_list(designs: &[(DesignId, String, u64)]) -> Utf8Bytes {
+/// `designs` (echoing `req`).
+pub fn design_list(req: Option<u64>, designs: &[(DesignId, String, u64)]) -> Utf8Bytes {
     text(&ServerMessage::Designs {
+        req,
         designs: designs
             .iter()
             .map(|(id, name, versions)| wire::DesignInfo {
@@ -471,15 +496,27 @@ pub fn design_list(designs: &[(DesignId, String, u64)]) -> Utf8Bytes {
     })
 }
 
-/// `designs` listing one newly created design (its tokens go only in the
-/// REST answer and the server's banner).
-pub fn design_created(rec: &DesignRecord) -> Utf8Bytes {
-    design_list(&[(rec.id, rec.name.clone(), 1)])
+/// `design_created`, for its creator only: the new design with its tokens.
+pub fn design_created(req: Option<u64>, rec: &DesignRecord) -> Utf8Bytes {
+    text(&ServerMessage::DesignCreated {
+        req,
+        design: wire::DesignInfo {
+            id: rec.id,
+            name: rec.name.clone(),
+            versions: 1,
+        },
+        tokens: wire::DesignTokens {
+            editor: rec.tokens.editor.clone(),
+            viewer: rec.tokens.viewer.clone(),
+            device: rec.tokens.device.clone(),
+        },
+    })
 }
 
-/// `versions`.
-pub fn versions(v: &[VersionInfo]) -> Utf8Bytes {
+/// `versions` (echoing `req`).
+pub fn versions(req: Option<u64>, v: &[VersionInfo]) -> Utf8Bytes {
     text(&ServerMessage::Versions {
+        req,
         versions: v.iter().map(version_to_wire).collect(),
     })
 }

@@ -9,6 +9,7 @@ use crate::design::Hub;
 use crate::metrics::Metrics;
 use crate::shutdown::Shutdown;
 use crate::store::{DesignRecord, Store, StoreError};
+use axum::serve::ListenerExt;
 use std::future::IntoFuture;
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -66,9 +67,14 @@ impl Server {
         let addr = listener.local_addr()?;
         let dir = config.data_dir.clone();
         let store = Arc::new(
-            tokio::task::spawn_blocking(move || Store::open(&dir))
-                .await
-                .map_err(|e| ServerError::Demo(e.to_string()))??,
+            tokio::task::spawn_blocking(move || {
+                crate::permissions::private_dir(&dir)?;
+                let store = Store::open(&dir)?;
+                crate::permissions::private_db_files(&dir)?;
+                Ok::<_, ServerError>(store)
+            })
+            .await
+            .map_err(|e| ServerError::Demo(e.to_string()))??,
         );
         let admin_token = read_or_create_admin_token(&config)?;
         let metrics = Arc::new(Metrics::new());
@@ -125,7 +131,9 @@ impl Server {
         let ws = format!("ws://{}", self.addr);
         let mut out = format!("vsculpt-server listening on {base}\nweb client: {base}/\n");
         for d in self.designs()? {
-            let (id, name) = (d.id, &d.name);
+            // Escaped (quotes, line breaks, control characters) so a name
+            // can neither end its quotes nor start a forged line.
+            let (id, name) = (d.id, d.name.escape_debug().to_string());
             out.push_str(&format!(
                 "design {id} \"{name}\" editor: {base}/?design={id}&token={}\n",
                 d.tokens.editor
@@ -149,7 +157,15 @@ impl Server {
         let router = app::router(self.shared.clone());
         let stop = shared.shutdown.clone();
         tracing::info!(addr = %self.addr, "serving");
-        let serving = axum::serve(self.listener, router)
+        // Replies and geometry frames are small writes that must leave at
+        // once: without TCP_NODELAY, Nagle holds each one until the peer's
+        // delayed ACK (~40 ms on Linux) when a previous write is unacked.
+        let listener = self.listener.tap_io(|tcp| {
+            if let Err(e) = tcp.set_nodelay(true) {
+                tracing::debug!("cannot set TCP_NODELAY on an accepted connection: {e}");
+            }
+        });
+        let serving = axum::serve(listener, router)
             .with_graceful_shutdown(async move { stop.wait().await })
             .into_future();
         // WebSocket tasks close on the signal; a client that does not answer

@@ -100,6 +100,68 @@ fn reads_a_file_in_another_tools_style() {
 }
 
 #[test]
+fn iges_export_of_any_name_is_80_ascii_columns_and_reads_back() {
+    let s = dome(6, 5);
+    // Non-ASCII letters (one straddling column 72 of the Start record),
+    // line breaks, control characters, the delimiters and a fake Hollerith
+    // prefix, and a name longer than a record.
+    let straddle = format!("{}é{}", "a".repeat(15), "b".repeat(80));
+    let names = [
+        "Crème brûlée — été",
+        "two\nlines\r\n\u{7}bell\ttab",
+        "commas, semi; 5Hfake",
+        straddle.as_str(),
+        "日本語のデザイン名",
+    ];
+    for name in names {
+        let text = write_iges(&s, &IgesMeta::now(name, "tést\nauthor")).unwrap();
+        assert!(text.is_ascii(), "{name:?}");
+        for line in text.lines() {
+            assert_eq!(line.len(), 80, "{name:?}: {line:?}");
+        }
+        let back = read_iges(&text).unwrap_or_else(|e| panic!("{name:?}: {e}"));
+        assert_eq!(back, vec![s.clone()], "{name:?}");
+    }
+}
+
+#[test]
+fn iges_import_refuses_coordinates_beyond_1e9() {
+    for (value, ok) in [
+        (1e9, true),
+        (-1e9, true),
+        (1.5e9, false),
+        (1e20, false),
+        (1e300, false),
+    ] {
+        let mut s = dome(4, 4);
+        s.points[5].y = value;
+        let text = write_iges(&s, &IgesMeta::now("big", "t")).unwrap();
+        match read_iges(&text) {
+            Ok(back) if ok => assert_eq!(back[0].points[5].y, value),
+            Err(IgesError::TooLarge {
+                de: 1,
+                what,
+                value: v,
+            }) if !ok => {
+                assert_eq!(what, "control point coordinate");
+                assert_eq!(v, value);
+            }
+            other => panic!("{value}: {other:?}"),
+        }
+    }
+    let mut s = dome(4, 4);
+    let n = s.u_knots.len();
+    s.u_knots[n - 4..].fill(1e12);
+    let text = write_iges(&s, &IgesMeta::now("knots", "t")).unwrap();
+    let e = read_iges(&text).unwrap_err();
+    assert!(
+        matches!(e, IgesError::TooLarge { what: "knot", .. }),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("1e9"), "{e}");
+}
+
+#[test]
 fn rejects_rational_weights_clearly() {
     let text = include_str!("data/rational_arc_panel.igs");
     match read_iges(text) {

@@ -314,8 +314,10 @@ async fn designs_and_versions_over_the_websocket() {
     );
     e.send(json!({"type": "create_design", "req": 2, "name": "kettle"}))
         .await;
-    let c = e.wait_for("designs").await;
-    assert_eq!(c["designs"][0]["name"], "kettle");
+    let c = e.wait_for("design_created").await;
+    assert_eq!(c["req"], 2);
+    assert_eq!(c["design"]["name"], "kettle");
+    assert_eq!(c["tokens"]["editor"].as_str().unwrap().len(), 64);
     let admin = http::get(server.addr, "/api/designs", Some(&server.admin))
         .await
         .json();

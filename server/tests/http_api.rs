@@ -341,3 +341,68 @@ async fn iges_export_import_round_trip() {
     assert_eq!(copy["design"]["surface"], state["design"]["surface"]);
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn iges_of_a_non_ascii_name_exports_and_reimports() {
+    let server = TestServer::start(common::data_dir("http-iges-name")).await;
+    // A name whose é falls on the Start record's 72-column boundary, and
+    // more non-ASCII after it.
+    let name = format!("{}é — crème brûlée", "n".repeat(15));
+    let body = json!({ "name": name }).to_string();
+    let c = http::request(
+        server.addr,
+        "POST",
+        "/api/designs",
+        Some(&server.admin),
+        body.as_bytes(),
+    )
+    .await;
+    assert_eq!(c.status, 201, "{}", c.text());
+    let c = c.json();
+    let id = c["id"].as_u64().unwrap();
+    let editor = c["tokens"]["editor"].as_str().unwrap();
+    let igs = get(
+        server.addr,
+        &format!("/api/designs/{id}/export.igs"),
+        Some(editor),
+    )
+    .await;
+    assert_eq!(igs.status, 200);
+    let text = igs.text();
+    assert!(text.is_ascii() && text.lines().all(|l| l.len() == 80));
+    let before = get(server.addr, &format!("/api/designs/{id}"), Some(editor))
+        .await
+        .json();
+    let p = format!("/api/designs/{id}/import");
+    let r = http::request(server.addr, "POST", &p, Some(editor), text.as_bytes()).await;
+    assert_eq!(r.status, 200, "{}", r.text());
+    let after = get(server.addr, &format!("/api/designs/{id}"), Some(editor))
+        .await
+        .json();
+    assert_eq!(after["design"]["surface"], before["design"]["surface"]);
+
+    // A coordinate of 1e300 (or 2e9) is refused with a clear error and
+    // changes nothing.
+    for big in ["1.0E300", "2.0E9"] {
+        let surface = vsculpt_server::cad::read_iges(&text).unwrap().remove(0);
+        let mut s = surface.clone();
+        s.points[0].z = big.parse().unwrap();
+        let bad =
+            vsculpt_server::cad::write_iges(&s, &vsculpt_server::cad::IgesMeta::now("big", "test"))
+                .unwrap();
+        let r = http::request(server.addr, "POST", &p, Some(editor), bad.as_bytes()).await;
+        assert_eq!(r.status, 400, "{}", r.text());
+        assert_eq!(r.json()["error"]["code"], "out_of_range");
+        assert!(
+            r.json()["error"]["message"]
+                .as_str()
+                .unwrap()
+                .contains("1e9")
+        );
+    }
+    let again = get(server.addr, &format!("/api/designs/{id}"), Some(editor))
+        .await
+        .json();
+    assert_eq!(again["design"], after["design"]);
+    server.stop().await;
+}

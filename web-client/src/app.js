@@ -1,5 +1,6 @@
 // The vsculpt web client: joins the design named in the page URL
-// (?design=ID&token=TOKEN), draws it live, and — for an editor link — lets a
+// (?design=ID&token=TOKEN; the token is then moved out of the address bar),
+// draws it live, and — for an editor link — lets a
 // person create, drag and switch icons, set the material, undo, commit,
 // revert and restore versions. A viewer link shows the same, read-only, with
 // presence. Exposed as `window.vsculpt` for scripting and tests.
@@ -15,7 +16,17 @@ import { XRSculpt } from './xr.js';
 
 const params = new URLSearchParams(location.search);
 const design = Number(params.get('design') || 1);
-const token = params.get('token') || '';
+// The token arrives in the link (?token= or #token=) and leaves the address
+// bar at once: kept for this tab only (sessionStorage, so a reload still
+// works), never in history, bookmarks or a referrer.
+const fragment = new URLSearchParams(location.hash.slice(1));
+const tokenKey = `vsculpt-token-${design}`;
+const token = params.get('token') || fragment.get('token') || sessionStorage.getItem(tokenKey) || '';
+if (token) sessionStorage.setItem(tokenKey, token);
+if (params.has('token') || fragment.has('token')) {
+  params.delete('token');
+  history.replaceState(null, '', `${location.pathname}?${params}`);
+}
 const $ = (id) => document.getElementById(id);
 
 const state = {

@@ -61,10 +61,27 @@ pub enum IgesError {
         /// Largest weight.
         max: f64,
     },
+    /// A knot or (transformed) control point is beyond [`MAX_IGES_MAGNITUDE`].
+    #[error(
+        "entity at D{de}: {what} {value:e} is beyond ±{MAX_IGES_MAGNITUDE:e}, the largest coordinate accepted"
+    )]
+    TooLarge {
+        /// The entity's directory-entry sequence number.
+        de: usize,
+        /// Which kind of number ("knot" or "control point coordinate").
+        what: &'static str,
+        /// The offending value (may be infinite after a transformation).
+        value: f64,
+    },
     /// The surface to write is inconsistent.
     #[error("invalid surface: {0}")]
     InvalidSurface(String),
 }
+
+/// Largest magnitude of a knot or control-point coordinate read from IGES:
+/// the protocol's limit for any coordinate (`vsculpt_protocol::limits`), so
+/// an imported surface can be solved, sent in f32 frames and exported.
+pub const MAX_IGES_MAGNITUDE: f64 = vsculpt_protocol::limits::MAX_MAGNITUDE;
 
 /// A polynomial B-spline surface as IGES carries it: degrees, full knot
 /// vectors and control points row-major (`i * nv + j`, `i` along u) — the
@@ -170,12 +187,40 @@ pub fn iges_timestamp(t: std::time::SystemTime) -> String {
     )
 }
 
+/// `s` as IGES may carry it: printable ASCII only (a fixed-format file is
+/// 80 ASCII columns per record). Every other character — non-ASCII letters,
+/// line breaks, tabs, other control characters — becomes `_`, so a name
+/// can neither split a record nor shift the columns after it.
+pub fn iges_text(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c == ' ' || c.is_ascii_graphic() {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// A Hollerith string (`nHtext`) of `s` made IGES-safe; the count is in
+/// bytes, which for the printable ASCII of [`iges_text`] is also characters.
 fn hollerith(s: &str) -> String {
-    let clean: String = s
-        .chars()
-        .filter(|c| c.is_ascii() && !c.is_ascii_control())
-        .collect();
+    let clean = iges_text(s);
     format!("{}H{}", clean.len(), clean)
+}
+
+/// The longest prefix of `s` of at most `width` bytes that ends on a
+/// character boundary (at least one character, so splitting progresses).
+fn split_at_most(s: &str, width: usize) -> (&str, &str) {
+    let mut cut = width.min(s.len());
+    while cut > 0 && !s.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    if cut == 0 {
+        cut = s.chars().next().map_or(0, char::len_utf8);
+    }
+    s.split_at(cut)
 }
 
 fn real(x: f64) -> String {
@@ -198,7 +243,7 @@ fn pack(tokens: &[String], width: usize) -> Vec<String> {
         }
         let mut t = t.as_str();
         while t.len() > width {
-            let (head, tail) = t.split_at(width);
+            let (head, tail) = split_at_most(t, width);
             lines.push(head.to_string());
             t = tail;
         }
@@ -230,7 +275,7 @@ pub fn write_iges(surface: &IgesSurface, meta: &IgesMeta) -> Result<String, Iges
     // Start section.
     let start = format!(
         "vsculpt surface \"{}\" exported as IGES entity 128",
-        meta.name
+        iges_text(&meta.name)
     );
     let start_lines = pack(&[start], 72);
     for (k, l) in start_lines.iter().enumerate() {
@@ -588,12 +633,34 @@ pub fn read_iges(text: &str) -> Result<Vec<IgesSurface>, IgesError> {
                 *p = m(*p);
             }
         }
+        check_magnitudes(de, &s)?;
         surfaces.push(s);
     }
     if surfaces.is_empty() {
         return Err(IgesError::NoSurface);
     }
     Ok(surfaces)
+}
+
+/// Every knot and control-point coordinate finite and within
+/// ±[`MAX_IGES_MAGNITUDE`] (checked after any transformation).
+fn check_magnitudes(de: usize, s: &IgesSurface) -> Result<(), IgesError> {
+    let bad = |x: f64| !x.is_finite() || x.abs() > MAX_IGES_MAGNITUDE;
+    if let Some(&value) = s.u_knots.iter().chain(&s.v_knots).find(|&&x| bad(x)) {
+        return Err(IgesError::TooLarge {
+            de,
+            what: "knot",
+            value,
+        });
+    }
+    if let Some(value) = s.points.iter().flat_map(|p| p.to_array()).find(|&x| bad(x)) {
+        return Err(IgesError::TooLarge {
+            de,
+            what: "control point coordinate",
+            value,
+        });
+    }
+    Ok(())
 }
 
 type Params<'a> = dyn Fn(usize) -> Result<Vec<String>, IgesError> + 'a;

@@ -7,8 +7,8 @@ pub mod mesh;
 pub mod obj;
 pub mod stl;
 
-pub use gltf::write_gltf;
-pub use iges::{IgesError, IgesMeta, IgesSurface, read_iges, write_iges};
+pub use gltf::{write_gltf, write_gltf_to};
+pub use iges::{IgesError, IgesMeta, IgesSurface, iges_text, read_iges, write_iges};
 pub use mesh::{Mesh, MeshError};
-pub use obj::write_obj;
-pub use stl::write_stl;
+pub use obj::{write_obj, write_obj_to};
+pub use stl::{write_stl, write_stl_to};

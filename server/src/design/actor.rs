@@ -81,6 +81,17 @@ pub struct Feedback {
     pub revision: u64,
 }
 
+/// A drag frame without a request number that was refused (unknown icon,
+/// held by another client, …): the client still hears of it, latest wins,
+/// so a stream of refused frames costs one error per writer wake-up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Refusal {
+    /// Counts refusals for this client, so equal errors still notify.
+    pub seq: u64,
+    /// Why.
+    pub error: CommandError,
+}
+
 /// An ordered event every client of a design receives.
 #[derive(Clone, Debug)]
 pub enum DesignEvent {
@@ -119,6 +130,8 @@ pub struct Joined {
     pub geometry: watch::Receiver<Arc<Geometry>>,
     /// This client's drag feedback (latest wins).
     pub feedback: watch::Receiver<Option<Feedback>>,
+    /// This client's refused drag frames (latest wins).
+    pub refusals: watch::Receiver<Option<Refusal>>,
 }
 
 /// A request to the actor.
@@ -311,6 +324,7 @@ struct Actor {
     undo: UndoStack,
     clients: BTreeMap<u64, Presence>,
     feedback: BTreeMap<u64, watch::Sender<Option<Feedback>>>,
+    refusals: BTreeMap<u64, watch::Sender<Option<Refusal>>>,
     events: broadcast::Sender<DesignEvent>,
     geometry: watch::Sender<Arc<Geometry>>,
     doc: Arc<DesignDoc>,
@@ -345,6 +359,7 @@ pub fn spawn(
         undo: UndoStack::new(64),
         clients: BTreeMap::new(),
         feedback: BTreeMap::new(),
+        refusals: BTreeMap::new(),
         events: broadcast::channel(EVENT_CAPACITY).0,
         geometry,
         doc,
@@ -457,6 +472,7 @@ impl Actor {
                 }
                 Request::Leave { client } => {
                     self.feedback.remove(&client);
+                    self.refusals.remove(&client);
                     if let Some(icon) = self.dragging.remove(&client) {
                         if self.model.release(icon).is_ok() {
                             self.changed();
@@ -480,6 +496,12 @@ impl Actor {
                         }
                         (None, Err(e)) => {
                             tracing::debug!(design = self.id, client, "drag refused: {e}");
+                            if let Some(tx) = self.refusals.get(&client) {
+                                tx.send_modify(|r| {
+                                    let seq = r.as_ref().map_or(1, |r| r.seq + 1);
+                                    *r = Some(Refusal { seq, error: e });
+                                });
+                            }
                         }
                         (None, Ok(_)) => {}
                     }
@@ -506,7 +528,7 @@ impl Actor {
                     let _ = reply.send(self.model.mesh(density));
                 }
                 Request::Replace { doc, reply } => {
-                    let out = match DesignModel::load(&doc) {
+                    let out = match heavy(|| DesignModel::load(&doc)) {
                         Ok(m) => {
                             self.undo.push(self.model.to_doc());
                             self.model = m;
@@ -557,11 +579,14 @@ impl Actor {
     fn joined(&mut self, client: u64) -> Joined {
         let feedback = watch::channel(None);
         self.feedback.insert(client, feedback.0);
+        let refusals = watch::channel(None);
+        self.refusals.insert(client, refusals.0);
         Joined {
             view: self.view(),
             events: self.events.subscribe(),
             geometry: self.geometry.subscribe(),
             feedback: feedback.1,
+            refusals: refusals.1,
         }
     }
 

@@ -42,6 +42,26 @@ fn surface_from(
     })
 }
 
+/// Checks a new design's name: 1 to 200 bytes after trimming, no control
+/// characters (a name is printed in the start banner and in logs, where a
+/// line break would forge a line).
+pub fn check_name(name: &str) -> Result<(), CommandError> {
+    let name = name.trim();
+    if name.is_empty() || name.len() > 200 {
+        return Err(CommandError::new(
+            ErrorKind::InvalidValue,
+            "a design name has 1 to 200 bytes",
+        ));
+    }
+    if name.chars().any(char::is_control) {
+        return Err(CommandError::new(
+            ErrorKind::InvalidValue,
+            "a design name may not contain control characters (line breaks, tabs, escapes)",
+        ));
+    }
+    Ok(())
+}
+
 /// A flat `nu × nv` bicubic plate, 100 × 100 (model units: mm), no icons.
 pub fn plate(name: &str, nu: usize, nv: usize) -> Result<DesignDoc, CommandError> {
     let surface = surface_from(nu, nv, |s, t| [100.0 * s - 50.0, 100.0 * t - 50.0, 0.0])?;

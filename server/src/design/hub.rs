@@ -85,11 +85,12 @@ impl Hub {
 
     /// Creates a design from `doc` (stored, with version 1 = `doc`).
     pub async fn create(&self, doc: DesignDoc, author: &str) -> Result<DesignRecord, CommandError> {
-        // Validate by building the model once.
-        super::model::DesignModel::load(&doc)?;
         let store = self.store.clone();
         let author = author.to_string();
         tokio::task::spawn_blocking(move || {
+            // Validate by building the model once (CPU work: off the async
+            // threads, like the store writes).
+            super::model::DesignModel::load(&doc)?;
             let bytes = doc.to_bytes();
             let rec = store.create_design(&doc.name, &bytes).map_err(storage)?;
             store

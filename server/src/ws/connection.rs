@@ -42,6 +42,49 @@ struct Session {
     out: mpsc::Sender<Out>,
 }
 
+/// Close code 1007: a text message that is not UTF-8 (RFC 6455 §7.4.1).
+pub const CLOSE_INVALID_DATA: u16 = 1007;
+/// Close code 1008: policy violation (bad handshake, bad token).
+pub const CLOSE_POLICY: u16 = 1008;
+/// Close code 1009: a message too big to process.
+pub const CLOSE_TOO_BIG: u16 = 1009;
+/// Close code 1002: a WebSocket protocol error.
+pub const CLOSE_PROTOCOL: u16 = 1002;
+
+/// What to tell a client whose socket failed to read: the error it gets
+/// and the close code, or `None` when the connection is simply gone (reset,
+/// closed) and nothing can be sent.
+pub fn read_failure(e: axum::Error) -> Option<(WireError, u16)> {
+    use tungstenite::Error as E;
+    let inner = e.into_inner();
+    let Some(e) = inner.downcast_ref::<E>() else {
+        return None;
+    };
+    match e {
+        E::Utf8(detail) => Some((
+            WireError::malformed(format!(
+                "a text message is not valid UTF-8 ({detail}); closing"
+            )),
+            CLOSE_INVALID_DATA,
+        )),
+        E::Capacity(c) => Some((
+            WireError::new(
+                vsculpt_protocol::ErrorCode::TooLarge,
+                format!(
+                    "{c}; the hard limit is {} bytes; closing",
+                    super::HARD_MESSAGE_LIMIT
+                ),
+            ),
+            CLOSE_TOO_BIG,
+        )),
+        E::Protocol(p) => Some((
+            WireError::malformed(format!("WebSocket protocol error: {p}; closing")),
+            CLOSE_PROTOCOL,
+        )),
+        _ => None,
+    }
+}
+
 async fn send_now(socket: &mut WebSocket, text: axum::extract::ws::Utf8Bytes) {
     let _ = socket.send(Message::Text(text)).await;
 }
@@ -73,21 +116,44 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
             return refuse(
                 socket,
                 WireError::handshake("the first message must be a JSON hello"),
-                1008,
+                CLOSE_POLICY,
             )
             .await;
         }
+        Ok(Some(Err(e))) => {
+            return match read_failure(e) {
+                Some((err, code)) => {
+                    tracing::info!(
+                        code,
+                        "closing a connection before its hello: {}",
+                        err.message
+                    );
+                    refuse(socket, err, code).await
+                }
+                None => tracing::debug!("connection lost before its hello"),
+            };
+        }
         Ok(_) => return,
         Err(_) => {
-            return refuse(socket, WireError::handshake("no hello within 10 s"), 1008).await;
+            return refuse(
+                socket,
+                WireError::handshake("no hello within 10 s"),
+                CLOSE_POLICY,
+            )
+            .await;
         }
     };
     if text.len() > limit {
-        return refuse(socket, WireError::too_large(text.len(), limit), 1009).await;
+        return refuse(
+            socket,
+            WireError::too_large(text.len(), limit),
+            CLOSE_TOO_BIG,
+        )
+        .await;
     }
     let hello = match convert::decode_hello(text.as_str()) {
         Ok(h) => h,
-        Err(e) => return refuse(socket, e, 1008).await,
+        Err(e) => return refuse(socket, e, CLOSE_POLICY).await,
     };
     let design = hello.design;
     // A device link may carry its token in the URL (the banner's device
@@ -99,17 +165,24 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     };
     let role = match state.role_on(&token, design).await {
         Ok(Some(r)) => r,
-        _ => return refuse(socket, WireError::unauthorized(), 1008).await,
+        _ => return refuse(socket, WireError::unauthorized(), CLOSE_POLICY).await,
     };
     let handle = match state.hub.open(design).await {
         Ok(h) => h,
-        Err(e) => return refuse(socket, WireError::from(e), 1008).await,
+        Err(e) => return refuse(socket, WireError::from(e), CLOSE_POLICY).await,
     };
     let client = state.next_client.fetch_add(1, Ordering::Relaxed);
-    let name = if hello.name.trim().is_empty() {
+    // The name is shown to every client of the design and becomes the
+    // author of commits: control characters are replaced by spaces.
+    let cleaned: String = hello
+        .name
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect();
+    let name = if cleaned.trim().is_empty() {
         format!("{role:?} {client}").to_lowercase()
     } else {
-        hello.name.trim().to_string()
+        cleaned.trim().to_string()
     };
     let info = ClientInfo {
         id: client,
@@ -188,7 +261,32 @@ impl Session {
                 }
             };
             let text = match msg {
-                None | Some(Err(_)) => return,
+                None => return,
+                Some(Err(e)) => {
+                    // Invalid UTF-8, a frame over the hard limit or a
+                    // protocol violation: the stream cannot be trusted any
+                    // further. Say why, close with the matching code, log.
+                    match read_failure(e) {
+                        Some((err, code)) => {
+                            tracing::info!(
+                                design = self.handle.id,
+                                client = self.client,
+                                code,
+                                "closing the connection: {}",
+                                err.message
+                            );
+                            let reason = err.message.chars().take(100).collect();
+                            self.error(None, err).await;
+                            let _ = self.out.send(Out::Close(code, reason)).await;
+                        }
+                        None => tracing::debug!(
+                            design = self.handle.id,
+                            client = self.client,
+                            "connection lost"
+                        ),
+                    }
+                    return;
+                }
                 Some(Ok(Message::Close(_))) => return,
                 Some(Ok(Message::Ping(_) | Message::Pong(_))) => continue,
                 Some(Ok(Message::Binary(b))) => {
@@ -220,7 +318,7 @@ impl Session {
                 self.error(id, WireError::handshake("already said hello"))
                     .await;
             }
-            Inbound::Ping => self.reply(convert::pong()).await,
+            Inbound::Ping => self.reply(convert::pong(id)).await,
             Inbound::Command(crate::design::Command::Drag { icon, xyz }) if id.is_none() => {
                 // Drag frames without a request number are fire-and-forget
                 // and coalesced by the actor; the role is checked here so a
@@ -260,7 +358,7 @@ impl Session {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                     return;
                 }
-                tracing::trace!(client = self.client, sensor, "device sample");
+                tracing::trace!(client = self.client, sensor = ?sensor, "device sample");
                 let _ = self
                     .handle
                     .send(crate::design::actor::Request::Pointer {
@@ -279,17 +377,19 @@ impl Session {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                     return;
                 }
+                // Debug formatting quotes and escapes the bridge's strings:
+                // a line break or escape sequence cannot forge a log line.
                 tracing::info!(
                     client = self.client,
-                    device,
+                    device = ?device,
                     condition,
-                    message,
+                    detail = ?message,
                     "device status"
                 );
                 self.ack(id).await;
             }
             Inbound::ListVersions => match self.handle.versions().await {
-                Ok(v) => self.reply(convert::versions(&v)).await,
+                Ok(v) => self.reply(convert::versions(id, &v)).await,
                 Err(e) => self.error(id, WireError::from(e)).await,
             },
             Inbound::ListDesigns => self.list(id).await,
@@ -324,7 +424,7 @@ impl Session {
             })
             .await;
         match listed {
-            Ok(Ok(visible)) => self.reply(convert::design_list(&visible)).await,
+            Ok(Ok(visible)) => self.reply(convert::design_list(id, &visible)).await,
             _ => {
                 self.error(
                     id,
@@ -340,20 +440,15 @@ impl Session {
             return self.error(id, WireError::from(forbidden(self.role))).await;
         }
         let name = name.trim().to_string();
-        if name.is_empty() || name.len() > 200 {
-            return self
-                .error(
-                    id,
-                    WireError::invalid("a design name has 1 to 200 characters"),
-                )
-                .await;
+        if let Err(e) = crate::design::demo::check_name(&name) {
+            return self.error(id, WireError::from(e)).await;
         }
         let doc = match crate::design::demo::plate(&name, 16, 12) {
             Ok(d) => d,
             Err(e) => return self.error(id, WireError::from(e)).await,
         };
         match self.state.hub.create(doc, &self.name).await {
-            Ok(rec) => self.reply(convert::design_created(&rec)).await,
+            Ok(rec) => self.reply(convert::design_created(id, &rec)).await,
             Err(e) => self.error(id, WireError::from(e)).await,
         }
     }

@@ -7,8 +7,10 @@
 //! 2. the design's ordered events (broadcast): never skipped silently — if
 //!    this client falls more than the channel's capacity behind, it gets a
 //!    fresh full snapshot from the actor and continues from there;
-//! 3. this client's drag feedback and the geometry (both `watch`): latest
-//!    wins — a slow client skips intermediate frames instead of queueing them.
+//! 3. this client's drag feedback, its refused drag frames and the geometry
+//!    (all `watch`): latest wins — a slow client skips intermediate frames
+//!    instead of queueing them, and a stream of refused drags yields one
+//!    error per wake-up, not one per frame.
 
 use crate::convert;
 use crate::design::{DesignEvent, DesignHandle, Joined};
@@ -135,6 +137,19 @@ pub async fn run(
                     && sink.send(Message::Text(convert::feedback(&f))).await.is_err()
                 {
                     break;
+                }
+            }
+            r = joined.refusals.changed(), if geometry_live => {
+                if r.is_err() {
+                    continue;
+                }
+                let refused = joined.refusals.borrow_and_update().clone();
+                if let Some(r) = refused {
+                    metrics.error_sent();
+                    let e = convert::WireError::from(r.error);
+                    if sink.send(Message::Text(convert::error(None, &e))).await.is_err() {
+                        break;
+                    }
                 }
             }
             r = joined.geometry.changed(), if geometry_live => {

@@ -94,9 +94,19 @@ pub struct TestServer {
 impl TestServer {
     /// Starts a server on 127.0.0.1:0 over `data` (web client from `web`).
     pub async fn start_with(data: PathBuf, web: PathBuf) -> Self {
+        Self::start_configured(data, web, |_| {}).await
+    }
+
+    /// Starts a server whose configuration `adjust` changes first.
+    pub async fn start_configured(
+        data: PathBuf,
+        web: PathBuf,
+        adjust: impl FnOnce(&mut Config),
+    ) -> Self {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let mut config = Config::new(data, web);
         config.persist_delay = std::time::Duration::from_millis(100);
+        adjust(&mut config);
         let shutdown = Shutdown::new();
         let server = Server::start(listener, config, shutdown.clone())
             .await

@@ -38,6 +38,15 @@ pub async fn raw(addr: SocketAddr) -> Stream {
 }
 
 pub fn hello(design: u64, token: &str, name: &str) -> Value {
+    if name.is_empty() {
+        // The shortest hello: the optional fields left out.
+        return json!({
+            "type": "hello",
+            "protocol": vsculpt_protocol::PROTOCOL_VERSION,
+            "token": token,
+            "design": design
+        });
+    }
     json!({
         "type": "hello",
         "protocol": vsculpt_protocol::PROTOCOL_VERSION,

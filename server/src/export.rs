@@ -1,0 +1,205 @@
+//! Bounded, streamed exports: a mesh export tessellates with at most a
+//! vertex budget ([`DEFAULT_MAX_EXPORT_VERTICES`] unless the operator raises
+//! it with `--export-max-vertices`), on a blocking thread, and the file goes
+//! out in 64 KiB chunks through a small bounded channel — the body is never
+//! held whole, a client that stops reading stalls only its own export, and
+//! one that disconnects stops it. IGES is written on a blocking thread too.
+//!
+//! Density: 8 samples per knot span when that fits the budget, else the
+//! largest whole number of samples per span that fits, else (more spans
+//! than the budget allows at one sample each) uniform samples scaled to it.
+
+use crate::cad::{self, IgesMeta, Mesh};
+use crate::design::DesignDoc;
+use axum::body::{Body, Bytes};
+use std::io::{self, Write};
+use std::sync::Arc;
+use tokio::sync::{mpsc, oneshot};
+use vsculpt_kernel::analysis::tessellate;
+use vsculpt_kernel::bspline::{BSplineSurface, KnotVector};
+
+/// The default vertex budget of one mesh export.
+pub const DEFAULT_MAX_EXPORT_VERTICES: usize = 1_000_000;
+/// Samples per knot span when the budget allows.
+pub const SAMPLES_PER_SPAN: usize = 8;
+/// Size of one body chunk.
+pub const CHUNK_BYTES: usize = 64 * 1024;
+/// Chunks buffered between the writer thread and the connection.
+const CHUNKS_IN_FLIGHT: usize = 4;
+
+/// A mesh file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    /// Wavefront OBJ.
+    Obj,
+    /// Binary STL.
+    Stl,
+    /// glTF 2.0 with an embedded buffer.
+    Gltf,
+}
+
+/// Why an export could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ExportError {
+    /// The document's surface does not build (a bug: stored documents are valid).
+    #[error("surface: {0}")]
+    Surface(String),
+    /// The tessellation is not a valid mesh (non-finite points).
+    #[error("mesh: {0}")]
+    Mesh(#[from] cad::MeshError),
+    /// IGES writing failed.
+    #[error("IGES: {0}")]
+    Iges(#[from] cad::IgesError),
+    /// The blocking task died.
+    #[error("export task failed")]
+    Task,
+}
+
+/// Samples along u and v for a surface of `spans_u` × `spans_v` knot spans
+/// so that `samples_u · samples_v ≤ budget` (budget at least 4).
+pub fn samples(spans_u: usize, spans_v: usize, budget: usize) -> (usize, usize) {
+    let budget = budget.max(4);
+    let (su, sv) = (spans_u.max(1), spans_v.max(1));
+    for d in (1..=SAMPLES_PER_SPAN).rev() {
+        let (nu, nv) = (su * d + 1, sv * d + 1);
+        if nu.saturating_mul(nv) <= budget {
+            return (nu, nv);
+        }
+    }
+    // Even one sample per span is too many: scale both directions alike.
+    let (nu, nv) = ((su + 1) as f64, (sv + 1) as f64);
+    let f = (budget as f64 / (nu * nv)).sqrt();
+    let mut a = ((nu * f).floor() as usize).max(2);
+    let mut b = ((nv * f).floor() as usize).max(2);
+    while a * b > budget {
+        if a >= b { a -= 1 } else { b -= 1 }
+    }
+    (a, b)
+}
+
+fn kernel_surface(doc: &DesignDoc) -> Result<BSplineSurface, ExportError> {
+    let s = &doc.surface;
+    let bad = |e: &dyn std::fmt::Display| ExportError::Surface(e.to_string());
+    let u = KnotVector::new(s.u_degree, s.u_knots.clone()).map_err(|e| bad(&e))?;
+    let v = KnotVector::new(s.v_degree, s.v_knots.clone()).map_err(|e| bad(&e))?;
+    BSplineSurface::new(u, v, s.dpoints()).map_err(|e| bad(&e))
+}
+
+/// Sends what it is given to the HTTP body in [`CHUNK_BYTES`] pieces,
+/// blocking while the connection is behind; fails once the client is gone.
+struct ChunkWriter {
+    buf: Vec<u8>,
+    tx: mpsc::Sender<io::Result<Bytes>>,
+}
+
+impl ChunkWriter {
+    fn send(&mut self) -> io::Result<()> {
+        if self.buf.is_empty() {
+            return Ok(());
+        }
+        let chunk = std::mem::replace(&mut self.buf, Vec::with_capacity(CHUNK_BYTES));
+        self.tx
+            .blocking_send(Ok(Bytes::from(chunk)))
+            .map_err(|_| io::Error::new(io::ErrorKind::BrokenPipe, "the client went away"))
+    }
+}
+
+impl Write for ChunkWriter {
+    fn write(&mut self, data: &[u8]) -> io::Result<usize> {
+        self.buf.extend_from_slice(data);
+        if self.buf.len() >= CHUNK_BYTES {
+            self.send()?;
+        }
+        Ok(data.len())
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.send()
+    }
+}
+
+/// Runs `prepare` on a blocking thread; when it succeeds, answers with a
+/// body that `write` fills chunk by chunk on that same thread.
+async fn stream<T, P, W>(prepare: P, write: W) -> Result<Body, ExportError>
+where
+    T: Send + 'static,
+    P: FnOnce() -> Result<T, ExportError> + Send + 'static,
+    W: FnOnce(&T, &mut dyn Write) -> io::Result<()> + Send + 'static,
+{
+    let (ready_tx, ready_rx) = oneshot::channel();
+    let (tx, mut rx) = mpsc::channel::<io::Result<Bytes>>(CHUNKS_IN_FLIGHT);
+    tokio::task::spawn_blocking(move || {
+        let prepared = match prepare() {
+            Ok(p) => p,
+            Err(e) => {
+                let _ = ready_tx.send(Err(e));
+                return;
+            }
+        };
+        if ready_tx.send(Ok(())).is_err() {
+            return;
+        }
+        let mut w = ChunkWriter {
+            buf: Vec::with_capacity(CHUNK_BYTES),
+            tx: tx.clone(),
+        };
+        let done = write(&prepared, &mut w).and_then(|()| w.flush());
+        drop(prepared);
+        if let Err(e) = done
+            && e.kind() != io::ErrorKind::BrokenPipe
+        {
+            tracing::warn!("export failed while streaming: {e}");
+            let _ = tx.blocking_send(Err(e));
+        }
+    });
+    ready_rx.await.map_err(|_| ExportError::Task)??;
+    let body = futures_util::stream::poll_fn(move |cx| rx.poll_recv(cx));
+    Ok(Body::from_stream(body))
+}
+
+/// A mesh export of `doc` with at most `max_vertices` vertices, streamed.
+pub async fn mesh(
+    doc: Arc<DesignDoc>,
+    format: MeshFormat,
+    max_vertices: usize,
+) -> Result<Body, ExportError> {
+    let name = doc.name.clone();
+    stream(
+        move || {
+            let surface = kernel_surface(&doc)?;
+            drop(doc);
+            let (su, sv) = samples(
+                surface.u_knots().spans().len(),
+                surface.v_knots().spans().len(),
+                max_vertices,
+            );
+            let t = tessellate(&surface, su, sv);
+            Mesh::new(&t.positions, &t.normals, &t.indices)?;
+            Ok(t)
+        },
+        move |t, out| {
+            // Validated in `prepare`; cannot fail again.
+            let mesh = Mesh::new(&t.positions, &t.normals, &t.indices)
+                .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e))?;
+            let mut out = out;
+            match format {
+                MeshFormat::Obj => cad::write_obj_to(&mesh, &name, &mut out),
+                MeshFormat::Stl => cad::write_stl_to(&mesh, &name, &mut out),
+                MeshFormat::Gltf => cad::write_gltf_to(&mesh, &name, &mut out),
+            }
+        },
+    )
+    .await
+}
+
+/// The IGES export of `doc`, written on a blocking thread and streamed.
+pub async fn iges(doc: Arc<DesignDoc>) -> Result<Body, ExportError> {
+    stream(
+        move || {
+            let meta = IgesMeta::now(&doc.name, "vsculpt");
+            Ok(cad::write_iges(&doc.surface.to_iges(), &meta)?)
+        },
+        |text, out| out.write_all(text.as_bytes()),
+    )
+    .await
+}
