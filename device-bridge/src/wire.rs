@@ -104,6 +104,7 @@ impl Wire for ProtocolWire {
             design: design.unwrap_or(1),
             client_name: CLIENT_NAME.to_owned(),
             client_kind: ClientKind::Bridge,
+            geometry_first: false,
         })
     }
 

@@ -42,6 +42,15 @@ pub enum ClientMessage {
         /// What kind of program this is (optional; `tool` when omitted).
         #[serde(default)]
         client_kind: ClientKind,
+        /// The compact join (optional; `false` when omitted): the server
+        /// sends the shape first, as a binary geometry frame flagged
+        /// [`crate::frame::FLAG_SNAPSHOT`], and every `snapshot` to this
+        /// client leaves `surface.points` empty (the shape comes in frames).
+        /// A client on a slow link draws the picture before the icons,
+        /// history and presence arrive, and the control net crosses the link
+        /// once, in binary, instead of twice (JSON and binary).
+        #[serde(default)]
+        geometry_first: bool,
     },
     /// List the designs (answered with `designs`, carrying `req`).
     ListDesigns,

@@ -19,12 +19,27 @@ pub const MAGIC: [u8; 4] = *b"VSGF";
 pub const KIND_SURFACE: u8 = 1;
 /// Flag: this frame comes from a drag (more will follow soon).
 pub const FLAG_DRAG: u16 = 1;
+/// Flag: this frame is the shape of a joining client's `snapshot`, sent
+/// before it (the compact join: a hello with `geometry_first`).
+pub const FLAG_SNAPSHOT: u16 = 2;
 /// Size of the fixed header in bytes.
 pub const HEADER_BYTES: usize = 40;
 /// Size of one icon record in bytes.
 pub const ICON_BYTES: usize = 24;
 /// Highest degree a frame may carry.
 pub const MAX_DEGREE: u8 = 15;
+
+/// A copy of an encoded frame with `flags` set in addition to its own
+/// (bytes 6–7 of the header); bytes that are not a frame are copied as they
+/// are. Lets a server re-flag a frame it already encoded, without decoding it.
+pub fn with_flags(frame: &[u8], flags: u16) -> Vec<u8> {
+    let mut out = frame.to_vec();
+    if out.len() >= HEADER_BYTES && out[..4] == MAGIC {
+        let old = u16::from_le_bytes([out[6], out[7]]);
+        out[6..8].copy_from_slice(&(old | flags).to_le_bytes());
+    }
+    out
+}
 
 /// An icon's id and position in a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,7 +57,7 @@ pub struct GeometryFrame {
     pub design: u64,
     /// The shape revision (increases with every change).
     pub revision: u64,
-    /// Bit flags ([`FLAG_DRAG`]).
+    /// Bit flags ([`FLAG_DRAG`], [`FLAG_SNAPSHOT`]).
     pub flags: u16,
     /// Degree along u.
     pub degree_u: u8,

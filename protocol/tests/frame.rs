@@ -125,3 +125,33 @@ fn encode_refuses_inconsistent_frames() {
     f.degree_u = 0;
     assert!(f.encode().is_err());
 }
+
+#[test]
+fn with_flags_sets_bits_in_place_and_leaves_everything_else() {
+    use vsculpt_protocol::frame::{FLAG_DRAG, FLAG_SNAPSHOT, with_flags};
+    let mut f = frame(5, 4, 2);
+    f.flags = FLAG_DRAG;
+    let bytes = f.encode().unwrap();
+    let flagged = with_flags(&bytes, FLAG_SNAPSHOT);
+    // Only bytes 6–7 (the flags, little-endian) differ.
+    assert_eq!(flagged.len(), bytes.len());
+    for (k, (a, b)) in bytes.iter().zip(&flagged).enumerate() {
+        if k != 6 {
+            assert_eq!(a, b, "byte {k}");
+        }
+    }
+    assert_eq!(
+        u16::from_le_bytes([flagged[6], flagged[7]]),
+        FLAG_DRAG | FLAG_SNAPSHOT
+    );
+    let back = GeometryFrame::decode(&flagged).unwrap();
+    assert_eq!(back.flags, FLAG_DRAG | FLAG_SNAPSHOT);
+    assert_eq!(back.points, f.points);
+    // Bytes that are not a frame are copied unchanged.
+    for junk in [
+        &b"VSG"[..],
+        &b"not a frame at all, but long enough to have a header"[..],
+    ] {
+        assert_eq!(with_flags(junk, FLAG_SNAPSHOT), junk);
+    }
+}

@@ -101,6 +101,8 @@ pub struct Hello {
     pub design: DesignId,
     /// Display name.
     pub name: String,
+    /// The compact join: the shape first, in binary; snapshots without points.
+    pub geometry_first: bool,
 }
 
 /// A decoded client message (after the hello).
@@ -173,6 +175,7 @@ pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
             token,
             design,
             client_name,
+            geometry_first,
             ..
         } => {
             if protocol != wire::PROTOCOL_VERSION {
@@ -188,6 +191,7 @@ pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
                 token,
                 design,
                 name: client_name,
+                geometry_first,
             })
         }
         _ => Err(WireError::handshake("the first message must be a hello")),
@@ -546,8 +550,9 @@ fn holders(presence: &[Presence]) -> BTreeMap<u64, u64> {
         .collect()
 }
 
-/// `snapshot`: the full state.
-pub fn snapshot(v: &SnapshotView) -> Utf8Bytes {
+/// `snapshot`: the full state; with `points` false, `surface.points` is left
+/// empty for a client of the compact join, which has the shape from frames.
+pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
     let holders = holders(&v.presence);
     text(&ServerMessage::Snapshot {
         design: wire::DesignInfo {
@@ -556,7 +561,13 @@ pub fn snapshot(v: &SnapshotView) -> Utf8Bytes {
             versions: v.versions.len() as u64,
         },
         revision: v.revision,
-        surface: surface_to_wire(&v.doc),
+        surface: {
+            let mut s = surface_to_wire(&v.doc);
+            if !points {
+                s.points = Vec::new();
+            }
+            s
+        },
         material: material_to_wire(&v.doc.material),
         icons: v
             .doc
@@ -571,10 +582,11 @@ pub fn snapshot(v: &SnapshotView) -> Utf8Bytes {
     })
 }
 
-/// The message of an event (`None` for events with no wire form).
-pub fn event(e: &DesignEvent) -> Option<Utf8Bytes> {
+/// The message of an event (`None` for events with no wire form); a
+/// snapshot carries its points unless `points` is false (the compact join).
+pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
     Some(match e {
-        DesignEvent::Snapshot(v) => snapshot(v),
+        DesignEvent::Snapshot(v) => snapshot(v, points),
         DesignEvent::IconCreated(i, holder) => text(&ServerMessage::IconCreated {
             icon: icon_to_wire(i, *holder),
         }),

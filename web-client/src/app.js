@@ -204,8 +204,12 @@ function onMessage(msg) {
       break;
     case 'snapshot':
       shellDesign(msg.design);
-      state.surface = surfaceFromSnapshot(msg.surface);
-      surfaceSeq++;
+      // The compact join (geometry_first): the points came in the frame before
+      // this snapshot, and frames keep them current; only a full snapshot carries them.
+      if (msg.surface.points.length) {
+        state.surface = surfaceFromSnapshot(msg.surface);
+        surfaceSeq++;
+      }
       state.icons = new Map(msg.icons.map((i) => [i.id, i]));
       state.versions = msg.versions;
       state.presence = msg.presence;

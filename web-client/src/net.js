@@ -44,6 +44,8 @@ export class Link {
         design: this.design,
         client_name: this.name,
         client_kind: 'browser',
+        // The compact join: the shape first, in binary, then a snapshot without points.
+        geometry_first: true,
       }));
     };
     ws.onmessage = (ev) => {

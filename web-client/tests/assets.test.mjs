@@ -15,7 +15,7 @@ import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { brotliDecompressSync, gunzipSync } from 'node:zlib';
-import { webDir, serverBinProblem, startServer, stopServer, launchChromium } from './harness.mjs';
+import { webDir, serverBinProblem, createDesign, startServer, stopServer, launchChromium } from './harness.mjs';
 import { startLink } from './wan.mjs';
 import { fileFor, moduleGraph, pageEntries } from '../tools/module-graph.mjs';
 
@@ -131,6 +131,29 @@ test('through a 2 Mbit/s link: a cold visit is bounded in bytes, a warm one asks
     assert.equal(shown.length, points.length);
     const size = Math.max(...points.map(Math.abs));
     for (let i = 0; i < points.length; i++) assert.ok(Math.abs(shown[i] - points[i]) <= 1e-6 * size, `point ${i}: ${shown[i]} vs ${points[i]}`);
+  } finally {
+    await context.close();
+    await link.close();
+  }
+});
+
+test('an 81 × 159 design joins compactly: the net crosses the link once, in binary, and the shape equals the server\'s', async () => {
+  const big = await createDesign(server, dataDir, { name: 'large', nu: 81, nv: 159 });
+  const link = await startLink({ target: new URL(server.base).host, mbit: 100, delayMs: 40 });
+  const context = await browser.newContext({ viewport: { width: 1100, height: 700 } });
+  try {
+    const page = await context.newPage();
+    await page.goto(link.url(`${server.base}/?design=${big.id}&token=${big.tokens.viewer}`), { waitUntil: 'commit' });
+    await page.waitForFunction(() => window.vsculpt && window.vsculpt.perf.firstPicture !== null && window.vsculpt.state.access, null, { timeout: 60000 });
+    // The page's modules (about 410 KiB compressed) and one 155 KiB frame; the JSON net alone was about 700 KiB.
+    const cold = link.bytes.down;
+    assert.ok(cold < 640 * 1024, `cold visit of 81 × 159: ${(cold / 1024).toFixed(0)} KiB`);
+    const shown = await page.evaluate(() => Array.from(window.vsculpt.state.surface.points));
+    const rest = JSON.parse((await get(`/api/designs/${big.id}?token=${big.tokens.viewer}`)).body.toString());
+    const points = rest.design.surface.points.flat();
+    assert.equal(shown.length, 81 * 159 * 3);
+    const size = Math.max(...points.map(Math.abs));
+    for (let i = 0; i < points.length; i++) assert.ok(Math.abs(shown[i] - points[i]) <= 1e-6 * size, `point ${i}`);
   } finally {
     await context.close();
     await link.close();

@@ -189,19 +189,32 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         name: name.clone(),
         role,
     };
-    let joined = match handle.join(info).await {
+    let mut joined = match handle.join(info).await {
         Ok(j) => j,
         Err(e) => return refuse(socket, WireError::from(e), 1011).await,
     };
     tracing::info!(design, client, ?role, "client connected");
 
-    // 2. Welcome and the full snapshot, then the writer takes over.
-    if socket
+    // 2. Welcome and the full snapshot, then the writer takes over (and
+    //    sends the current geometry frame first). The compact join sends
+    //    the geometry frame, flagged as the snapshot's shape, before a
+    //    snapshot without points: the picture can be drawn while the rest
+    //    is still on its way, and the net crosses the link once.
+    let compact = hello.geometry_first;
+    let welcome = socket
         .send(Message::Text(convert::welcome(client, design, role)))
-        .await
-        .is_err()
+        .await;
+    let shape = match (&welcome, compact) {
+        (Ok(()), true) => {
+            let frame = writer::snapshot_frame(&mut joined, &state.metrics);
+            socket.send(Message::Binary(frame)).await
+        }
+        _ => Ok(()),
+    };
+    if welcome.is_err()
+        || shape.is_err()
         || socket
-            .send(Message::Text(convert::snapshot(&joined.view)))
+            .send(Message::Text(convert::snapshot(&joined.view, !compact)))
             .await
             .is_err()
     {
@@ -219,6 +232,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         handle.clone(),
         client,
         state.metrics.clone(),
+        compact,
     ));
     let mut session = Session {
         state: state.clone(),

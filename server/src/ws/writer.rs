@@ -15,6 +15,7 @@
 use crate::convert;
 use crate::design::{DesignEvent, DesignHandle, Joined};
 use crate::metrics::Metrics;
+use axum::body::Bytes;
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::SinkExt;
 use futures_util::stream::SplitSink;
@@ -42,8 +43,22 @@ async fn send_geometry(
     sink.send(Message::Binary(g.frame.clone())).await
 }
 
+/// The current geometry frame of a joining client's snapshot, flagged
+/// [`FLAG_SNAPSHOT`](vsculpt_protocol::frame::FLAG_SNAPSHOT) and marked
+/// seen, for the compact join (sent before the snapshot itself).
+pub fn snapshot_frame(joined: &mut Joined, metrics: &Metrics) -> Bytes {
+    let g = joined.geometry.borrow_and_update().clone();
+    metrics.frame_sent(g.frame.len());
+    Bytes::from(vsculpt_protocol::frame::with_flags(
+        &g.frame,
+        vsculpt_protocol::frame::FLAG_SNAPSHOT,
+    ))
+}
+
 /// Runs until the reader drops its sender, a close is requested, the socket
-/// fails or the design goes away.
+/// fails or the design goes away. `compact` is the compact join: the
+/// connection already sent the current frame, and snapshots go without
+/// their points.
 pub async fn run(
     mut sink: Sink,
     mut out: mpsc::Receiver<Out>,
@@ -51,11 +66,13 @@ pub async fn run(
     handle: DesignHandle,
     client: u64,
     metrics: Arc<Metrics>,
+    compact: bool,
 ) {
     let mut geometry_live = true;
-    if send_geometry(&mut sink, &mut joined, &metrics)
-        .await
-        .is_err()
+    if !compact
+        && send_geometry(&mut sink, &mut joined, &metrics)
+            .await
+            .is_err()
     {
         return;
     }
@@ -81,7 +98,7 @@ pub async fn run(
                 match e {
                     Ok(ev) => {
                         let deleted = matches!(ev, DesignEvent::Deleted(_));
-                        if let Some(text) = convert::event(&ev)
+                        if let Some(text) = convert::event(&ev, !compact)
                             && sink.send(Message::Text(text)).await.is_err()
                         {
                             break;
@@ -94,7 +111,7 @@ pub async fn run(
                         tracing::info!(design = handle.id, skipped = n, "client lagged; resyncing with a full snapshot");
                         match handle.resync(client).await {
                             Ok(j) => {
-                                let snap = convert::snapshot(&j.view);
+                                let snap = convert::snapshot(&j.view, !compact);
                                 joined = j;
                                 if sink.send(Message::Text(snap)).await.is_err()
                                     || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()

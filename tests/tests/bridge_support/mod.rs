@@ -128,6 +128,7 @@ pub async fn join(
             design: 1,
             client_name: "e2e".into(),
             client_kind: ClientKind::Tool,
+            geometry_first: false,
         },
     };
     tx.send(Message::text(serde_json::to_string(&hello).unwrap()))
@@ -161,6 +162,7 @@ pub async fn watch_frames(addr: SocketAddr, token: &str) -> mpsc::UnboundedRecei
             design: 1,
             client_name: "e2e-frames".into(),
             client_kind: ClientKind::Tool,
+            geometry_first: false,
         },
     };
     tx.send(Message::text(serde_json::to_string(&hello).unwrap()))
