@@ -57,9 +57,7 @@ pub const CLOSE_PROTOCOL: u16 = 1002;
 pub fn read_failure(e: axum::Error) -> Option<(WireError, u16)> {
     use tungstenite::Error as E;
     let inner = e.into_inner();
-    let Some(e) = inner.downcast_ref::<E>() else {
-        return None;
-    };
+    let e = inner.downcast_ref::<E>()?;
     match e {
         E::Utf8(detail) => Some((
             WireError::malformed(format!(
