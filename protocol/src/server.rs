@@ -107,10 +107,23 @@ pub enum ServerMessage {
         /// The designs.
         designs: Vec<DesignInfo>,
     },
-    /// Who is here and what each holds.
+    /// Who is here and what each holds (the whole list; the server sends
+    /// it in `snapshot` and then keeps clients current with
+    /// `presence_changed` / `presence_left`).
     Presence {
         /// Every connected client of the design.
         clients: Vec<PresenceEntry>,
+    },
+    /// A client joined, or what it holds or points at changed: its entry
+    /// replaces the one with the same `client` id (or is added).
+    PresenceChanged {
+        /// The client's entry as it is now.
+        client: PresenceEntry,
+    },
+    /// A client left the design.
+    PresenceLeft {
+        /// Its client id.
+        client: u64,
     },
     /// After a solve during a drag: where the dragged icon actually went,
     /// which the bridge's spring model needs (Δy in paper 003).

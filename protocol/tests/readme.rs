@@ -72,6 +72,8 @@ fn every_server_example_parses_and_round_trips() {
         "designs",
         "design_created",
         "presence",
+        "presence_changed",
+        "presence_left",
         "icon_feedback",
         "history",
         "pong",

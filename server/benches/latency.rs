@@ -1,13 +1,21 @@
 //! Server latency and fan-out on loopback (harness = false; bounded loops,
 //! 127.0.0.1 only). On an 81 × 159 bicubic design with one load icon:
 //!
+//! 0. join: `hello` sent → `snapshot` received (and → first geometry
+//!    frame), p50 / p99 over 200 joins;
 //! 1. drag → geometry frame at a second client: p50 / p99 / max over
-//!    sequential drags (each waits for its frame);
+//!    sequential drags (each waits for its frame); and drag → the dragging
+//!    editor's own frame;
 //! 2. bytes per geometry frame;
 //! 3. viewers served at 60 frames per second: an editor drags at 60 Hz for
 //!    3 s while N viewers read; the largest N at which every viewer gets at
 //!    least 57 frames per second (server and clients share this machine's
 //!    cores, so the figure is pessimistic).
+//!
+//! The clients are tokio-tungstenite with its defaults: Nagle on, and the
+//! kernel's delayed ACKs — a client that does not ack early, as browsers
+//! and most WebSocket libraries behave. Without TCP_NODELAY on the server a
+//! second small write waits for that ACK (~40 ms on Linux).
 //!
 //! Run: `cargo bench -p vsculpt-server --bench latency`.
 
@@ -126,6 +134,42 @@ async fn run() {
     let (_, f0, _) = next_frame(&mut b).await;
     let mut last_rev = f0.revision;
 
+    // 0: joins.
+    let joins = 200;
+    let mut to_snapshot = Vec::with_capacity(joins);
+    let mut to_frame = Vec::with_capacity(joins);
+    for k in 0..joins {
+        let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
+            .await
+            .unwrap();
+        let hello = json!({"type": "hello", "protocol": vsculpt_protocol::PROTOCOL_VERSION,
+            "token": viewer, "design": id, "client_name": format!("j{k}")});
+        let t0 = Instant::now();
+        ws.send(Message::text(hello.to_string())).await.unwrap();
+        loop {
+            match ws.next().await.unwrap().unwrap() {
+                Message::Text(t) if t.as_str().contains("\"snapshot\"") => {
+                    to_snapshot.push(t0.elapsed().as_secs_f64() * 1e3);
+                }
+                Message::Binary(_) => {
+                    to_frame.push(t0.elapsed().as_secs_f64() * 1e3);
+                    break;
+                }
+                _ => {}
+            }
+        }
+        let _ = ws.close(None).await;
+    }
+    to_snapshot.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    to_frame.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    println!(
+        "join: hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; hello -> first frame p50 {:.3} ms, p99 {:.3} ms ({joins} joins)",
+        percentile(&to_snapshot, 0.5),
+        percentile(&to_snapshot, 0.99),
+        percentile(&to_frame, 0.5),
+        percentile(&to_frame, 0.99)
+    );
+
     // 1 + 2: sequential drag → frame latency.
     let n = 1000;
     let mut lat = Vec::with_capacity(n);
@@ -168,6 +212,32 @@ async fn run() {
     );
     println!("bytes per geometry frame: {bytes}");
     drop(b);
+
+    // 1b: the dragging editor's own frame.
+    let mut own = Vec::with_capacity(n);
+    let mut last_own = 0;
+    for k in 0..n {
+        let z = 5.0 * ((k % 40) as f64 / 40.0);
+        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
+            .to_string();
+        let t0 = Instant::now();
+        a.send(Message::text(msg)).await.unwrap();
+        loop {
+            let (t1, f, _) = next_frame(&mut a).await;
+            if f.revision > last_own.max(last_rev) {
+                last_own = f.revision;
+                own.push((t1 - t0).as_secs_f64() * 1e3);
+                break;
+            }
+        }
+    }
+    own.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    println!(
+        "drag -> the editor's own frame: p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms",
+        percentile(&own, 0.5),
+        percentile(&own, 0.99),
+        own[own.len() - 1]
+    );
 
     // 3: viewers at 60 fps.
     let mut best = 0;

@@ -153,13 +153,12 @@ impl Shared {
             return Ok(Some(Caller::Admin));
         }
         let store = self.store.clone();
-        let designs = tokio::task::spawn_blocking(move || store.designs())
+        let token = token.to_owned();
+        let found = tokio::task::spawn_blocking(move || store.design_by_token(&token))
             .await
             .map_err(storage)?
             .map_err(storage)?;
-        Ok(designs
-            .iter()
-            .find_map(|d| d.tokens.role_of(token).map(|r| Caller::Design(d.id, r))))
+        Ok(found.map(|(d, role)| Caller::Design(d.id, role)))
     }
 
     /// The role a token grants on design `id` (admin = editor).
@@ -226,17 +225,22 @@ async fn list_designs(
     let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
     let caller = s.caller(&token).await?.ok_or_else(unauthorized)?;
     let store = s.store.clone();
-    let designs = tokio::task::spawn_blocking(move || store.designs())
-        .await
-        .map_err(storage)?
-        .map_err(storage)?;
-    let list: Vec<_> = designs
-        .iter()
-        .filter_map(|d| match &caller {
-            Caller::Admin => Some(design_json(d, Some(Role::Editor))),
-            Caller::Design(..) => d.tokens.role_of(&token).map(|r| design_json(d, Some(r))),
-        })
-        .collect();
+    let list: Vec<_> = match caller {
+        Caller::Admin => tokio::task::spawn_blocking(move || store.designs())
+            .await
+            .map_err(storage)?
+            .map_err(storage)?
+            .iter()
+            .map(|d| design_json(d, Some(Role::Editor)))
+            .collect(),
+        Caller::Design(..) => tokio::task::spawn_blocking(move || store.design_by_token(&token))
+            .await
+            .map_err(storage)?
+            .map_err(storage)?
+            .iter()
+            .map(|(d, r)| design_json(d, Some(*r)))
+            .collect(),
+    };
     Ok(axum::Json(json!({ "designs": list })).into_response())
 }
 

@@ -363,16 +363,18 @@ fn version_to_wire(v: &VersionInfo) -> wire::VersionInfo {
     }
 }
 
+fn presence_entry(p: &Presence) -> wire::PresenceEntry {
+    wire::PresenceEntry {
+        client: p.client.id,
+        name: p.client.name.clone(),
+        access: access(p.client.role),
+        holding: p.holding,
+        pointer: p.pointer,
+    }
+}
+
 fn presence_to_wire(p: &[Presence]) -> Vec<wire::PresenceEntry> {
-    p.iter()
-        .map(|p| wire::PresenceEntry {
-            client: p.client.id,
-            name: p.client.name.clone(),
-            access: access(p.client.role),
-            holding: p.holding,
-            pointer: p.pointer,
-        })
-        .collect()
+    p.iter().map(presence_entry).collect()
 }
 
 /// Decodes one client message after the hello. On failure returns the
@@ -600,9 +602,10 @@ pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
         DesignEvent::Committed(v) => text(&ServerMessage::Committed {
             version: version_to_wire(v),
         }),
-        DesignEvent::Presence(p) => text(&ServerMessage::Presence {
-            clients: presence_to_wire(p),
+        DesignEvent::PresenceChanged(p) => text(&ServerMessage::PresenceChanged {
+            client: presence_entry(p),
         }),
+        DesignEvent::PresenceLeft(client) => text(&ServerMessage::PresenceLeft { client: *client }),
         DesignEvent::History { can_undo, can_redo } => text(&ServerMessage::History {
             can_undo: *can_undo,
             can_redo: *can_redo,

@@ -70,6 +70,7 @@ impl Server {
             tokio::task::spawn_blocking(move || {
                 crate::permissions::private_dir(&dir)?;
                 let store = Store::open(&dir)?;
+                store.ensure_token_indexes()?;
                 crate::permissions::private_db_files(&dir)?;
                 Ok::<_, ServerError>(store)
             })

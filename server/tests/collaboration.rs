@@ -57,14 +57,8 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
         }
     }
 
-    // Presence: the viewer sees three clients.
-    let presence = loop {
-        let p = v.wait_for("presence").await;
-        if p["clients"].as_array().unwrap().len() == 3 {
-            break p;
-        }
-    };
-    let names: Vec<&str> = presence["clients"]
+    // Presence: the viewer (the last to join) sees three clients.
+    let names: Vec<&str> = v.snapshot["presence"]
         .as_array()
         .unwrap()
         .iter()
@@ -83,14 +77,9 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
         .collect();
     a.ok(json!({"type": "drag_start", "icon": id})).await;
     let held = loop {
-        let p = b.wait_for("presence").await;
-        if let Some(c) = p["clients"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|c| c["name"] == "ann")
-            && c["holding"] == json!(id)
-        {
+        let p = b.wait_for("presence_changed").await;
+        let c = &p["client"];
+        if c["name"] == "ann" && c["holding"] == json!(id) {
             break c.clone();
         }
     };
@@ -275,15 +264,15 @@ async fn a_client_that_stops_reading_resyncs_instead_of_queueing() {
     let mut presences = 0;
     loop {
         match slow.next().await {
-            Got::Text(v) if v["type"] == "snapshot" || v["type"] == "presence" => {
+            Got::Text(v) if v["type"] == "snapshot" || v["type"] == "presence_changed" => {
                 let list = if v["type"] == "snapshot" {
                     resyncs += 1;
-                    &v["presence"]
+                    v["presence"].as_array().unwrap().clone()
                 } else {
                     presences += 1;
-                    &v["clients"]
+                    vec![v["client"].clone()]
                 };
-                let done = list.as_array().unwrap().iter().any(|c| {
+                let done = list.iter().any(|c| {
                     c["name"] == "fast" && c["pointer"] == json!([(n - 1) as f64, 0.0, 0.0])
                 });
                 if done {
@@ -391,5 +380,43 @@ async fn edits_are_solved_by_the_kernel() {
     e.send(json!({"type": "set_material", "material": {"alpha11": 0.02, "alpha12": 0.0, "alpha22": 0.02, "beta11": 2.0, "beta12": 1.0, "beta22": 2.0}})).await;
     let m = e.wait_for("material_changed").await;
     assert_eq!(m["material"]["beta11"], 2.0);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn presence_travels_by_deltas() {
+    let server = TestServer::start(common::data_dir("presence-deltas")).await;
+    let d = server.demo().clone();
+    let mut a = Client::connect(server.addr, d.id, &d.editor, "ann").await;
+    // Ann hears of her own arrival first (she subscribed before it).
+    let own = a.wait_for("presence_changed").await;
+    assert_eq!(own["client"]["client"], json!(a.client_id()));
+    // Twenty joins: each reaches ann as one entry, never the whole list.
+    let mut others = Vec::new();
+    for k in 0..20 {
+        let c = Client::connect(server.addr, d.id, &d.viewer, &format!("v{k}")).await;
+        let m = a.wait_for("presence_changed").await;
+        assert_eq!(m["client"]["client"], json!(c.client_id()), "{m}");
+        assert_eq!(m["client"]["name"], format!("v{k}"));
+        assert!(m.get("clients").is_none());
+        others.push(c);
+    }
+    // A pointer move: one entry.
+    let mut b = others.pop().unwrap();
+    b.send(json!({"type": "presence", "pointer": [1.0, 2.0, 3.0]}))
+        .await;
+    let m = a.wait_for("presence_changed").await;
+    assert_eq!(m["client"]["pointer"], json!([1.0, 2.0, 3.0]));
+    // A departure: only its id.
+    let gone = b.client_id();
+    drop(b);
+    let m = a.wait_for("presence_left").await;
+    assert_eq!(m, json!({"type": "presence_left", "client": gone}));
+    // A late joiner still gets the whole list once, in its snapshot.
+    let late = Client::connect(server.addr, d.id, &d.viewer, "late").await;
+    assert_eq!(
+        late.snapshot["presence"].as_array().unwrap().len(),
+        1 + 19 + 1
+    );
     server.stop().await;
 }

@@ -240,6 +240,15 @@ function onMessage(msg) {
     case 'presence':
       state.presence = msg.clients;
       break;
+    case 'presence_changed': {
+      const i = state.presence.findIndex((p) => p.client === msg.client.client);
+      if (i >= 0) state.presence[i] = msg.client;
+      else state.presence.push(msg.client);
+      break;
+    }
+    case 'presence_left':
+      state.presence = state.presence.filter((p) => p.client !== msg.client);
+      break;
     case 'history':
       setHistory(msg.can_undo, msg.can_redo);
       break;

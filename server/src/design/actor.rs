@@ -107,8 +107,10 @@ pub enum DesignEvent {
     MaterialChanged(MaterialDoc),
     /// A version was committed.
     Committed(VersionInfo),
-    /// Who is here and what they hold.
-    Presence(Arc<Vec<Presence>>),
+    /// A client joined, or what it holds or points at changed.
+    PresenceChanged(Presence),
+    /// A client left.
+    PresenceLeft(u64),
     /// Undo/redo availability changed.
     History {
         /// Undo available.
@@ -464,7 +466,7 @@ impl Actor {
                     );
                     // Subscribe first so the newcomer hears the presence too.
                     let joined = self.joined(id);
-                    self.broadcast_presence();
+                    self.broadcast_presence(id);
                     let _ = reply.send(joined);
                 }
                 Request::Resync { client, reply } => {
@@ -481,7 +483,7 @@ impl Actor {
                         geometry_dirty = true;
                     }
                     if self.clients.remove(&client).is_some() {
-                        self.broadcast_presence();
+                        self.broadcast_presence(client);
                     }
                 }
                 Request::Command {
@@ -515,7 +517,7 @@ impl Actor {
                         _ => false,
                     };
                     if changed {
-                        self.broadcast_presence();
+                        self.broadcast_presence(client);
                     }
                 }
                 Request::Versions { reply } => {
@@ -590,9 +592,15 @@ impl Actor {
         }
     }
 
-    fn broadcast_presence(&self) {
-        let list: Arc<Vec<Presence>> = Arc::new(self.clients.values().cloned().collect());
-        let _ = self.events.send(DesignEvent::Presence(list));
+    /// Presence by deltas: what changed about `client` (it joined, holds
+    /// or points elsewhere) or that it left — one entry, whatever the number
+    /// of clients, instead of the whole list on every change.
+    fn broadcast_presence(&self, client: u64) {
+        let event = match self.clients.get(&client) {
+            Some(p) => DesignEvent::PresenceChanged(p.clone()),
+            None => DesignEvent::PresenceLeft(client),
+        };
+        let _ = self.events.send(event);
     }
 
     fn broadcast_snapshot(&self) {
@@ -615,7 +623,7 @@ impl Actor {
             _ => false,
         };
         if changed {
-            self.broadcast_presence();
+            self.broadcast_presence(client);
         }
     }
 

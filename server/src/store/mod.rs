@@ -11,6 +11,7 @@
 //! Calls block (SQLite is synchronous); async callers go through
 //! `tokio::task::spawn_blocking`.
 
+pub mod token_index;
 pub mod tokens;
 
 use rusqlite::{Connection, OptionalExtension, params};

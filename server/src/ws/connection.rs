@@ -57,9 +57,7 @@ pub const CLOSE_PROTOCOL: u16 = 1002;
 pub fn read_failure(e: axum::Error) -> Option<(WireError, u16)> {
     use tungstenite::Error as E;
     let inner = e.into_inner();
-    let Some(e) = inner.downcast_ref::<E>() else {
-        return None;
-    };
+    let e = inner.downcast_ref::<E>()?;
     match e {
         E::Utf8(detail) => Some((
             WireError::malformed(format!(
@@ -427,12 +425,19 @@ impl Session {
         let token = self.token.clone();
         let listed =
             tokio::task::spawn_blocking(move || -> Result<Vec<_>, crate::store::StoreError> {
+                let designs = if admin {
+                    store.designs()?
+                } else {
+                    store
+                        .design_by_token(&token)?
+                        .into_iter()
+                        .map(|(d, _)| d)
+                        .collect()
+                };
                 let mut out = Vec::new();
-                for d in store.designs()? {
-                    if admin || d.tokens.role_of(&token).is_some() {
-                        let n = store.versions(d.id)?.len() as u64;
-                        out.push((d.id, d.name, n));
-                    }
+                for d in designs {
+                    let n = store.versions(d.id)?.len() as u64;
+                    out.push((d.id, d.name, n));
                 }
                 Ok(out)
             })
