@@ -3,7 +3,8 @@
 // through tests/wan.mjs at 2, 10 and 100 Mbit/s with 40 ms delay each way,
 // once with an empty cache (cold) and once reloaded (warm), for the demo
 // design and an 81 × 159 design; reports the time from navigation start to
-// the first shaded picture and the bytes that crossed the link by then.
+// the first shaded picture, the bytes that crossed the link by then and the
+// server's CPU time for the visit (from /proc).
 //
 //   node bench/first-picture.mjs [--before-bin PATH --before-rev REV] [--rounds N]
 //
@@ -13,7 +14,7 @@
 // the client has drawn a surface (its perf counters say so), read in the
 // page so that old and new clients are timed alike.
 
-import { mkdtempSync, rmSync } from 'node:fs';
+import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { cpus, tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { webDir, serverBin, serverBinProblem, createDesign, clientAt, startServer, stopServer, launchChromium } from '../tests/harness.mjs';
@@ -40,12 +41,19 @@ const firstPicture = () =>
     poll();
   });
 
-async function visit(page, link, url, reload) {
+/** CPU time the process `pid` has used so far, in ms (utime + stime from /proc, Linux). */
+function cpuMs(pid) {
+  const fields = readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' ');
+  return ((Number(fields[11]) + Number(fields[12])) * 1000) / 100; // clock ticks of 1/100 s (USER_HZ)
+}
+
+async function visit(page, link, url, reload, serverPid) {
   link.reset();
+  const cpu0 = cpuMs(serverPid);
   if (reload) await page.reload({ waitUntil: 'commit' });
   else await page.goto(url, { waitUntil: 'commit' });
   const ms = await page.evaluate(firstPicture);
-  return { ms, down: link.bytes.down, up: link.bytes.up };
+  return { ms, down: link.bytes.down, up: link.bytes.up, serverCpu: cpuMs(serverPid) - cpu0 };
 }
 
 async function measure(browser, variant) {
@@ -62,8 +70,8 @@ async function measure(browser, variant) {
         const context = await browser.newContext({ viewport: { width: 1100, height: 700 } });
         try {
           const page = await context.newPage();
-          const cold = await visit(page, link, link.url(url), false);
-          const warm = await visit(page, link, link.url(url), true);
+          const cold = await visit(page, link, link.url(url), false, server.child.pid);
+          const warm = await visit(page, link, link.url(url), true, server.child.pid);
           out.push({ mbit, design, cold, warm });
           console.log(`${variant.name} ${mbit} Mbit/s ${design}: cold ${cold.ms.toFixed(0)} ms, ${(cold.down / 1024).toFixed(0)} KiB down; warm ${warm.ms.toFixed(0)} ms, ${(warm.down / 1024).toFixed(0)} KiB down`);
         } finally {
@@ -101,14 +109,14 @@ try {
 
 const median = (xs) => xs.slice().sort((a, b) => a - b)[Math.floor(xs.length / 2)];
 console.log(`\n${cpus().length} cores (${cpus()[0].model}); headless Chromium (SwiftShader); link ${DELAY_MS} ms each way; medians of ${rounds} round(s):`);
-console.log('| server + client | link | design | cold: first picture | cold: bytes down | warm: first picture | warm: bytes down |');
-console.log('|---|---|---|---|---|---|---|');
+console.log('| server + client | link | design | cold: first picture | cold: bytes down | cold: server CPU | warm: first picture | warm: bytes down |');
+console.log('|---|---|---|---|---|---|---|---|');
 for (const [name, rs] of results) {
   for (const mbit of speeds) {
     for (const design of ['demo', '81x159']) {
       const xs = rs.filter((x) => x.mbit === mbit && x.design === design);
       const f = (k, part) => median(xs.map((x) => x[part][k]));
-      console.log(`| ${name} | ${mbit} Mbit/s | ${design} | ${(f('ms', 'cold') / 1000).toFixed(2)} s | ${(f('down', 'cold') / 1024).toFixed(0)} KiB | ${(f('ms', 'warm') / 1000).toFixed(2)} s | ${(f('down', 'warm') / 1024).toFixed(0)} KiB |`);
+      console.log(`| ${name} | ${mbit} Mbit/s | ${design} | ${(f('ms', 'cold') / 1000).toFixed(2)} s | ${(f('down', 'cold') / 1024).toFixed(0)} KiB | ${f('serverCpu', 'cold').toFixed(0)} ms | ${(f('ms', 'warm') / 1000).toFixed(2)} s | ${(f('down', 'warm') / 1024).toFixed(0)} KiB |`);
     }
   }
 }
