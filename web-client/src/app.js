@@ -50,7 +50,7 @@ const state = {
 };
 
 const view = new View($('viewport'));
-const icons = new IconLayer(view.scene);
+const icons = new IconLayer(view.model);
 
 function status(kind, text) {
   const el = $('status');
@@ -342,7 +342,7 @@ function send(msg) {
 const gizmo = new TransformControls(view.camera, view.renderer.domElement);
 view.scene.add(gizmo.getHelper());
 const proxy = new THREE.Object3D();
-view.scene.add(proxy);
+view.model.add(proxy);
 let dragging = false;
 let pendingDrag = null;
 

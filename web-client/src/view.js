@@ -61,12 +61,18 @@ export class View {
     this.shaded = new THREE.MeshStandardMaterial({ color: 0xb8c4d6, metalness: 0.1, roughness: 0.45, side: THREE.DoubleSide });
     this.colored = new THREE.MeshStandardMaterial({ vertexColors: true, metalness: 0.0, roughness: 0.6, side: THREE.DoubleSide });
     this.zebra = new THREE.ShaderMaterial({ uniforms: { stripes: { value: 8 } }, vertexShader: zebraVertex, fragmentShader: zebraFragment, side: THREE.DoubleSide });
+    // Everything in the design's own units and axes (millimetres, z up) hangs
+    // under `model`: the identity on a screen; in VR it places the design at
+    // real size on a table, y up (placeOnTable).
+    this.model = new THREE.Group();
+    this.model.name = 'model';
+    this.scene.add(this.model);
     this.mesh = new THREE.Mesh(this.geometry, this.shaded);
     this.mesh.name = 'surface';
-    this.scene.add(this.mesh);
+    this.model.add(this.mesh);
     this.net = new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ color: 0x6fa8ff }));
     this.net.visible = false;
-    this.scene.add(this.net);
+    this.model.add(this.net);
     this.mode = 'shaded';
     this.range = 1;
     this.fitted = false;
@@ -161,6 +167,36 @@ export class View {
   showNet(visible) {
     this.net.visible = visible;
     if (visible && this.netSurface) this.setNet(this.netSurface);
+  }
+
+  /**
+   * VR: the design at real size on a table in front of the user — model
+   * units (millimetres: `metresPerUnit` 0.001) to metres, z up to WebXR's y
+   * up, the bottom of its bounding box at `tableHeight` metres, its centre
+   * `distance` metres ahead (−z) of the origin where the headset starts.
+   */
+  placeOnTable({ metresPerUnit = 0.001, tableHeight = 0.9, distance = 0.7 } = {}) {
+    const box = this.geometry.boundingBox;
+    const m = this.model;
+    m.scale.setScalar(metresPerUnit);
+    m.rotation.set(-Math.PI / 2, 0, 0);
+    m.position.set(0, 0, 0);
+    m.updateMatrixWorld(true);
+    if (box) {
+      const centre = box.getCenter(new THREE.Vector3());
+      const bottom = new THREE.Vector3(centre.x, centre.y, box.min.z);
+      const at = bottom.applyMatrix4(m.matrixWorld);
+      m.position.set(-at.x, tableHeight - at.y, -distance - at.z);
+    }
+    m.updateMatrixWorld(true);
+  }
+
+  /** Back to the screen: the model in its own units and axes. */
+  placeOnScreen() {
+    this.model.position.set(0, 0, 0);
+    this.model.rotation.set(0, 0, 0);
+    this.model.scale.setScalar(1);
+    this.model.updateMatrixWorld(true);
   }
 
   fit() {

@@ -7,6 +7,13 @@
 // loads its glTF from our own server (/vendor/webxr-profiles, the npm
 // package @webxr-input-profiles/assets; never a CDN). Until a model has
 // loaded, or if it cannot be loaded (logged), a simple grip body stands in.
+//
+// Real scale: on entering VR the design is put on a table in front of the
+// user at its real size (View.placeOnTable: millimetres to metres, z up to
+// y up), so a hand moved 0.2 m moves a grabbed icon 200 mm. Squeezing where
+// there is no icon grabs the whole model: it follows the hand (move and
+// turn), and squeezing with the other hand as well scales it by the change
+// of the distance between the hands.
 
 import * as THREE from 'three';
 import { XRControllerModelFactory } from 'three/addons/webxr/XRControllerModelFactory.js';
@@ -30,7 +37,7 @@ class ControllerModelLoader extends GLTFLoader {
   }
 }
 
-/** Hand motion in metres is scaled by this many model units per metre of surface size. */
+/** A grabbed icon moves this many times the hand's motion, measured in the model's own units (1: real scale). */
 const HAND_GAIN = 1;
 
 /** Two VR controllers bound to the design: grab-and-drag icons, trigger-to-create. */
@@ -49,8 +56,10 @@ export class XRSculpt {
     Object.assign(this, o);
     this.raycaster = new THREE.Raycaster();
     this.controllers = [];
-    /** The current grab: controller index, icon, start positions of hand and icon. */
+    /** The current grab: controller index, icon, start positions of hand (model units) and icon. */
     this.grab = null;
+    /** The model held by the hands: { index, offset (grip → model), second: { index, distance, scale } | null }. */
+    this.modelGrab = null;
     this.drags = 0;
     /** How many controller models have been loaded and shown. */
     this.modelsLoaded = 0;
@@ -104,14 +113,23 @@ export class XRSculpt {
     }
     const session = await navigator.xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
     await this.view.renderer.xr.setSession(session);
+    this.view.placeOnTable();
     session.addEventListener('end', () => {
       if (this.grab) this.squeezeEnd(this.grab.index);
+      this.modelGrab = null;
+      this.view.placeOnScreen();
     });
   }
 
   /** World position of a controller's grip. */
   gripPosition(i) {
     return this.controllers[i].grip.getWorldPosition(new THREE.Vector3());
+  }
+
+  /** A controller's grip in the model's own units and axes. */
+  gripInModel(i) {
+    this.view.model.updateMatrixWorld(true);
+    return this.view.model.worldToLocal(this.gripPosition(i));
   }
 
   /** Sets the raycaster along controller i's target ray. */
@@ -126,8 +144,8 @@ export class XRSculpt {
   /** The icon under controller i: the nearest handle within reach of the grip, else the one its ray hits. */
   iconAt(i) {
     const p = this.gripPosition(i);
-    const radius = this.view.geometry.boundingSphere ? this.view.geometry.boundingSphere.radius : 1;
-    const reach = Math.max(0.08, radius * 0.08);
+    const radius = this.view.geometry.boundingSphere ? this.view.geometry.boundingSphere.radius * this.view.model.scale.x : 1;
+    const reach = Math.max(0.03, radius * 0.08);
     let best = null;
     for (const h of this.handles()) {
       const d = h.getWorldPosition(new THREE.Vector3()).distanceTo(p);
@@ -140,17 +158,65 @@ export class XRSculpt {
   }
 
   squeezeStart(i) {
-    if (!this.canEdit() || this.grab) return;
-    const id = this.iconAt(i);
-    if (id == null) return;
+    if (this.grab) return;
+    if (this.modelGrab) {
+      // The other hand joins: from now on the distance between the hands scales the model.
+      if (this.modelGrab.index !== i) {
+        this.modelGrab.second = { index: i, distance: this.handDistance(), scale: this.view.model.scale.x };
+      }
+      return;
+    }
+    const id = this.canEdit() ? this.iconAt(i) : null;
+    if (id == null) {
+      this.grabModel(i);
+      return;
+    }
     const start = this.iconPosition(id);
     if (!start) return;
-    this.grab = { index: i, id, hand: this.gripPosition(i), icon: new THREE.Vector3(...start), last: null };
+    this.grab = { index: i, id, hand: this.gripInModel(i), icon: new THREE.Vector3(...start), last: null };
     this.onDragging(true, id);
     this.send({ type: 'drag_start', icon: id });
   }
 
+  /** The model follows controller i's grip from now on (its pose relative to the grip kept). */
+  grabModel(i) {
+    const grip = this.controllers[i].grip;
+    grip.updateMatrixWorld(true);
+    this.view.model.updateMatrixWorld(true);
+    const offset = grip.matrixWorld.clone().invert().multiply(this.view.model.matrixWorld);
+    this.modelGrab = { index: i, offset, second: null };
+  }
+
+  handDistance() {
+    return this.gripPosition(0).distanceTo(this.gripPosition(1));
+  }
+
+  /** Every frame while the model is held: the grip's pose times the held offset, scaled by the hands' spread. */
+  moveModel() {
+    const h = this.modelGrab;
+    const grip = this.controllers[h.index].grip;
+    grip.updateMatrixWorld(true);
+    const m = this.view.model;
+    grip.matrixWorld.clone().multiply(h.offset).decompose(m.position, m.quaternion, m.scale);
+    if (h.second) {
+      const s = h.second.scale * (this.handDistance() / Math.max(h.second.distance, 1e-3));
+      m.scale.setScalar(Math.min(Math.max(s, 1e-5), 1));
+    }
+    m.updateMatrixWorld(true);
+  }
+
   squeezeEnd(i) {
+    const h = this.modelGrab;
+    if (h) {
+      if (h.second && (h.second.index === i || h.index === i)) {
+        // One hand lets go: the other keeps holding the model at its new scale.
+        const keep = h.index === i ? h.second.index : h.index;
+        this.grabModel(keep);
+      } else if (h.index === i) {
+        this.modelGrab = null;
+      }
+      return;
+    }
     const g = this.grab;
     if (!g || g.index !== i) return;
     this.update();
@@ -166,11 +232,12 @@ export class XRSculpt {
     if (hit && hit.uv) this.create(hit.uv.x, hit.uv.y);
   }
 
-  /** Called every frame: sends the grabbed icon's new position when the hand moved. */
+  /** Called every frame: moves a held model, or sends the grabbed icon's new position when the hand moved. */
   update() {
+    if (this.modelGrab) this.moveModel();
     const g = this.grab;
     if (!g) return;
-    const delta = this.gripPosition(g.index).sub(g.hand).multiplyScalar(HAND_GAIN);
+    const delta = this.gripInModel(g.index).sub(g.hand).multiplyScalar(HAND_GAIN);
     const target = g.icon.clone().add(delta);
     if (g.last && g.last.distanceTo(target) < 1e-6) return;
     g.last = target;

@@ -176,7 +176,7 @@ async function enterVr(page) {
   await page.waitForFunction(() => window.vsculpt.view.renderer.xr.isPresenting, null, { timeout: 15000 });
 }
 
-test('VR (iwer emulated Quest 3): controller models from our server, squeeze on an icon, move the controller, the surface moved', async () => {
+test('VR (iwer emulated Quest 3): controller models from our server, the design at real size on a table, squeeze on an icon, a 0.2 m hand motion moves it 200 mm', async () => {
   const page = await open(links.editor);
   await emulateQuest3(page);
   // A position constraint in the middle of the surface.
@@ -194,6 +194,20 @@ test('VR (iwer emulated Quest 3): controller models from our server, squeeze on 
   const models = page.requests.filter((u) => u.startsWith(`${base}/vendor/webxr-profiles/`) && u.endsWith('.glb'));
   assert.ok(models.length >= 1, `a controller glTF fetched from the server: ${page.requests.filter((u) => !u.includes('/src/')).join(' ')}`);
   assert.ok(page.requests.includes(`${base}/vendor/webxr-profiles/profilesList.json`), 'the profile list came from the server');
+  // Real scale, y up, on a table in front of the headset, which is outside it.
+  const placed = await page.evaluate(() => {
+    const v = window.vsculpt.view;
+    const local = v.geometry.boundingBox.clone();
+    const world = local.clone().applyMatrix4(v.model.matrixWorld);
+    const eye = v.renderer.xr.getCamera().getWorldPosition(new v.camera.position.constructor());
+    const size = (b) => [b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z];
+    return { local: size(local), world: size(world), bottom: world.min.y, inside: world.containsPoint(eye), eye: eye.toArray() };
+  });
+  assert.equal(placed.inside, false, `the headset (${placed.eye}) is outside the model`);
+  // Model x (mm) → world x (m); model y → world −z; model z (up) → world y (up).
+  const want = [placed.local[0] / 1000, placed.local[2] / 1000, placed.local[1] / 1000];
+  placed.world.forEach((w, k) => assert.ok(Math.abs(w - want[k]) < 1e-6, `real size along ${k}: ${w} m vs ${want[k]} m`));
+  assert.ok(Math.abs(placed.bottom - 0.9) < 1e-6, `on a 0.9 m table: bottom at ${placed.bottom}`);
   const frames = () => page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
   // Put the right controller's grip on the icon: correct the emulator's pose by
   // the offset between where it was put and where three's grip group ended up.
@@ -201,9 +215,10 @@ test('VR (iwer emulated Quest 3): controller models from our server, squeeze on 
     await frames();
     await page.evaluate((p) => {
       const v = window.vsculpt;
+      const at = v.view.model.localToWorld(new v.view.camera.position.constructor(...p));
       const grip = v.xr.gripPosition(1);
       const c = window.__xrdev.controllers.right;
-      c.position.set(c.position.x + p[0] - grip.x, c.position.y + p[1] - grip.y, c.position.z + p[2] - grip.z);
+      c.position.set(c.position.x + at.x - grip.x, c.position.y + at.y - grip.y, c.position.z + at.z - grip.z);
     }, start);
   }
   await frames();
@@ -222,13 +237,17 @@ test('VR (iwer emulated Quest 3): controller models from our server, squeeze on 
   await page.waitForFunction(() => window.vsculpt.xr.grab === null, null, { timeout: 10000 });
   assert.ok((await page.evaluate(() => window.vsculpt.xr.drags)) > 0, 'drag messages were sent');
   await page.waitForFunction(
-    ([id, y]) => {
+    ([id, z]) => {
       const i = window.vsculpt.state.icons.get(id);
-      return i && i.target[1] > y + 0.1;
+      return i && i.target[2] > z + 150;
     },
-    [icon, start[1]],
+    [icon, start[2]],
     { timeout: 10000 },
   );
+  // Raised 0.2 m in the room = 200 mm up in the model (z), nothing sideways.
+  const moved = await page.evaluate((id) => window.vsculpt.state.icons.get(id).target, icon);
+  assert.ok(Math.abs(moved[2] - start[2] - 200) < 0.5, `moved up ${moved[2] - start[2]} mm`);
+  assert.ok(Math.hypot(moved[0] - start[0], moved[1] - start[1]) < 0.5, `sideways ${moved[0] - start[0]}, ${moved[1] - start[1]} mm`);
   await new Promise((r) => setTimeout(r, 500));
   const restAfter = await designJson(tokenOf(links.editor));
   assert.notDeepEqual(restAfter.design, restBefore.design, 'the VR drag moved the surface on the server');
@@ -236,6 +255,53 @@ test('VR (iwer emulated Quest 3): controller models from our server, squeeze on 
   assert.deepEqual(page.errors, []);
   await page.evaluate(() => window.vsculpt.view.renderer.xr.getSession().end());
   assert.deepEqual(page.requests.filter((u) => !isLocal(u)), [], 'no request left this machine');
+  await page.close();
+});
+
+test('VR: squeezing where no icon is grabs the model: it follows the hand, and a second hand scales it', async () => {
+  const page = await open(links.editor);
+  await emulateQuest3(page);
+  await enterVr(page);
+  const frames = () => page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
+  // Both hands high above the table, pointing ahead over the model: nothing within reach or under the rays.
+  await page.evaluate(() => {
+    const { left, right } = window.__xrdev.controllers;
+    left.position.set(-0.2, 2.0, 0);
+    right.position.set(0.2, 2.0, 0);
+  });
+  await frames();
+  const at = () => page.evaluate(() => ({ p: window.vsculpt.view.model.position.toArray(), s: window.vsculpt.view.model.scale.x }));
+  const start = await at();
+  await page.evaluate(() => window.__xrdev.controllers.right.updateButtonValue('squeeze', 1));
+  await page.waitForFunction(() => window.vsculpt.xr.modelGrab !== null, null, { timeout: 10000 });
+  assert.equal(await page.evaluate(() => window.vsculpt.xr.grab), null, 'no icon grabbed');
+  await page.evaluate(() => {
+    window.__xrdev.controllers.right.position.x += 0.1;
+  });
+  await frames();
+  const moved = await at();
+  assert.ok(Math.abs(moved.p[0] - start.p[0] - 0.1) < 1e-3, `followed the hand: ${moved.p[0] - start.p[0]} m`);
+  assert.ok(Math.abs(moved.s - start.s) < 1e-9, 'one hand does not scale');
+  // The left hand joins; spreading the hands scales the model by the ratio of their distances.
+  await page.evaluate(() => window.__xrdev.controllers.left.updateButtonValue('squeeze', 1));
+  await page.waitForFunction(() => window.vsculpt.xr.modelGrab && window.vsculpt.xr.modelGrab.second, null, { timeout: 10000 });
+  const d0 = await page.evaluate(() => window.vsculpt.xr.modelGrab.second.distance);
+  await page.evaluate(() => {
+    window.__xrdev.controllers.left.position.x -= 0.5;
+  });
+  await frames();
+  const d1 = await page.evaluate(() => window.vsculpt.xr.handDistance());
+  const scaled = await at();
+  assert.ok(d1 / d0 > 1.5, `the hands spread: ${d0} → ${d1} m`);
+  assert.ok(Math.abs(scaled.s / start.s - d1 / d0) < 1e-3, `scaled ×${scaled.s / start.s}, hands ×${d1 / d0}`);
+  await page.evaluate(() => {
+    window.__xrdev.controllers.left.updateButtonValue('squeeze', 0);
+    window.__xrdev.controllers.right.updateButtonValue('squeeze', 0);
+  });
+  await page.waitForFunction(() => window.vsculpt.xr.modelGrab === null, null, { timeout: 10000 });
+  assert.deepEqual(page.errors, []);
+  await page.evaluate(() => window.vsculpt.view.renderer.xr.getSession().end());
+  assert.equal(await page.evaluate(() => window.vsculpt.view.model.scale.x), 1, 'back on the screen in model units');
   await page.close();
 });
 
