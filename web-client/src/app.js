@@ -47,6 +47,8 @@ const state = {
   online: null,
   canUndo: false,
   canRedo: false,
+  /** The version being compared with: { version, other (its surface), tess, deviation, max } or null. */
+  compare: null,
 };
 
 const view = new View($('viewport'));
@@ -163,6 +165,7 @@ function redraw() {
   icons.size = view.geometry.boundingSphere ? view.geometry.boundingSphere.radius * 0.025 : 0.05;
   icons.update(state.icons, s, state.selected);
   attachGizmo();
+  updateCompare();
 }
 
 function renderPanels() {
@@ -176,7 +179,8 @@ function renderPanels() {
     .slice()
     .reverse()
     .map((v) => `<li><b>v${v.version}</b> ${escape(v.message)} <small>${escape(v.author)} · ${new Date(v.time_ms).toLocaleString()}</small>
-      ${editor ? `<button data-restore="${v.version}">restore</button>` : ''}</li>`)
+      <button data-compare="${v.version}">${state.compare && state.compare.version === v.version ? 'comparing' : 'compare'}</button>
+      ${editor ? `<button data-restore="${v.version}"${state.online ? '' : ' disabled'}>restore</button>` : ''}</li>`)
     .join('');
   const sel = state.icons.get(state.selected);
   $('selection').hidden = !sel;
@@ -317,6 +321,7 @@ function surfaceShown(seq, tess) {
   perf.shown++;
   view.updateTessellation(tess);
   view.setNet(state.surface);
+  if (state.compare) updateCompare();
   icons.move([...state.icons.values()].map((i) => ({ id: i.id, xyz: i.xyz })));
 }
 
@@ -532,7 +537,81 @@ $('commit').addEventListener('submit', (e) => {
 $('history').addEventListener('click', (e) => {
   const v = e.target.dataset.restore;
   if (v) send({ type: 'restore_version', version: Number(v) });
+  const c = e.target.dataset.compare;
+  if (c) compareWith(Number(c)).catch((err) => toast(`compare with v${c}: ${err.message}`));
 });
+$('compare-stop').addEventListener('click', () => stopCompare());
+
+// --- version compare ------------------------------------------------------------------
+
+/**
+ * Compares the shape on screen with committed version `version`: both are
+ * evaluated at the same (u, v) samples, each vertex coloured by how far the
+ * current surface lies from the version's along its normal, and the version
+ * drawn as a faint wireframe. Follows the live shape until stopped. Needs
+ * the same parameter domain (a restore to another structure ends it).
+ */
+async function compareWith(version) {
+  const res = await fetch(`/api/designs/${design}/versions/${version}`, { headers: { authorization: `Bearer ${token}` } });
+  if (!res.ok) throw new Error(`${res.status} ${(await res.json().catch(() => ({}))).message || ''}`);
+  const s = (await res.json()).design.surface;
+  const other = {
+    degreeU: s.u_degree,
+    degreeV: s.v_degree,
+    knotsU: Float64Array.from(s.u_knots),
+    knotsV: Float64Array.from(s.v_knots),
+    nu: s.nu,
+    nv: s.nv,
+    points: Float64Array.from(s.points.flat()),
+  };
+  state.compare = { version, other, tess: null };
+  updateCompare();
+  renderPanels();
+}
+
+function stopCompare() {
+  state.compare = null;
+  view.setDeviation(null);
+  $('compare-legend').hidden = true;
+  renderPanels();
+}
+
+/** Recomputes the deviation of the current tessellation from the compared version. */
+function updateCompare() {
+  const c = state.compare;
+  const t = state.tess;
+  if (!c || !t) return;
+  const same = (a, b) => Math.abs(a - b) <= 1e-12 * Math.max(1, Math.abs(a));
+  const o = c.other;
+  const domain = [o.knotsU[o.degreeU], o.knotsU[o.nu], o.knotsV[o.degreeV], o.knotsV[o.nv]];
+  const shown = [t.us[0], t.us[t.su - 1], t.vs[0], t.vs[t.sv - 1]];
+  if (!domain.every((x, i) => same(x, shown[i]))) {
+    toast(`v${c.version} has another parameter domain: it cannot be compared point by point`);
+    stopCompare();
+    return;
+  }
+  if (!c.tess || c.tess.su !== t.su || c.tess.sv !== t.sv) {
+    c.tess = new Tessellator(c.other, t.su, t.sv);
+    c.tess.fill(c.other);
+  }
+  const n = t.su * t.sv;
+  const d = c.deviation && c.deviation.length === n ? c.deviation : new Float32Array(n);
+  let max = 0;
+  for (let i = 0; i < n; i++) {
+    const o = 3 * i;
+    const dev =
+      (t.positions[o] - c.tess.positions[o]) * t.normals[o] +
+      (t.positions[o + 1] - c.tess.positions[o + 1]) * t.normals[o + 1] +
+      (t.positions[o + 2] - c.tess.positions[o + 2]) * t.normals[o + 2];
+    d[i] = dev;
+    max = Math.max(max, Math.abs(dev));
+  }
+  c.deviation = d;
+  c.max = max;
+  view.setDeviation(d, max || 1, c.tess);
+  $('compare-legend').hidden = false;
+  $('compare-text').textContent = `deviation from v${c.version}: up to ${max.toPrecision(3)} (blue below, red above)`;
+}
 
 // --- keyboard -----------------------------------------------------------------------
 
@@ -663,4 +742,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, send, view, icons, pick, select, createIcon, finishCurve, link, xr, perf, toast };
+window.vsculpt = { state, send, view, icons, pick, select, createIcon, finishCurve, link, xr, perf, toast, compareWith, stopCompare };

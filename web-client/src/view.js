@@ -122,11 +122,42 @@ export class View {
 
   updateColors() {
     const t = this.geometry.userData.tess;
-    if (!t || (this.mode !== 'mean' && this.mode !== 'gauss')) return;
-    const values = this.mode === 'mean' ? t.mean : t.gauss;
+    if (!t || (this.mode !== 'mean' && this.mode !== 'gauss' && this.mode !== 'deviation')) return;
+    const values = this.mode === 'mean' ? t.mean : this.mode === 'gauss' ? t.gauss : this.deviation;
+    if (!values || values.length !== t.mean.length) return;
     const colors = this.geometry.attributes.color.array;
     for (let i = 0; i < values.length; i++) curvatureColor(values[i], this.range, colors, i * 3);
     this.geometry.attributes.color.needsUpdate = true;
+  }
+
+  /**
+   * Compare mode: colours each vertex by `deviation` (signed, along the
+   * normal; blue below, red above, white where equal, saturated at `range`)
+   * and draws `ghost` (a tessellation of the other shape) as a faint
+   * wireframe; `null` ends the comparison.
+   */
+  setDeviation(deviation, range, ghost) {
+    this.deviation = deviation;
+    if (this.ghost) {
+      this.model.remove(this.ghost);
+      this.ghost.geometry.dispose();
+      this.ghost = null;
+    }
+    if (!deviation) {
+      this.setMode(this.modeBeforeCompare || 'shaded');
+      return;
+    }
+    if (this.mode !== 'deviation') this.modeBeforeCompare = this.mode;
+    if (ghost) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', new THREE.BufferAttribute(ghost.positions, 3));
+      g.setIndex(new THREE.BufferAttribute(ghost.indices, 1));
+      this.ghost = new THREE.Mesh(g, new THREE.MeshBasicMaterial({ color: 0xffd54f, wireframe: true, transparent: true, opacity: 0.18 }));
+      this.ghost.name = 'compare-ghost';
+      this.model.add(this.ghost);
+    }
+    this.range = range;
+    this.setMode('deviation');
   }
 
   setMode(mode) {

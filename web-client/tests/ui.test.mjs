@@ -190,3 +190,60 @@ test('a bare server address and a bad token each say what to do, and the page st
   assert.equal(sockets.length, 1, 'no reconnect loop after a refusal');
   await bad.close();
 });
+
+test('a viewer compares the live shape with a committed version: zero deviation at that version, the pulled amount after a drag', async () => {
+  const editor = await openClient(browser, server.editor);
+  await connected(editor);
+  const n0 = await editor.evaluate(() => window.vsculpt.state.versions.length);
+  await editor.evaluate(() => window.vsculpt.send({ type: 'commit', message: 'before the pull' }));
+  await editor.waitForFunction((n) => window.vsculpt.state.versions.length === n + 1, n0, { timeout: 10000 });
+  const version = await editor.evaluate(() => window.vsculpt.state.versions.at(-1).version);
+  const viewer = await openClient(browser, server.viewer);
+  await connected(viewer);
+  await viewer.click(`button[data-compare="${version}"]`);
+  await viewer.waitForFunction(() => window.vsculpt.state.compare && window.vsculpt.state.compare.max !== undefined, null, { timeout: 10000 });
+  assert.ok((await viewer.evaluate(() => window.vsculpt.state.compare.max)) < 1e-3, 'the shape equals the version it was committed as');
+  assert.ok(await viewer.isVisible('#compare-legend'));
+  // The editor pulls a point up by 2 (a position constraint dragged): the viewer's deviation follows live.
+  const before = await editor.evaluate(() => window.vsculpt.state.icons.size);
+  await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.45, v: 0.55 }, { kind: 'position' }));
+  await editor.waitForFunction((k) => window.vsculpt.state.icons.size === k + 1, before, { timeout: 10000 });
+  const id = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  await editor.evaluate((i) => {
+    const { send, state } = window.vsculpt;
+    const p = state.icons.get(i).target;
+    send({ type: 'drag_start', icon: i });
+    send({ type: 'drag', icon: i, xyz: [p[0], p[1], p[2] + 2] });
+    send({ type: 'drag_end', icon: i });
+  }, id);
+  await viewer.waitForFunction(() => window.vsculpt.state.compare.max > 1.5, null, { timeout: 15000 });
+  // At the sample nearest the pulled point the surface rose by 2 (the constraint's own move): its
+  // deviation along the normal is 2·n_z there. (Elsewhere the plate may swing further: the rim is free.)
+  const at = await viewer.evaluate(() => {
+    const { state, view } = window.vsculpt;
+    const t = state.tess;
+    let best = 0;
+    for (let i = 0; i < t.su * t.sv; i++) {
+      const d = (k) => Math.hypot(t.uvs[2 * k] - 0.45, t.uvs[2 * k + 1] - 0.55);
+      if (d(i) < d(best)) best = i;
+    }
+    return {
+      dev: state.compare.deviation[best],
+      nz: t.normals[3 * best + 2],
+      max: state.compare.max,
+      colored: view.mesh.material === view.colored,
+      ghost: !!view.model.getObjectByName('compare-ghost'),
+      colour: Array.from(view.geometry.attributes.color.array.slice(3 * best, 3 * best + 3)),
+    };
+  });
+  assert.ok(Math.abs(at.dev - 2 * at.nz) < 0.15, `deviation at the pulled point ${at.dev}, expected 2·n_z = ${2 * at.nz}`);
+  assert.ok(at.max >= at.dev - 1e-9);
+  assert.ok(at.colored && at.ghost, 'deviation colours and the version drawn as a ghost');
+  assert.ok(at.colour[0] === 1 && at.colour[2] < 1, `raised points are red: ${at.colour}`);
+  await viewer.click('#compare-stop');
+  assert.equal(await viewer.evaluate(() => window.vsculpt.view.mesh.material === window.vsculpt.view.shaded), true);
+  assert.equal(await viewer.evaluate(() => !!window.vsculpt.view.model.getObjectByName('compare-ghost')), false);
+  assert.deepEqual([...editor.errors, ...viewer.errors], []);
+  await editor.close();
+  await viewer.close();
+});
