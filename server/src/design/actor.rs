@@ -189,6 +189,9 @@ pub enum Request {
         /// Answered once flushed.
         reply: oneshot::Sender<()>,
     },
+    /// Test-only fault injection: the actor panics when it runs this.
+    #[cfg(feature = "fault-injection")]
+    Panic,
 }
 
 /// Runs CPU-heavy model work (a rebuild and solve: a refactorisation on
@@ -207,16 +210,33 @@ pub struct DesignHandle {
     /// The design.
     pub id: DesignId,
     tx: mpsc::Sender<Request>,
+    /// Set by the actor when it stops on purpose (the design was deleted,
+    /// or the server is stopping), before it stops.
+    retired: Arc<std::sync::atomic::AtomicBool>,
 }
 
-fn gone() -> CommandError {
-    CommandError::new(ErrorKind::UnknownDesign, "the design is closed or deleted")
+impl DesignHandle {
+    /// Why the actor cannot answer: the design was deleted, or the actor
+    /// died (it is being restarted by its supervisor).
+    fn gone(&self) -> CommandError {
+        if self.retired.load(std::sync::atomic::Ordering::SeqCst) {
+            CommandError::new(ErrorKind::UnknownDesign, "the design is closed or deleted")
+        } else {
+            CommandError::new(
+                ErrorKind::Unavailable,
+                format!(
+                    "design {} stopped after a failure and is restarting; reconnect",
+                    self.id
+                ),
+            )
+        }
+    }
 }
 
 impl DesignHandle {
     /// Sends a request (waits when the queue is full).
     pub async fn send(&self, r: Request) -> Result<(), CommandError> {
-        self.tx.send(r).await.map_err(|_| gone())
+        self.tx.send(r).await.map_err(|_| self.gone())
     }
 
     /// Whether the actor has stopped.
@@ -228,14 +248,14 @@ impl DesignHandle {
     pub async fn join(&self, client: ClientInfo) -> Result<Joined, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Join { client, reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// A fresh state and event stream for a client that lagged.
     pub async fn resync(&self, client: u64) -> Result<Joined, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Resync { client, reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// Runs a command and waits for its outcome.
@@ -247,7 +267,7 @@ impl DesignHandle {
             reply: Some(reply),
         })
         .await?;
-        rx.await.map_err(|_| gone())?
+        rx.await.map_err(|_| self.gone())?
     }
 
     /// Queues a drag frame (no ack; errors come back only as events).
@@ -264,21 +284,21 @@ impl DesignHandle {
     pub async fn state(&self) -> Result<Arc<SnapshotView>, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::State { reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// The committed versions.
     pub async fn versions(&self) -> Result<Arc<Vec<VersionInfo>>, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Versions { reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// A tessellation of the current surface.
     pub async fn mesh(&self, density: usize) -> Result<super::model::MeshData, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Mesh { density, reply }).await?;
-        rx.await.map_err(|_| gone())?
+        rx.await.map_err(|_| self.gone())?
     }
 
     /// Replaces the design's document (undoable).
@@ -289,7 +309,7 @@ impl DesignHandle {
             reply,
         })
         .await?;
-        rx.await.map_err(|_| gone())?
+        rx.await.map_err(|_| self.gone())?
     }
 
     /// Flushes and stops the actor.
@@ -301,8 +321,20 @@ impl DesignHandle {
     }
 }
 
+/// Counts the actor in `vsculpt_designs_open` for as long as it lives,
+/// however it ends (a panic included).
+struct OpenGauge(Arc<Metrics>);
+
+impl Drop for OpenGauge {
+    fn drop(&mut self) {
+        self.0.design_open(-1);
+    }
+}
+
 /// The actor's state.
 struct Actor {
+    _open: OpenGauge,
+    retired: Arc<std::sync::atomic::AtomicBool>,
     id: DesignId,
     model: DesignModel,
     store: Arc<Store>,
@@ -323,7 +355,8 @@ struct Actor {
     drag_frame: bool,
 }
 
-/// Starts the actor of design `id` from `doc`, with its committed versions.
+/// Starts the actor of design `id` from `doc`, with its committed versions;
+/// the task's handle tells its supervisor how it ended.
 pub fn spawn(
     id: DesignId,
     doc: DesignDoc,
@@ -331,12 +364,16 @@ pub fn spawn(
     store: Arc<Store>,
     metrics: Arc<Metrics>,
     persist_delay: Duration,
-) -> Result<DesignHandle, CommandError> {
+) -> Result<(DesignHandle, tokio::task::JoinHandle<()>), CommandError> {
     let model = DesignModel::load(&doc)?;
     let (tx, rx) = mpsc::channel(REQUEST_CAPACITY);
     let doc = Arc::new(model.to_doc());
     let geometry = watch::channel(Arc::new(model.geometry(id, 0, false))).0;
+    metrics.design_open(1);
+    let retired = Arc::new(std::sync::atomic::AtomicBool::new(false));
     let actor = Actor {
+        _open: OpenGauge(metrics.clone()),
+        retired: retired.clone(),
         id,
         model,
         store,
@@ -354,9 +391,8 @@ pub fn spawn(
         dragging: BTreeMap::new(),
         drag_frame: false,
     };
-    metrics.design_open(1);
-    tokio::spawn(actor.run(rx));
-    Ok(DesignHandle { id, tx })
+    let task = tokio::spawn(actor.run(rx));
+    Ok((DesignHandle { id, tx, retired }, task))
 }
 
 impl Actor {
@@ -383,7 +419,6 @@ impl Actor {
             }
         }
         self.persist().await;
-        self.metrics.design_open(-1);
         tracing::debug!(design = self.id, "design actor stopped");
     }
 
@@ -521,15 +556,21 @@ impl Actor {
                     let _ = reply.send(out);
                 }
                 Request::Delete => {
+                    self.retired
+                        .store(true, std::sync::atomic::Ordering::SeqCst);
                     let _ = self.events.send(DesignEvent::Deleted(self.id));
                     self.persist_at = None;
                     stop = true;
                 }
                 Request::Stop { reply } => {
+                    self.retired
+                        .store(true, std::sync::atomic::Ordering::SeqCst);
                     self.persist().await;
                     let _ = reply.send(());
                     stop = true;
                 }
+                #[cfg(feature = "fault-injection")]
+                Request::Panic => panic!("fault injection: design {} actor panics", self.id),
             }
         }
         if geometry_dirty && !stop {

@@ -11,6 +11,8 @@
 //! Calls block (SQLite is synchronous); async callers go through
 //! `tokio::task::spawn_blocking`.
 
+pub mod backup;
+pub mod lock;
 pub mod tokens;
 
 use rusqlite::{Connection, OptionalExtension, params};
