@@ -22,6 +22,7 @@ pub struct Metrics {
     errors: AtomicU64,
     actor_panics: AtomicU64,
     actor_restarts: AtomicU64,
+    store_write_errors: AtomicU64,
     fps_second: AtomicU64,
     fps_current: AtomicU64,
     fps_last: AtomicU64,
@@ -48,6 +49,7 @@ impl Metrics {
             errors: AtomicU64::new(0),
             actor_panics: AtomicU64::new(0),
             actor_restarts: AtomicU64::new(0),
+            store_write_errors: AtomicU64::new(0),
             fps_second: AtomicU64::new(0),
             fps_current: AtomicU64::new(0),
             fps_last: AtomicU64::new(0),
@@ -109,6 +111,11 @@ impl Metrics {
     /// A design actor was restarted after a panic.
     pub fn actor_restart(&self) {
         self.actor_restarts.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// A working-state write failed (it is retried).
+    pub fn store_write_failed(&self) {
+        self.store_write_errors.fetch_add(1, Ordering::Relaxed);
     }
 
     /// Geometry frames sent over the last full second.
@@ -215,6 +222,12 @@ impl Metrics {
             "counter",
             "Design actors restarted after a panic.",
             self.actor_restarts.load(Ordering::Relaxed).to_string(),
+        );
+        metric(
+            "vsculpt_store_write_errors_total",
+            "counter",
+            "Working-state writes that failed (disk full, read-only); each is retried.",
+            self.store_write_errors.load(Ordering::Relaxed).to_string(),
         );
         metric(
             "vsculpt_log_lines_dropped_total",

@@ -26,6 +26,10 @@ use tokio::sync::{broadcast, mpsc, oneshot, watch};
 pub const EVENT_CAPACITY: usize = 256;
 /// Capacity of a design's request queue.
 pub const REQUEST_CAPACITY: usize = 1024;
+/// First retry of a failed working-state write.
+pub const PERSIST_RETRY_MIN: Duration = Duration::from_millis(500);
+/// Longest wait between retries of a failed working-state write.
+pub const PERSIST_RETRY_MAX: Duration = Duration::from_secs(5);
 
 /// Who a connected client is.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -349,6 +353,8 @@ struct Actor {
     versions: Arc<Vec<VersionInfo>>,
     rev: u64,
     persist_at: Option<Instant>,
+    /// The back-off of the working-state write while it fails.
+    persist_retry: Option<Duration>,
     /// The icon each client is dragging.
     dragging: BTreeMap<u64, u64>,
     /// Whether the geometry published last came from a drag.
@@ -388,6 +394,7 @@ pub fn spawn(
         versions: Arc::new(versions),
         rev: 0,
         persist_at: None,
+        persist_retry: None,
         dragging: BTreeMap::new(),
         drag_frame: false,
     };
@@ -699,6 +706,10 @@ impl Actor {
         self.drag_frame = false;
     }
 
+    /// Writes the working state if a write is due. A failed write (disk
+    /// full, read-only, I/O error) keeps the state in memory and is retried
+    /// after a back-off growing to [`PERSIST_RETRY_MAX`]; the first failure
+    /// and the recovery are logged once.
     async fn persist(&mut self) {
         if self.persist_at.take().is_none() {
             return;
@@ -706,10 +717,34 @@ impl Actor {
         let bytes = self.model.to_doc().to_bytes();
         let store = self.store.clone();
         let id = self.id;
-        match tokio::task::spawn_blocking(move || store.save_working(id, &bytes)).await {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => tracing::error!(design = id, "cannot save working state: {e}"),
-            Err(e) => tracing::error!(design = id, "working-state writer failed: {e}"),
+        let failed = match tokio::task::spawn_blocking(move || store.save_working(id, &bytes)).await
+        {
+            Ok(Ok(())) => None,
+            Ok(Err(e)) => Some(e.to_string()),
+            Err(e) => Some(format!("writer task failed: {e}")),
+        };
+        match failed {
+            None => {
+                if self.persist_retry.take().is_some() {
+                    tracing::info!(design = id, "working state saved again");
+                }
+            }
+            Some(e) => {
+                self.metrics.store_write_failed();
+                let retry = match self.persist_retry {
+                    None => {
+                        tracing::error!(
+                            design = id,
+                            "cannot save the working state: {e}; keeping it in memory and retrying"
+                        );
+                        PERSIST_RETRY_MIN
+                    }
+                    Some(d) => (d * 2).min(PERSIST_RETRY_MAX),
+                };
+                self.persist_retry = Some(retry);
+                // Changes made meanwhile are written by the retry.
+                self.persist_at = Some(Instant::now() + retry);
+            }
         }
     }
 
@@ -904,6 +939,12 @@ impl Actor {
                 .map_err(|e| CommandError::new(ErrorKind::Storage, e.to_string()))?;
                 // The commit also wrote the working state.
                 self.persist_at = None;
+                if self.persist_retry.take().is_some() {
+                    tracing::info!(
+                        design = self.id,
+                        "working state saved again (with a commit)"
+                    );
+                }
                 let number = info.number;
                 let mut versions = (*self.versions).clone();
                 versions.push(info.clone());
