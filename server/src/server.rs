@@ -28,6 +28,10 @@ pub enum ServerError {
     /// The demo design could not be built.
     #[error("demo design: {0}")]
     Demo(String),
+    /// Some design actors did not flush their working state in time at
+    /// shutdown (the others did).
+    #[error("some designs could not flush their working state in time")]
+    Unflushed,
     /// Another server owns the data directory.
     #[error("{0}")]
     Locked(#[from] crate::store::lock::LockError),
@@ -182,17 +186,22 @@ impl Server {
                 tokio::time::sleep(DRAIN).await;
             } => Ok(()),
         };
-        if tokio::time::timeout(STOP_ACTORS, shared.hub.stop_all())
+        let flushed = tokio::time::timeout(STOP_ACTORS, shared.hub.stop_all())
             .await
-            .is_err()
-        {
-            tracing::error!("some designs could not flush their working state in time");
-        } else {
+            .is_ok();
+        if flushed {
             tracing::info!("store flushed, server stopped");
+        } else {
+            tracing::error!("some designs could not flush their working state in time");
         }
         tracing::debug!(dir = %self.lock.dir().display(), "data directory released");
         drop(self.lock);
-        served.map_err(ServerError::Io)
+        served.map_err(ServerError::Io)?;
+        if flushed {
+            Ok(())
+        } else {
+            Err(ServerError::Unflushed)
+        }
     }
 }
 

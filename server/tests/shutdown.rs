@@ -134,3 +134,78 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
     assert_eq!(after["design"], working["design"]);
     assert!(server.terminate().success());
 }
+
+/// With the test-only `VSCULPT_FAULT_HANG_ON_STOP` (a `fault-injection`
+/// build), design 2's actor never finishes its stop, as if stuck in a solve.
+/// SIGTERM still ends the process — exit 1, saying some designs could not be
+/// flushed — and design 1's uncommitted drag was flushed.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sigterm_ends_the_process_even_with_a_stuck_actor_flushing_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vsculpt-server"))
+        .args(["--listen", "127.0.0.1:0", "--data"])
+        .arg(&data)
+        .arg("--web-dir")
+        .arg(data.join("no-web-client"))
+        .env("VSCULPT_FAULT_HANG_ON_STOP", "2")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut banner = String::new();
+    for _ in 0..5 {
+        assert!(out.read_line(&mut banner).unwrap() > 0);
+    }
+    let (addr, designs) = common::parse_banner(&banner);
+    let d = designs[0].clone();
+    let admin = std::fs::read_to_string(data.join("admin-token")).unwrap();
+    let created = common::http::request(
+        addr,
+        "POST",
+        "/api/designs",
+        Some(admin.trim()),
+        br#"{"name": "lid", "nu": 8, "nv": 6}"#,
+    )
+    .await;
+    assert_eq!(created.status, 201);
+    let lid = created.json();
+    let lid_editor = lid["tokens"]["editor"].as_str().unwrap().to_string();
+    assert_eq!(lid["id"], 2);
+    // Both designs have running actors; design 1 has an uncommitted drag.
+    let _lid = Client::connect(addr, 2, &lid_editor, "bob").await;
+    let mut ann = Client::connect(addr, d.id, &d.editor, "ann").await;
+    let (icon, p) = load_icon(&ann.snapshot);
+    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
+    ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 7.0]}))
+        .await;
+    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    let working = get(addr, "/api/designs/1", Some(&d.editor)).await.json();
+
+    let ok = Command::new("kill")
+        .args(["-15", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("a stuck actor kept the server from exiting on SIGTERM");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(status.code(), Some(1), "{status:?}");
+    drop(ann);
+
+    let server = ChildServer::start(&data, 2);
+    let after = get(server.addr, "/api/designs/1", Some(&d.editor))
+        .await
+        .json();
+    assert_eq!(after["design"], working["design"]);
+    assert!(server.terminate().success());
+}

@@ -208,6 +208,21 @@ fn heavy<T>(f: impl FnOnce() -> T) -> T {
     }
 }
 
+/// Test-only fault injection for the binary: with
+/// `VSCULPT_FAULT_HANG_ON_STOP=<design id>` in a build with the
+/// `fault-injection` feature, that design's actor never finishes its stop
+/// (as if stuck in a solve), so the shutdown deadline can be tested.
+#[cfg(feature = "fault-injection")]
+fn hang_on_stop(id: DesignId) {
+    let hang = std::env::var("VSCULPT_FAULT_HANG_ON_STOP")
+        .ok()
+        .and_then(|v| v.parse::<DesignId>().ok())
+        == Some(id);
+    if hang {
+        heavy(|| std::thread::sleep(Duration::from_secs(3600)));
+    }
+}
+
 /// A handle to a running design actor.
 #[derive(Clone, Debug)]
 pub struct DesignHandle {
@@ -570,6 +585,8 @@ impl Actor {
                     stop = true;
                 }
                 Request::Stop { reply } => {
+                    #[cfg(feature = "fault-injection")]
+                    hang_on_stop(self.id);
                     self.retired
                         .store(true, std::sync::atomic::Ordering::SeqCst);
                     self.persist().await;
