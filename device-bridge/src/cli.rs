@@ -27,6 +27,9 @@ pub struct Args {
     /// List HID devices, serial ports, spacenavd and VRPN sources, then exit.
     #[arg(long)]
     pub list: bool,
+    /// Logging: `--log-file PATH` (rotated daily), `--log-format text|json`.
+    #[command(flatten)]
+    pub log: vsculpt_logging::LogArgs,
     /// What to do (default: run).
     #[command(subcommand)]
     pub command: Option<Action>,
@@ -66,32 +69,67 @@ fn load_config(args: &Args) -> Result<Config, String> {
     Ok(c)
 }
 
-async fn ctrl_c() {
-    if tokio::signal::ctrl_c().await.is_err() {
-        std::future::pending::<()>().await;
+/// Resolves on Ctrl-C or SIGTERM.
+async fn stop_signal() {
+    let ctrl_c = async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {}
+        _ = term => {}
     }
+    tracing::info!("stopping");
+}
+
+/// Writes a line to stderr, ignoring a closed or failing stderr.
+fn say(line: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr(), "vsculpt-bridge: {line}");
 }
 
 /// Runs the command line with `wire` as the protocol mapping.
 pub fn main(wire: Arc<dyn Wire>) -> ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
-        )
-        .with_writer(std::io::stderr)
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .init();
     let args = Args::parse();
+    let logging = match vsculpt_logging::init(&args.log, "info") {
+        Ok(l) => l,
+        Err(e) => {
+            say(&e.to_string());
+            return ExitCode::from(2);
+        }
+    };
+    let code = run(args, wire);
+    logging.flush(std::time::Duration::from_millis(200));
+    code
+}
+
+fn run(args: Args, wire: Arc<dyn Wire>) -> ExitCode {
     let config = match load_config(&args) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("vsculpt-bridge: {e}");
+            say(&e);
             return ExitCode::from(2);
         }
     };
     if args.list {
-        print!("{}", listing::probe(Some(&config)).render());
+        use std::io::Write;
+        let _ = write!(
+            std::io::stdout(),
+            "{}",
+            listing::probe(Some(&config)).render()
+        );
         return ExitCode::SUCCESS;
     }
     let rt = match tokio::runtime::Builder::new_multi_thread()
@@ -101,14 +139,16 @@ pub fn main(wire: Arc<dyn Wire>) -> ExitCode {
     {
         Ok(rt) => rt,
         Err(e) => {
-            eprintln!("vsculpt-bridge: cannot start the runtime: {e}");
+            say(&format!("cannot start the runtime: {e}"));
             return ExitCode::FAILURE;
         }
     };
     let result = rt.block_on(async {
         match args.command.unwrap_or(Action::Run) {
-            Action::Run => run_live(config, wire, None, ctrl_c()).await.map(|_| ()),
-            Action::Record { file } => run_live(config, wire, Some(&file), ctrl_c())
+            Action::Run => run_live(config, wire, None, stop_signal())
+                .await
+                .map(|_| ()),
+            Action::Record { file } => run_live(config, wire, Some(&file), stop_signal())
                 .await
                 .map(|_| ()),
             Action::Replay { file, speed } => {
@@ -117,7 +157,7 @@ pub fn main(wire: Arc<dyn Wire>) -> ExitCode {
                         "--speed must be a positive number".into(),
                     ));
                 }
-                run_replay(config, wire, &file, speed, ctrl_c())
+                run_replay(config, wire, &file, speed, stop_signal())
                     .await
                     .map(|n| {
                         tracing::info!(samples = n, "replay finished");
@@ -128,7 +168,7 @@ pub fn main(wire: Arc<dyn Wire>) -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("vsculpt-bridge: {e}");
+            say(&e.to_string());
             ExitCode::FAILURE
         }
     }

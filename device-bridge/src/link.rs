@@ -124,6 +124,8 @@ pub struct LinkStats {
     pub connections: u64,
     /// Messages sent.
     pub sent: u64,
+    /// Times the connection task panicked and was restarted.
+    pub restarts: u64,
 }
 
 /// The running link; dropping it stops the connection task.
@@ -144,13 +146,13 @@ impl Link {
         let outbox = Arc::new(Mutex::new(Outbox::new()));
         let notify = Arc::new(Notify::new());
         let (stats_tx, stats) = watch::channel(LinkStats::default());
-        let task = tokio::spawn(run(
+        let task = tokio::spawn(supervise(
             options,
             wire,
             events,
             outbox.clone(),
             notify.clone(),
-            stats_tx,
+            Arc::new(stats_tx),
         ));
         Self {
             outbox,
@@ -203,13 +205,63 @@ impl Drop for Link {
     }
 }
 
+/// Aborts the task it holds when dropped (the link stops with its supervisor).
+struct AbortOnDrop(tokio::task::JoinHandle<()>);
+
+impl Drop for AbortOnDrop {
+    fn drop(&mut self) {
+        self.0.abort();
+    }
+}
+
+/// Runs the connection task and restarts it, with backoff, whenever it
+/// panics: the panic is logged, counted in [`LinkStats::restarts`] and
+/// reported as [`ServerEvent::Disconnected`], after which the new task
+/// reconnects and the bridge restores its bindings as after any outage.
+async fn supervise(
+    o: LinkOptions,
+    wire: Arc<dyn Wire>,
+    events: mpsc::UnboundedSender<ServerEvent>,
+    outbox: Arc<Mutex<Outbox>>,
+    notify: Arc<Notify>,
+    stats: Arc<watch::Sender<LinkStats>>,
+) {
+    let mut backoff = o.backoff_min;
+    loop {
+        let mut task = AbortOnDrop(tokio::spawn(run(
+            o.clone(),
+            wire.clone(),
+            events.clone(),
+            outbox.clone(),
+            notify.clone(),
+            stats.clone(),
+        )));
+        let panic = match (&mut task.0).await {
+            Err(e) if e.is_panic() => e.into_panic(),
+            _ => return,
+        };
+        let what = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a non-text panic".into());
+        stats.send_modify(|s| s.restarts += 1);
+        tracing::error!(url = %o.url, panic = %what, ?backoff, "server link task panicked; restarting");
+        if events.send(ServerEvent::Disconnected).is_err() {
+            return;
+        }
+        tokio::time::sleep(backoff).await;
+        backoff = (backoff * 2).min(o.backoff_max);
+    }
+}
+
 async fn run(
     o: LinkOptions,
     wire: Arc<dyn Wire>,
     events: mpsc::UnboundedSender<ServerEvent>,
     outbox: Arc<Mutex<Outbox>>,
     notify: Arc<Notify>,
-    stats: watch::Sender<LinkStats>,
+    stats: Arc<watch::Sender<LinkStats>>,
 ) {
     let mut backoff = o.backoff_min;
     let mut outage_logged = false;

@@ -42,6 +42,13 @@ pub enum ErrorCode {
     Solver,
     /// Something failed inside the server; the request changed nothing.
     Internal,
+    /// The design is restarting after a failure (or the server is stopping):
+    /// reconnect and retry in a moment.
+    Unavailable,
+    /// The store could not write (disk full, read-only, I/O error): nothing
+    /// was stored, the server keeps the design in memory and retries; retry
+    /// the request once space is back.
+    Storage,
 }
 
 /// A message that could not be decoded or failed validation.

@@ -73,7 +73,7 @@ impl From<crate::design::CommandError> for ApiError {
             | ErrorKind::Unsupported => StatusCode::BAD_REQUEST,
             ErrorKind::NothingToUndo | ErrorKind::Conflict => StatusCode::CONFLICT,
             ErrorKind::Solver => StatusCode::UNPROCESSABLE_ENTITY,
-            ErrorKind::Unavailable | ErrorKind::Storage => StatusCode::INTERNAL_SERVER_ERROR,
+            ErrorKind::Unavailable | ErrorKind::Storage => StatusCode::SERVICE_UNAVAILABLE,
         };
         let w = crate::convert::WireError::from(e);
         ApiError(status, code_name(w.code), w.message)
@@ -101,6 +101,8 @@ fn code_name(code: vsculpt_protocol::ErrorCode) -> &'static str {
         C::Unsupported => "unsupported",
         C::Solver => "solver",
         C::Internal => "internal",
+        C::Unavailable => "unavailable",
+        C::Storage => "storage",
     }
 }
 
@@ -193,8 +195,15 @@ async fn need_role(
     }
 }
 
-async fn healthz() -> impl IntoResponse {
-    axum::Json(json!({ "status": "ok" }))
+/// `ok`, or `degraded` with the designs whose actor is down or restarting
+/// (still 200: the rest of the studio serves).
+async fn healthz(State(s): State<AppState>) -> impl IntoResponse {
+    let down = s.hub.down();
+    if down.is_empty() {
+        axum::Json(json!({ "status": "ok" }))
+    } else {
+        axum::Json(json!({ "status": "degraded", "designs_down": down }))
+    }
 }
 
 async fn metrics(

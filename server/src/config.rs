@@ -17,7 +17,7 @@ pub struct Cli {
     #[arg(long, default_value = "127.0.0.1:7878")]
     pub listen: SocketAddr,
     /// Data directory (the embedded database lives here).
-    #[arg(long, default_value = "./data")]
+    #[arg(long, default_value = "./data", global = true)]
     pub data: PathBuf,
     /// The web client's folder (index.html, src/, node_modules/).
     #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../web-client"))]
@@ -33,6 +33,34 @@ pub struct Cli {
     /// server's own whose pages may use the API and WebSocket; repeatable.
     #[arg(long = "allow-origin")]
     pub allow_origin: Vec<String>,
+    /// Logging: `--log-file PATH` (rotated daily), `--log-format text|json`.
+    #[command(flatten)]
+    pub log: vsculpt_logging::LogArgs,
+    /// Instead of serving: back up or restore the data directory.
+    #[command(subcommand)]
+    pub command: Option<Maintenance>,
+}
+
+/// Data-directory maintenance (`vsculpt-server backup|restore`).
+#[derive(Clone, Debug, clap::Subcommand)]
+pub enum Maintenance {
+    /// Copy the database of `--data` (a server may be running on it) into
+    /// OUT as one consistent snapshot.
+    Backup {
+        /// The backup file to write.
+        out: PathBuf,
+        /// Overwrite OUT if it exists.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Make BACKUP the database of `--data` (no server may be running on it).
+    Restore {
+        /// A file written by `backup`.
+        backup: PathBuf,
+        /// Replace an existing database in `--data`.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 /// Everything the server needs to run.

@@ -86,7 +86,8 @@ impl From<CommandError> for WireError {
             ErrorKind::NothingToUndo | ErrorKind::Conflict => ErrorCode::Conflict,
             ErrorKind::Unsupported => ErrorCode::Unsupported,
             ErrorKind::Solver => ErrorCode::Solver,
-            ErrorKind::Unavailable | ErrorKind::Storage => ErrorCode::Internal,
+            ErrorKind::Unavailable => ErrorCode::Unavailable,
+            ErrorKind::Storage => ErrorCode::Storage,
         };
         Self::new(code, e.message)
     }

@@ -1,6 +1,7 @@
 //! Service metrics in the Prometheus text format (`GET /metrics`): open
 //! designs, connected clients, solve count and time, geometry frames sent and
-//! the frame rate over the last full second. Plain atomics, shared by
+//! the frame rate over the last full second, design actors that panicked
+//! and were restarted, log lines dropped. Plain atomics, shared by
 //! every task, no locks on the hot path.
 
 use std::fmt::Write;
@@ -19,6 +20,9 @@ pub struct Metrics {
     frames: AtomicU64,
     frame_bytes: AtomicU64,
     errors: AtomicU64,
+    actor_panics: AtomicU64,
+    actor_restarts: AtomicU64,
+    store_write_errors: AtomicU64,
     fps_second: AtomicU64,
     fps_current: AtomicU64,
     fps_last: AtomicU64,
@@ -43,6 +47,9 @@ impl Metrics {
             frames: AtomicU64::new(0),
             frame_bytes: AtomicU64::new(0),
             errors: AtomicU64::new(0),
+            actor_panics: AtomicU64::new(0),
+            actor_restarts: AtomicU64::new(0),
+            store_write_errors: AtomicU64::new(0),
             fps_second: AtomicU64::new(0),
             fps_current: AtomicU64::new(0),
             fps_last: AtomicU64::new(0),
@@ -94,6 +101,21 @@ impl Metrics {
     /// An error message went to a client.
     pub fn error_sent(&self) {
         self.errors.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// A design actor panicked.
+    pub fn actor_panic(&self) {
+        self.actor_panics.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// A design actor was restarted after a panic.
+    pub fn actor_restart(&self) {
+        self.actor_restarts.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// A working-state write failed (it is retried).
+    pub fn store_write_failed(&self) {
+        self.store_write_errors.fetch_add(1, Ordering::Relaxed);
     }
 
     /// Geometry frames sent over the last full second.
@@ -188,6 +210,30 @@ impl Metrics {
             "counter",
             "Error messages sent to clients.",
             self.errors.load(Ordering::Relaxed).to_string(),
+        );
+        metric(
+            "vsculpt_actor_panics_total",
+            "counter",
+            "Design actors that panicked (each is restarted from its persisted state).",
+            self.actor_panics.load(Ordering::Relaxed).to_string(),
+        );
+        metric(
+            "vsculpt_actor_restarts_total",
+            "counter",
+            "Design actors restarted after a panic.",
+            self.actor_restarts.load(Ordering::Relaxed).to_string(),
+        );
+        metric(
+            "vsculpt_store_write_errors_total",
+            "counter",
+            "Working-state writes that failed (disk full, read-only); each is retried.",
+            self.store_write_errors.load(Ordering::Relaxed).to_string(),
+        );
+        metric(
+            "vsculpt_log_lines_dropped_total",
+            "counter",
+            "Log lines dropped (log reader gone, log sink failing or too slow).",
+            vsculpt_logging::dropped_lines().to_string(),
         );
         metric(
             "vsculpt_uptime_seconds",

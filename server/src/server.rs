@@ -1,5 +1,6 @@
-//! Starting and stopping the whole service: open the store (creating the
-//! demo design on first start), bind the router to a listener, serve until
+//! Starting and stopping the whole service: lock the data directory (one
+//! server owns it, see `store::lock`), open the store (creating the demo
+//! design on first start), bind the router to a listener, serve until
 //! the shutdown signal, then stop every design actor so working states are
 //! flushed. [`Server::links`] gives the start banner of API.md §4.
 
@@ -28,10 +29,24 @@ pub enum ServerError {
     /// The demo design could not be built.
     #[error("demo design: {0}")]
     Demo(String),
+    /// Some design actors did not flush their working state in time at
+    /// shutdown (the others did).
+    #[error("some designs could not flush their working state in time")]
+    Unflushed,
+    /// Another server owns the data directory.
+    #[error("{0}")]
+    Locked(#[from] crate::store::lock::LockError),
 }
+
+/// How long open connections get to close after the shutdown signal.
+pub const DRAIN: std::time::Duration = std::time::Duration::from_millis(1000);
+/// How long the design actors get to flush after the connections closed.
+pub const STOP_ACTORS: std::time::Duration = std::time::Duration::from_millis(1200);
 
 /// A started server (store open, listener bound), not yet serving.
 pub struct Server {
+    /// Held until [`Server::run`] returns: no other server uses the directory.
+    lock: crate::store::lock::DataDirLock,
     shared: Arc<Shared>,
     listener: TcpListener,
     addr: SocketAddr,
@@ -65,6 +80,7 @@ impl Server {
         shutdown: Shutdown,
     ) -> Result<Self, ServerError> {
         let addr = listener.local_addr()?;
+        let lock = crate::store::lock::DataDirLock::acquire(&config.data_dir)?;
         let dir = config.data_dir.clone();
         let store = Arc::new(
             tokio::task::spawn_blocking(move || {
@@ -105,6 +121,7 @@ impl Server {
             shutdown,
         });
         Ok(Self {
+            lock,
             shared,
             listener,
             addr,
@@ -114,6 +131,11 @@ impl Server {
     /// The bound address.
     pub fn local_addr(&self) -> SocketAddr {
         self.addr
+    }
+
+    /// The registry of design actors (tests drive fault injection through it).
+    pub fn hub(&self) -> crate::design::Hub {
+        self.shared.hub.clone()
     }
 
     /// The administrator token (also in `DATA/admin-token`).
@@ -169,19 +191,34 @@ impl Server {
         let serving = axum::serve(listener, router)
             .with_graceful_shutdown(async move { stop.wait().await })
             .into_future();
-        // WebSocket tasks close on the signal; a client that does not answer
-        // the close gets two seconds before the server stops anyway.
+        // WebSocket tasks close on the signal; clients that do not answer
+        // the close get DRAIN before the server stops anyway, and the design
+        // actors get STOP_ACTORS to flush: the process ends well within the
+        // 3 s a supervisor allows.
         let stop = shared.shutdown.clone();
         let served = tokio::select! {
             r = serving => r,
             _ = async {
                 stop.wait().await;
-                tokio::time::sleep(std::time::Duration::from_secs(2)).await;
+                tokio::time::sleep(DRAIN).await;
             } => Ok(()),
         };
-        shared.hub.stop_all().await;
-        tracing::info!("store flushed, server stopped");
-        served.map_err(ServerError::Io)
+        let flushed = tokio::time::timeout(STOP_ACTORS, shared.hub.stop_all())
+            .await
+            .is_ok();
+        if flushed {
+            tracing::info!("store flushed, server stopped");
+        } else {
+            tracing::error!("some designs could not flush their working state in time");
+        }
+        tracing::debug!(dir = %self.lock.dir().display(), "data directory released");
+        drop(self.lock);
+        served.map_err(ServerError::Io)?;
+        if flushed {
+            Ok(())
+        } else {
+            Err(ServerError::Unflushed)
+        }
     }
 }
 

@@ -1,6 +1,9 @@
-//! Graceful shutdown: a future that resolves on Ctrl-C or SIGTERM, and a
-//! cloneable signal the server and every design actor watch so they stop
-//! accepting work and flush their state to the store before the process ends.
+//! Graceful shutdown that cannot be broken: a cloneable signal the server
+//! and every design actor watch so they stop accepting work and flush their
+//! state to the store, and the OS signal watcher of the binary
+//! ([`watch_os_signals`]): the first SIGTERM or Ctrl-C triggers the graceful
+//! shutdown and arms a deadline after which the process exits whatever state
+//! it is in; a second signal exits at once.
 
 use tokio::sync::watch;
 
@@ -43,30 +46,100 @@ impl Shutdown {
     }
 }
 
-/// Resolves on Ctrl-C (SIGINT) or, on Unix, SIGTERM.
-pub async fn os_signal() {
-    let ctrl_c = async {
-        if let Err(e) = tokio::signal::ctrl_c().await {
-            tracing::error!("cannot listen for Ctrl-C: {e}");
-            std::future::pending::<()>().await;
-        }
+/// How the process ended when the signal watcher had to end it.
+pub const FORCED_EXIT_CODE: i32 = 1;
+
+/// Watches SIGTERM and Ctrl-C on a thread of its own (with its own small
+/// runtime, so a busy or wedged server runtime cannot delay it). The first
+/// signal triggers `shutdown`; if the process is still running `deadline`
+/// later, or on a second signal, `before_exit` runs (flush the logs, briefly)
+/// and the process exits with [`FORCED_EXIT_CODE`].
+pub fn watch_os_signals(
+    shutdown: Shutdown,
+    deadline: std::time::Duration,
+    before_exit: impl Fn() + Send + 'static,
+) -> std::io::Result<()> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()?;
+    // Listen before returning, so a signal sent right after the banner is
+    // never met by the default action.
+    let mut signals = {
+        let _rt = rt.enter();
+        OsSignals::new()
     };
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            rt.block_on(async move {
+                signals.next().await;
+                // Trigger first: the log line after it may go nowhere.
+                shutdown.trigger();
+                tracing::info!("shutting down (a second signal exits at once)");
+                tokio::select! {
+                    _ = signals.next() => {
+                        tracing::warn!("second signal: exiting now");
+                    }
+                    _ = tokio::time::sleep(deadline) => {
+                        tracing::error!(?deadline, "shutdown not finished in time: exiting now");
+                    }
+                }
+                before_exit();
+                std::process::exit(FORCED_EXIT_CODE);
+            })
+        })?;
+    Ok(())
+}
+
+/// SIGTERM and SIGINT as one stream.
+struct OsSignals {
     #[cfg(unix)]
-    let term = async {
-        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
-            Ok(mut s) => {
-                s.recv().await;
-            }
-            Err(e) => {
-                tracing::error!("cannot listen for SIGTERM: {e}");
-                std::future::pending::<()>().await;
+    term: Option<tokio::signal::unix::Signal>,
+    #[cfg(unix)]
+    int: Option<tokio::signal::unix::Signal>,
+}
+
+#[cfg(unix)]
+async fn recv(s: &mut Option<tokio::signal::unix::Signal>) {
+    match s {
+        Some(s) => {
+            s.recv().await;
+        }
+        None => std::future::pending::<()>().await,
+    }
+}
+
+impl OsSignals {
+    fn new() -> Self {
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{SignalKind, signal};
+            let open = |k: SignalKind, name: &str| match signal(k) {
+                Ok(s) => Some(s),
+                Err(e) => {
+                    tracing::error!("cannot listen for {name}: {e}");
+                    None
+                }
+            };
+            Self {
+                term: open(SignalKind::terminate(), "SIGTERM"),
+                int: open(SignalKind::interrupt(), "SIGINT"),
             }
         }
-    };
-    #[cfg(not(unix))]
-    let term = std::future::pending::<()>();
-    tokio::select! {
-        _ = ctrl_c => tracing::info!("Ctrl-C received, shutting down"),
-        _ = term => tracing::info!("SIGTERM received, shutting down"),
+        #[cfg(not(unix))]
+        Self {}
+    }
+
+    /// The next SIGTERM or SIGINT.
+    async fn next(&mut self) {
+        #[cfg(unix)]
+        tokio::select! {
+            _ = recv(&mut self.term) => tracing::info!("SIGTERM received"),
+            _ = recv(&mut self.int) => tracing::info!("Ctrl-C received"),
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = tokio::signal::ctrl_c().await;
+        }
     }
 }

@@ -2,9 +2,15 @@
 //! sink, and when the device fails (unplugged, garbage it cannot resync from, a
 //! VRPN server gone) closes it and reopens it with exponential backoff. Each
 //! kind of failure is logged once, and recovery once.
+//!
+//! The thread supervises itself: a panic anywhere in the device's code is
+//! caught, logged with the device's name, counted ([`RunStats::panics`]),
+//! reported as [`DeviceStatus::Lost`] (so the server hears it) and the device
+//! is closed and started again after the same backoff.
 
 use super::driver::{Device, DeviceError};
 use super::sample::Sample;
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
@@ -55,6 +61,8 @@ pub struct RunStats {
     pub opens: AtomicU64,
     /// Failures (open errors and lost devices).
     pub failures: AtomicU64,
+    /// Panics caught in the device's code (each followed by a restart).
+    pub panics: AtomicU64,
 }
 
 /// A device running in a thread; dropping it stops the thread and closes the device.
@@ -90,7 +98,7 @@ impl DeviceRunner {
         let (s, st) = (stop.clone(), stats.clone());
         let thread = std::thread::Builder::new()
             .name(format!("device {name}"))
-            .spawn(move || run(device.as_mut(), options, &mut sink, &mut status, &s, &st))
+            .spawn(move || supervise(device.as_mut(), options, &mut sink, &mut status, &s, &st))
             .ok();
         if thread.is_none() {
             tracing::error!(device = %name, "cannot start a thread for the device");
@@ -141,6 +149,51 @@ fn sleep_unless_stopped(d: Duration, stop: &AtomicBool) {
 
 fn same_kind(a: &DeviceError, b: &DeviceError) -> bool {
     std::mem::discriminant(a) == std::mem::discriminant(b)
+}
+
+/// The text of a panic payload.
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = p.downcast_ref::<&str>() {
+        (*s).to_string()
+    } else if let Some(s) = p.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "a non-text panic".into()
+    }
+}
+
+/// [`run`], restarted with backoff whenever it panics, until `stop`.
+fn supervise(
+    device: &mut dyn Device,
+    o: RunOptions,
+    sink: &mut dyn FnMut(&[Sample]) -> bool,
+    status: &mut dyn FnMut(DeviceStatus),
+    stop: &AtomicBool,
+    stats: &RunStats,
+) {
+    let mut backoff = o.backoff_min;
+    loop {
+        let ran = catch_unwind(AssertUnwindSafe(|| {
+            run(&mut *device, o, &mut *sink, &mut *status, stop, stats)
+        }));
+        let Err(panic) = ran else { return };
+        let name = device.name().to_owned();
+        let what = panic_text(&*panic);
+        stats.panics.fetch_add(1, Ordering::Relaxed);
+        tracing::error!(device = %name, panic = %what, ?backoff, "device task panicked; restarting");
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            device.close();
+            status(DeviceStatus::Lost(format!(
+                "device task failed ({what}); restarting in {} ms",
+                backoff.as_millis()
+            )));
+        }));
+        sleep_unless_stopped(backoff, stop);
+        backoff = (backoff * 2).min(o.backoff_max);
+        if stop.load(Ordering::SeqCst) {
+            return;
+        }
+    }
 }
 
 fn run(

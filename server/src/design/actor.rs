@@ -26,6 +26,10 @@ use tokio::sync::{broadcast, mpsc, oneshot, watch};
 pub const EVENT_CAPACITY: usize = 256;
 /// Capacity of a design's request queue.
 pub const REQUEST_CAPACITY: usize = 1024;
+/// First retry of a failed working-state write.
+pub const PERSIST_RETRY_MIN: Duration = Duration::from_millis(500);
+/// Longest wait between retries of a failed working-state write.
+pub const PERSIST_RETRY_MAX: Duration = Duration::from_secs(5);
 
 /// Who a connected client is.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -204,6 +208,9 @@ pub enum Request {
         /// Answered once flushed.
         reply: oneshot::Sender<()>,
     },
+    /// Test-only fault injection: the actor panics when it runs this.
+    #[cfg(feature = "fault-injection")]
+    Panic,
 }
 
 /// Runs CPU-heavy model work (a rebuild and solve: a refactorisation on
@@ -216,22 +223,54 @@ fn heavy<T>(f: impl FnOnce() -> T) -> T {
     }
 }
 
+/// Test-only fault injection for the binary: with
+/// `VSCULPT_FAULT_HANG_ON_STOP=<design id>` in a build with the
+/// `fault-injection` feature, that design's actor never finishes its stop
+/// (as if stuck in a solve), so the shutdown deadline can be tested.
+#[cfg(feature = "fault-injection")]
+fn hang_on_stop(id: DesignId) {
+    let hang = std::env::var("VSCULPT_FAULT_HANG_ON_STOP")
+        .ok()
+        .and_then(|v| v.parse::<DesignId>().ok())
+        == Some(id);
+    if hang {
+        heavy(|| std::thread::sleep(Duration::from_secs(3600)));
+    }
+}
+
 /// A handle to a running design actor.
 #[derive(Clone, Debug)]
 pub struct DesignHandle {
     /// The design.
     pub id: DesignId,
     tx: mpsc::Sender<Request>,
+    /// Set by the actor when it stops on purpose (the design was deleted,
+    /// or the server is stopping), before it stops.
+    retired: Arc<std::sync::atomic::AtomicBool>,
 }
 
-fn gone() -> CommandError {
-    CommandError::new(ErrorKind::UnknownDesign, "the design is closed or deleted")
+impl DesignHandle {
+    /// Why the actor cannot answer: the design was deleted, or the actor
+    /// died (it is being restarted by its supervisor).
+    fn gone(&self) -> CommandError {
+        if self.retired.load(std::sync::atomic::Ordering::SeqCst) {
+            CommandError::new(ErrorKind::UnknownDesign, "the design is closed or deleted")
+        } else {
+            CommandError::new(
+                ErrorKind::Unavailable,
+                format!(
+                    "design {} stopped after a failure and is restarting; reconnect",
+                    self.id
+                ),
+            )
+        }
+    }
 }
 
 impl DesignHandle {
     /// Sends a request (waits when the queue is full).
     pub async fn send(&self, r: Request) -> Result<(), CommandError> {
-        self.tx.send(r).await.map_err(|_| gone())
+        self.tx.send(r).await.map_err(|_| self.gone())
     }
 
     /// Whether the actor has stopped.
@@ -243,14 +282,14 @@ impl DesignHandle {
     pub async fn join(&self, client: ClientInfo) -> Result<Joined, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Join { client, reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// A fresh state and event stream for a client that lagged.
     pub async fn resync(&self, client: u64) -> Result<Joined, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Resync { client, reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// Runs a command and waits for its outcome.
@@ -262,7 +301,7 @@ impl DesignHandle {
             reply: Some(reply),
         })
         .await?;
-        rx.await.map_err(|_| gone())?
+        rx.await.map_err(|_| self.gone())?
     }
 
     /// Queues a drag frame (no ack; errors come back only as events).
@@ -279,21 +318,21 @@ impl DesignHandle {
     pub async fn state(&self) -> Result<Arc<SnapshotView>, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::State { reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// The committed versions.
     pub async fn versions(&self) -> Result<Arc<Vec<VersionInfo>>, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Versions { reply }).await?;
-        rx.await.map_err(|_| gone())
+        rx.await.map_err(|_| self.gone())
     }
 
     /// A tessellation of the current surface.
     pub async fn mesh(&self, density: usize) -> Result<super::model::MeshData, CommandError> {
         let (reply, rx) = oneshot::channel();
         self.send(Request::Mesh { density, reply }).await?;
-        rx.await.map_err(|_| gone())?
+        rx.await.map_err(|_| self.gone())?
     }
 
     /// Replaces the design's document (undoable).
@@ -304,7 +343,7 @@ impl DesignHandle {
             reply,
         })
         .await?;
-        rx.await.map_err(|_| gone())?
+        rx.await.map_err(|_| self.gone())?
     }
 
     /// Flushes and stops the actor.
@@ -316,8 +355,20 @@ impl DesignHandle {
     }
 }
 
+/// Counts the actor in `vsculpt_designs_open` for as long as it lives,
+/// however it ends (a panic included).
+struct OpenGauge(Arc<Metrics>);
+
+impl Drop for OpenGauge {
+    fn drop(&mut self) {
+        self.0.design_open(-1);
+    }
+}
+
 /// The actor's state.
 struct Actor {
+    _open: OpenGauge,
+    retired: Arc<std::sync::atomic::AtomicBool>,
     id: DesignId,
     model: DesignModel,
     store: Arc<Store>,
@@ -333,13 +384,16 @@ struct Actor {
     versions: Arc<Vec<VersionInfo>>,
     rev: u64,
     persist_at: Option<Instant>,
+    /// The back-off of the working-state write while it fails.
+    persist_retry: Option<Duration>,
     /// The icon each client is dragging.
     dragging: BTreeMap<u64, u64>,
     /// Whether the geometry published last came from a drag.
     drag_frame: bool,
 }
 
-/// Starts the actor of design `id` from `doc`, with its committed versions.
+/// Starts the actor of design `id` from `doc`, with its committed versions;
+/// the task's handle tells its supervisor how it ended.
 pub fn spawn(
     id: DesignId,
     doc: DesignDoc,
@@ -347,12 +401,16 @@ pub fn spawn(
     store: Arc<Store>,
     metrics: Arc<Metrics>,
     persist_delay: Duration,
-) -> Result<DesignHandle, CommandError> {
+) -> Result<(DesignHandle, tokio::task::JoinHandle<()>), CommandError> {
     let model = DesignModel::load(&doc)?;
     let (tx, rx) = mpsc::channel(REQUEST_CAPACITY);
     let doc = Arc::new(model.to_doc());
     let geometry = watch::channel(Arc::new(model.geometry(id, 0, false))).0;
+    metrics.design_open(1);
+    let retired = Arc::new(std::sync::atomic::AtomicBool::new(false));
     let actor = Actor {
+        _open: OpenGauge(metrics.clone()),
+        retired: retired.clone(),
         id,
         model,
         store,
@@ -368,12 +426,12 @@ pub fn spawn(
         versions: Arc::new(versions),
         rev: 0,
         persist_at: None,
+        persist_retry: None,
         dragging: BTreeMap::new(),
         drag_frame: false,
     };
-    metrics.design_open(1);
-    tokio::spawn(actor.run(rx));
-    Ok(DesignHandle { id, tx })
+    let task = tokio::spawn(actor.run(rx));
+    Ok((DesignHandle { id, tx, retired }, task))
 }
 
 impl Actor {
@@ -400,7 +458,6 @@ impl Actor {
             }
         }
         self.persist().await;
-        self.metrics.design_open(-1);
         tracing::debug!(design = self.id, "design actor stopped");
     }
 
@@ -545,15 +602,23 @@ impl Actor {
                     let _ = reply.send(out);
                 }
                 Request::Delete => {
+                    self.retired
+                        .store(true, std::sync::atomic::Ordering::SeqCst);
                     let _ = self.events.send(DesignEvent::Deleted(self.id));
                     self.persist_at = None;
                     stop = true;
                 }
                 Request::Stop { reply } => {
+                    #[cfg(feature = "fault-injection")]
+                    hang_on_stop(self.id);
+                    self.retired
+                        .store(true, std::sync::atomic::Ordering::SeqCst);
                     self.persist().await;
                     let _ = reply.send(());
                     stop = true;
                 }
+                #[cfg(feature = "fault-injection")]
+                Request::Panic => panic!("fault injection: design {} actor panics", self.id),
             }
         }
         if geometry_dirty && !stop {
@@ -691,6 +756,10 @@ impl Actor {
         self.drag_frame = false;
     }
 
+    /// Writes the working state if a write is due. A failed write (disk
+    /// full, read-only, I/O error) keeps the state in memory and is retried
+    /// after a back-off growing to [`PERSIST_RETRY_MAX`]; the first failure
+    /// and the recovery are logged once.
     async fn persist(&mut self) {
         if self.persist_at.take().is_none() {
             return;
@@ -698,10 +767,34 @@ impl Actor {
         let bytes = self.model.to_doc().to_bytes();
         let store = self.store.clone();
         let id = self.id;
-        match tokio::task::spawn_blocking(move || store.save_working(id, &bytes)).await {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => tracing::error!(design = id, "cannot save working state: {e}"),
-            Err(e) => tracing::error!(design = id, "working-state writer failed: {e}"),
+        let failed = match tokio::task::spawn_blocking(move || store.save_working(id, &bytes)).await
+        {
+            Ok(Ok(())) => None,
+            Ok(Err(e)) => Some(e.to_string()),
+            Err(e) => Some(format!("writer task failed: {e}")),
+        };
+        match failed {
+            None => {
+                if self.persist_retry.take().is_some() {
+                    tracing::info!(design = id, "working state saved again");
+                }
+            }
+            Some(e) => {
+                self.metrics.store_write_failed();
+                let retry = match self.persist_retry {
+                    None => {
+                        tracing::error!(
+                            design = id,
+                            "cannot save the working state: {e}; keeping it in memory and retrying"
+                        );
+                        PERSIST_RETRY_MIN
+                    }
+                    Some(d) => (d * 2).min(PERSIST_RETRY_MAX),
+                };
+                self.persist_retry = Some(retry);
+                // Changes made meanwhile are written by the retry.
+                self.persist_at = Some(Instant::now() + retry);
+            }
         }
     }
 
@@ -896,6 +989,12 @@ impl Actor {
                 .map_err(|e| CommandError::new(ErrorKind::Storage, e.to_string()))?;
                 // The commit also wrote the working state.
                 self.persist_at = None;
+                if self.persist_retry.take().is_some() {
+                    tracing::info!(
+                        design = self.id,
+                        "working state saved again (with a commit)"
+                    );
+                }
                 let number = info.number;
                 let mut versions = (*self.versions).clone();
                 versions.push(info.clone());

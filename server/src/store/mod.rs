@@ -12,6 +12,8 @@
 //! `tokio::task::spawn_blocking`.
 
 pub mod token_index;
+pub mod backup;
+pub mod lock;
 pub mod tokens;
 
 use rusqlite::{Connection, OptionalExtension, params};
@@ -308,6 +310,29 @@ impl Store {
                 },
             )
             .optional()?)
+    }
+
+    /// Test-only: caps the database at `pages` pages (SQLite's
+    /// `max_page_count`; `None` lifts the cap), so a test can fill the
+    /// "disk" and give the space back. Writes past the cap fail with
+    /// `SQLITE_FULL`, exactly as on a full disk.
+    #[cfg(feature = "fault-injection")]
+    pub fn limit_pages(&self, pages: Option<u64>) -> Result<u64, StoreError> {
+        let conn = self.conn();
+        let n: i64 = match pages {
+            Some(p) => conn.query_row(&format!("PRAGMA max_page_count = {p}"), [], |r| r.get(0))?,
+            None => conn.query_row("PRAGMA max_page_count = 4294967294", [], |r| r.get(0))?,
+        };
+        Ok(n as u64)
+    }
+
+    /// Test-only: the database's size in pages.
+    #[cfg(feature = "fault-injection")]
+    pub fn page_count(&self) -> Result<u64, StoreError> {
+        let n: i64 = self
+            .conn()
+            .query_row("PRAGMA page_count", [], |r| r.get(0))?;
+        Ok(n as u64)
     }
 
     /// The newest version with its snapshot.

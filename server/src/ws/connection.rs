@@ -167,6 +167,10 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     };
     let handle = match state.hub.open(design).await {
         Ok(h) => h,
+        // 1013: try again later (the design is restarting).
+        Err(e) if e.kind == ErrorKind::Unavailable => {
+            return refuse(socket, WireError::from(e), 1013).await;
+        }
         Err(e) => return refuse(socket, WireError::from(e), CLOSE_POLICY).await,
     };
     let client = state.next_client.fetch_add(1, Ordering::Relaxed);

@@ -69,6 +69,7 @@ pub async fn run(
     compact: bool,
 ) {
     let mut geometry_live = true;
+    let mut deleted = false;
     if !compact
         && send_geometry(&mut sink, &mut joined, &metrics)
             .await
@@ -97,13 +98,14 @@ pub async fn run(
             e = joined.events.recv() => {
                 match e {
                     Ok(ev) => {
-                        let deleted = matches!(ev, DesignEvent::Deleted(_));
+                        let is_deleted = matches!(ev, DesignEvent::Deleted(_));
                         if let Some(text) = convert::event(&ev, !compact)
                             && sink.send(Message::Text(text)).await.is_err()
                         {
                             break;
                         }
-                        if deleted {
+                        if is_deleted {
+                            deleted = true;
                             geometry_live = false;
                         }
                     }
@@ -124,9 +126,24 @@ pub async fn run(
                             }
                         }
                     }
+                    Err(RecvError::Closed) if !deleted => {
+                        // The actor died (it panicked; its supervisor
+                        // restarts it from the persisted state): say so
+                        // and close, so the client reconnects to the new one.
+                        let e = crate::convert::WireError::new(
+                            vsculpt_protocol::ErrorCode::Unavailable,
+                            format!("design {} stopped after a failure and is restarting; reconnect", handle.id),
+                        );
+                        metrics.error_sent();
+                        let _ = sink.send(Message::Text(convert::error(None, &e))).await;
+                        let _ = sink
+                            .send(Message::Close(Some(CloseFrame { code: 1012, reason: "design restarting".into() })))
+                            .await;
+                        break;
+                    }
                     Err(RecvError::Closed) => {
-                        // The actor stopped (deleted or shutting down): wait
-                        // for the reader to close or rejoin.
+                        // The design was deleted: wait for the reader to
+                        // close or rejoin.
                         geometry_live = false;
                         match out.recv().await {
                             Some(Out::Msg(m)) => {

@@ -1,0 +1,153 @@
+//! A data directory that fills up during a session (a test-only size cap on
+//! the database, SQLite's `max_page_count`, from the `fault-injection`
+//! feature: writes past it fail with `SQLITE_FULL` as on a full disk).
+//! Commits get the `storage` code and change nothing, edits go on in
+//! memory, the working state is written again by itself once space is
+//! back, commits succeed again, and nothing acked is lost across a restart.
+
+mod common;
+
+use common::http::get;
+use common::ws::Client;
+use serde_json::{Value, json};
+use std::time::Duration;
+use vsculpt_server::config::Config;
+use vsculpt_server::design::DesignDoc;
+use vsculpt_server::server::Server;
+use vsculpt_server::shutdown::Shutdown;
+
+fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
+    let i = snapshot["icons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["role"]["kind"] == "load")
+        .unwrap();
+    (
+        i["id"].as_u64().unwrap(),
+        serde_json::from_value(i["xyz"].clone()).unwrap(),
+    )
+}
+
+async fn start(data: &std::path::Path) -> (Server, Shutdown) {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let mut config = Config::new(data.to_path_buf(), data.join("no-web-client"));
+    config.persist_delay = Duration::from_millis(100);
+    let shutdown = Shutdown::new();
+    let server = Server::start(listener, config, shutdown.clone())
+        .await
+        .unwrap();
+    (server, shutdown)
+}
+
+async fn drag(c: &mut Client, icon: u64, to: [f64; 3]) {
+    c.ok(json!({"type": "drag_start", "icon": icon})).await;
+    c.ok(json!({"type": "drag", "icon": icon, "xyz": to})).await;
+    c.ok(json!({"type": "drag_end", "icon": icon})).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let (server, shutdown) = start(&data).await;
+    let addr = server.local_addr();
+    let hub = server.hub();
+    let store = hub.store().clone();
+    let admin = server.admin_token().to_string();
+    let d = server.designs().unwrap()[0].clone();
+    let serving = tokio::spawn(server.run());
+    let mut ann = Client::connect(addr, d.id, &d.tokens.editor, "ann").await;
+    let (icon, p) = load_icon(&ann.snapshot);
+
+    // Cap the database where it is and commit until the space runs out.
+    store
+        .limit_pages(Some(store.page_count().unwrap()))
+        .unwrap();
+    let mut acked = vec!["created".to_string()];
+    let mut refused = None;
+    for k in 1..=40 {
+        drag(&mut ann, icon, [p[0], p[1], p[2] + k as f64]).await;
+        let msg = format!("step {k}");
+        let r = ann.request(json!({"type": "commit", "message": msg})).await;
+        if r["type"] == "ack" {
+            acked.push(msg);
+        } else {
+            refused = Some(r);
+            break;
+        }
+    }
+    let refused = refused.expect("the capped database never filled up");
+    assert_eq!(refused["code"], "storage", "{refused}");
+    assert!(
+        refused["message"].as_str().unwrap().contains("full"),
+        "{refused}"
+    );
+
+    // Work goes on in memory: the working state grows (new icons), its
+    // writes fail and are retried; commits keep being refused.
+    for k in 0..12 {
+        let u = 0.1 + 0.06 * k as f64;
+        ann.ok(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": u, "v": 0.35}, "role": {"kind": "position"}}}))
+            .await;
+    }
+    let again = ann
+        .request(json!({"type": "commit", "message": "refused"}))
+        .await;
+    assert_eq!(again["code"], "storage", "{again}");
+    let in_memory = get(addr, "/api/designs/1", Some(&d.tokens.editor))
+        .await
+        .json();
+    assert_eq!(in_memory["design"]["icons"].as_array().unwrap().len(), 16);
+    let stored = |store: &vsculpt_server::store::Store| {
+        let bytes = store.working(d.id).unwrap().unwrap();
+        serde_json::to_value(DesignDoc::from_bytes(&bytes).unwrap()).unwrap()
+    };
+    // Give the writer time to try (and fail).
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    assert_ne!(stored(&store)["icons"], in_memory["design"]["icons"]);
+    let m = get(addr, "/metrics", Some(&admin)).await.text();
+    assert!(!m.contains("vsculpt_store_write_errors_total 0\n"), "{m}");
+
+    // Space comes back: the working state is written by itself.
+    store.limit_pages(None).unwrap();
+    let mut saved = false;
+    for _ in 0..400 {
+        if stored(&store)["icons"] == in_memory["design"]["icons"] {
+            saved = true;
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    assert!(
+        saved,
+        "the working state was never written after space returned"
+    );
+    ann.ok(json!({"type": "commit", "message": "space is back"}))
+        .await;
+    acked.push("space is back".into());
+    drop(ann);
+    shutdown.trigger();
+    serving.await.unwrap().unwrap();
+
+    // Nothing acked is lost.
+    let (server, shutdown) = start(&data).await;
+    let addr = server.local_addr();
+    let serving = tokio::spawn(server.run());
+    let v = get(addr, "/api/designs/1/versions", Some(&d.tokens.viewer))
+        .await
+        .json();
+    let msgs: Vec<&str> = v["versions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(msgs, acked);
+    let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
+        .await
+        .json();
+    assert_eq!(now["design"]["icons"], in_memory["design"]["icons"]);
+    shutdown.trigger();
+    serving.await.unwrap().unwrap();
+}
