@@ -88,62 +88,12 @@ async fn next_frame(ws: &mut Ws) -> (Instant, vsculpt_protocol::GeometryFrame, u
     }
 }
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
-}
-
-async fn run() {
-    let data = std::env::temp_dir().join(format!("vsculpt-bench-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&data);
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let mut config = Config::new(data.clone(), data.join("no-web"));
-    config.demo = false;
-    // A 400 × 400 IGES file is about 16 MB.
-    config.max_body_bytes = 64 << 20;
-    let shutdown = Shutdown::new();
-    let server = Server::start(listener, config, shutdown.clone())
-        .await
-        .unwrap();
-    let addr = server.local_addr();
-    let admin = server.admin_token().to_string();
-    let task = tokio::spawn(server.run());
-
-    let created = post(
-        addr,
-        "/api/designs",
-        &admin,
-        r#"{"name": "bench", "nu": 81, "nv": 159}"#,
-    )
-    .await;
-    let id = created["id"].as_u64().unwrap();
-    let editor = created["tokens"]["editor"].as_str().unwrap().to_string();
-    let viewer = created["tokens"]["viewer"].as_str().unwrap().to_string();
-    let mut a = connect(addr, id, &editor, "driver").await;
-    let mut b = connect(addr, id, &viewer, "watcher").await;
-    let spec = json!({"type": "create_icon", "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}});
-    a.send(Message::text(spec.to_string())).await.unwrap();
-    let icon = loop {
-        if let Message::Text(t) = a.next().await.unwrap().unwrap() {
-            let v: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
-            if v["type"] == "icon_created" {
-                break v["icon"]["id"].as_u64().unwrap();
-            }
-        }
-    };
-    a.send(Message::text(
-        json!({"type": "drag_start", "icon": icon}).to_string(),
-    ))
-    .await
-    .unwrap();
-    // Drain whatever b has so far (frame of the icon creation).
-    let (_, f0, _) = next_frame(&mut b).await;
-    let mut last_rev = f0.revision;
-
-    // 0: joins.
-    let joins = 200;
-    let mut to_snapshot = Vec::with_capacity(joins);
-    let mut to_frame = Vec::with_capacity(joins);
-    for k in 0..joins {
+/// `n` joins of a viewer: ms from sending `hello` to the `snapshot` and to
+/// the first geometry frame, each sorted.
+async fn joins(addr: SocketAddr, id: u64, viewer: &str, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut to_snapshot = Vec::with_capacity(n);
+    let mut to_frame = Vec::with_capacity(n);
+    for k in 0..n {
         let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
             .await
             .unwrap();
@@ -167,8 +117,134 @@ async fn run() {
     }
     to_snapshot.sort_by(|x, y| x.partial_cmp(y).unwrap());
     to_frame.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    (to_snapshot, to_frame)
+}
+
+/// `n` drags by the editor `a` of `icon`, each waiting for its own frame
+/// (revision above `after`): ms, sorted.
+async fn own_frames(a: &mut Ws, icon: u64, after: u64, n: usize) -> Vec<f64> {
+    let mut own = Vec::with_capacity(n);
+    let mut last = after;
+    for k in 0..n {
+        let z = 5.0 * ((k % 40) as f64 / 40.0);
+        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
+            .to_string();
+        let t0 = Instant::now();
+        a.send(Message::text(msg)).await.unwrap();
+        loop {
+            let (t1, f, _) = next_frame(a).await;
+            if f.revision > last {
+                last = f.revision;
+                own.push((t1 - t0).as_secs_f64() * 1e3);
+                break;
+            }
+        }
+    }
+    own.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    own
+}
+
+/// Starts a server over a fresh data dir with an 81 × 159 design, an editor
+/// connection holding a load icon (grabbed) and the viewer token.
+async fn bench_server(
+    nodelay: bool,
+    tag: &str,
+) -> (
+    SocketAddr,
+    String,
+    Shutdown,
+    tokio::task::JoinHandle<()>,
+    std::path::PathBuf,
+    u64,
+    String,
+    Ws,
+    u64,
+) {
+    let data = std::env::temp_dir().join(format!("vsculpt-bench-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&data);
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let mut config = Config::new(data.clone(), data.join("no-web"));
+    config.demo = false;
+    config.tcp_nodelay = nodelay;
+    // A 400 × 400 IGES file is about 16 MB.
+    config.max_body_bytes = 64 << 20;
+    let shutdown = Shutdown::new();
+    let server = Server::start(listener, config, shutdown.clone())
+        .await
+        .unwrap();
+    let addr = server.local_addr();
+    let admin = server.admin_token().to_string();
+    let task = tokio::spawn(async move {
+        let _ = server.run().await;
+    });
+    let created = post(
+        addr,
+        "/api/designs",
+        &admin,
+        r#"{"name": "bench", "nu": 81, "nv": 159}"#,
+    )
+    .await;
+    let id = created["id"].as_u64().unwrap();
+    let editor = created["tokens"]["editor"].as_str().unwrap().to_string();
+    let viewer = created["tokens"]["viewer"].as_str().unwrap().to_string();
+    let mut a = connect(addr, id, &editor, "driver").await;
+    let spec = json!({"type": "create_icon", "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}});
+    a.send(Message::text(spec.to_string())).await.unwrap();
+    let icon = loop {
+        if let Message::Text(t) = a.next().await.unwrap().unwrap() {
+            let v: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
+            if v["type"] == "icon_created" {
+                break v["icon"]["id"].as_u64().unwrap();
+            }
+        }
+    };
+    a.send(Message::text(
+        json!({"type": "drag_start", "icon": icon}).to_string(),
+    ))
+    .await
+    .unwrap();
+    (addr, admin, shutdown, task, data, id, viewer, a, icon)
+}
+
+/// The same-run baseline: join and own-frame latency with TCP_NODELAY off
+/// on the server (the code before this change).
+async fn nagle_baseline() {
+    let (addr, _admin, shutdown, task, data, id, viewer, mut a, icon) =
+        bench_server(false, "nagle").await;
+    let (snap, frame) = joins(addr, id, &viewer, 50).await;
+    let own = own_frames(&mut a, icon, 0, 100).await;
     println!(
-        "join: hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; hello -> first frame p50 {:.3} ms, p99 {:.3} ms ({joins} joins)",
+        "baseline without TCP_NODELAY: join hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; -> first frame p50 {:.3} ms, p99 {:.3} ms (50 joins); own frame p50 {:.3} ms, p99 {:.3} ms (100 drags)",
+        percentile(&snap, 0.5),
+        percentile(&snap, 0.99),
+        percentile(&frame, 0.5),
+        percentile(&frame, 0.99),
+        percentile(&own, 0.5),
+        percentile(&own, 0.99)
+    );
+    drop(a);
+    shutdown.trigger();
+    let _ = task.await;
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+}
+
+async fn run() {
+    nagle_baseline().await;
+    let (addr, admin, shutdown, task, data, id, viewer, mut a, icon) =
+        bench_server(true, "main").await;
+    let mut b = connect(addr, id, &viewer, "watcher").await;
+    // Drain whatever b has so far (frame of the icon creation).
+    let (_, f0, _) = next_frame(&mut b).await;
+    let mut last_rev = f0.revision;
+
+    // 0: joins.
+    let (to_snapshot, to_frame) = joins(addr, id, &viewer, 200).await;
+    println!(
+        "join: hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; hello -> first frame p50 {:.3} ms, p99 {:.3} ms (200 joins)",
         percentile(&to_snapshot, 0.5),
         percentile(&to_snapshot, 0.99),
         percentile(&to_frame, 0.5),
@@ -219,24 +295,7 @@ async fn run() {
     drop(b);
 
     // 1b: the dragging editor's own frame.
-    let mut own = Vec::with_capacity(n);
-    let mut last_own = 0;
-    for k in 0..n {
-        let z = 5.0 * ((k % 40) as f64 / 40.0);
-        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
-            .to_string();
-        let t0 = Instant::now();
-        a.send(Message::text(msg)).await.unwrap();
-        loop {
-            let (t1, f, _) = next_frame(&mut a).await;
-            if f.revision > last_own.max(last_rev) {
-                last_own = f.revision;
-                own.push((t1 - t0).as_secs_f64() * 1e3);
-                break;
-            }
-        }
-    }
-    own.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    let own = own_frames(&mut a, icon, last_rev, n).await;
     println!(
         "drag -> the editor's own frame: p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms",
         percentile(&own, 0.5),
