@@ -237,9 +237,8 @@ async fn run() {
     let (addr, admin, shutdown, task, data, id, viewer, mut a, icon) =
         bench_server(true, "main").await;
     let mut b = connect(addr, id, &viewer, "watcher").await;
-    // Drain whatever b has so far (frame of the icon creation).
-    let (_, f0, _) = next_frame(&mut b).await;
-    let mut last_rev = f0.revision;
+    // `connect` read b's first frame; every frame from here on is new.
+    let mut last_rev = 0;
 
     // 0: joins.
     let (to_snapshot, to_frame) = joins(addr, id, &viewer, 200).await;
