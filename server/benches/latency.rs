@@ -10,7 +10,10 @@
 //! 3. viewers served at 60 frames per second: an editor drags at 60 Hz for
 //!    3 s while N viewers read; the largest N at which every viewer gets at
 //!    least 57 frames per second (server and clients share this machine's
-//!    cores, so the figure is pessimistic).
+//!    cores, so the figure is pessimistic);
+//! 4. memory of a mesh export of a 400 × 400 bicubic design (imported as
+//!    IGES): this process's resident set (server and client together)
+//!    sampled every 5 ms during each STL / OBJ / glTF download and after.
 //!
 //! The clients are tokio-tungstenite with its defaults: Nagle on, and the
 //! kernel's delayed ACKs — a client that does not ack early, as browsers
@@ -85,60 +88,12 @@ async fn next_frame(ws: &mut Ws) -> (Instant, vsculpt_protocol::GeometryFrame, u
     }
 }
 
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
-}
-
-async fn run() {
-    let data = std::env::temp_dir().join(format!("vsculpt-bench-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&data);
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let mut config = Config::new(data.clone(), data.join("no-web"));
-    config.demo = false;
-    let shutdown = Shutdown::new();
-    let server = Server::start(listener, config, shutdown.clone())
-        .await
-        .unwrap();
-    let addr = server.local_addr();
-    let admin = server.admin_token().to_string();
-    let task = tokio::spawn(server.run());
-
-    let created = post(
-        addr,
-        "/api/designs",
-        &admin,
-        r#"{"name": "bench", "nu": 81, "nv": 159}"#,
-    )
-    .await;
-    let id = created["id"].as_u64().unwrap();
-    let editor = created["tokens"]["editor"].as_str().unwrap().to_string();
-    let viewer = created["tokens"]["viewer"].as_str().unwrap().to_string();
-    let mut a = connect(addr, id, &editor, "driver").await;
-    let mut b = connect(addr, id, &viewer, "watcher").await;
-    let spec = json!({"type": "create_icon", "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}});
-    a.send(Message::text(spec.to_string())).await.unwrap();
-    let icon = loop {
-        if let Message::Text(t) = a.next().await.unwrap().unwrap() {
-            let v: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
-            if v["type"] == "icon_created" {
-                break v["icon"]["id"].as_u64().unwrap();
-            }
-        }
-    };
-    a.send(Message::text(
-        json!({"type": "drag_start", "icon": icon}).to_string(),
-    ))
-    .await
-    .unwrap();
-    // Drain whatever b has so far (frame of the icon creation).
-    let (_, f0, _) = next_frame(&mut b).await;
-    let mut last_rev = f0.revision;
-
-    // 0: joins.
-    let joins = 200;
-    let mut to_snapshot = Vec::with_capacity(joins);
-    let mut to_frame = Vec::with_capacity(joins);
-    for k in 0..joins {
+/// `n` joins of a viewer: ms from sending `hello` to the `snapshot` and to
+/// the first geometry frame, each sorted.
+async fn joins(addr: SocketAddr, id: u64, viewer: &str, n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut to_snapshot = Vec::with_capacity(n);
+    let mut to_frame = Vec::with_capacity(n);
+    for k in 0..n {
         let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
             .await
             .unwrap();
@@ -162,8 +117,133 @@ async fn run() {
     }
     to_snapshot.sort_by(|x, y| x.partial_cmp(y).unwrap());
     to_frame.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    (to_snapshot, to_frame)
+}
+
+/// `n` drags by the editor `a` of `icon`, each waiting for its own frame
+/// (revision above `after`): ms, sorted.
+async fn own_frames(a: &mut Ws, icon: u64, after: u64, n: usize) -> Vec<f64> {
+    let mut own = Vec::with_capacity(n);
+    let mut last = after;
+    for k in 0..n {
+        let z = 5.0 * ((k % 40) as f64 / 40.0);
+        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
+            .to_string();
+        let t0 = Instant::now();
+        a.send(Message::text(msg)).await.unwrap();
+        loop {
+            let (t1, f, _) = next_frame(a).await;
+            if f.revision > last {
+                last = f.revision;
+                own.push((t1 - t0).as_secs_f64() * 1e3);
+                break;
+            }
+        }
+    }
+    own.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    own
+}
+
+/// Starts a server over a fresh data dir with an 81 × 159 design, an editor
+/// connection holding a load icon (grabbed) and the viewer token.
+async fn bench_server(
+    nodelay: bool,
+    tag: &str,
+) -> (
+    SocketAddr,
+    String,
+    Shutdown,
+    tokio::task::JoinHandle<()>,
+    std::path::PathBuf,
+    u64,
+    String,
+    Ws,
+    u64,
+) {
+    let data = std::env::temp_dir().join(format!("vsculpt-bench-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&data);
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let mut config = Config::new(data.clone(), data.join("no-web"));
+    config.demo = false;
+    config.tcp_nodelay = nodelay;
+    // A 400 × 400 IGES file is about 16 MB.
+    config.max_body_bytes = 64 << 20;
+    let shutdown = Shutdown::new();
+    let server = Server::start(listener, config, shutdown.clone())
+        .await
+        .unwrap();
+    let addr = server.local_addr();
+    let admin = server.admin_token().to_string();
+    let task = tokio::spawn(async move {
+        let _ = server.run().await;
+    });
+    let created = post(
+        addr,
+        "/api/designs",
+        &admin,
+        r#"{"name": "bench", "nu": 81, "nv": 159}"#,
+    )
+    .await;
+    let id = created["id"].as_u64().unwrap();
+    let editor = created["tokens"]["editor"].as_str().unwrap().to_string();
+    let viewer = created["tokens"]["viewer"].as_str().unwrap().to_string();
+    let mut a = connect(addr, id, &editor, "driver").await;
+    let spec = json!({"type": "create_icon", "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}});
+    a.send(Message::text(spec.to_string())).await.unwrap();
+    let icon = loop {
+        if let Message::Text(t) = a.next().await.unwrap().unwrap() {
+            let v: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
+            if v["type"] == "icon_created" {
+                break v["icon"]["id"].as_u64().unwrap();
+            }
+        }
+    };
+    a.send(Message::text(
+        json!({"type": "drag_start", "icon": icon}).to_string(),
+    ))
+    .await
+    .unwrap();
+    (addr, admin, shutdown, task, data, id, viewer, a, icon)
+}
+
+/// The same-run baseline: join and own-frame latency with TCP_NODELAY off
+/// on the server (the code before this change).
+async fn nagle_baseline() {
+    let (addr, _admin, shutdown, task, data, id, viewer, mut a, icon) =
+        bench_server(false, "nagle").await;
+    let (snap, frame) = joins(addr, id, &viewer, 50).await;
+    let own = own_frames(&mut a, icon, 0, 100).await;
     println!(
-        "join: hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; hello -> first frame p50 {:.3} ms, p99 {:.3} ms ({joins} joins)",
+        "baseline without TCP_NODELAY: join hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; -> first frame p50 {:.3} ms, p99 {:.3} ms (50 joins); own frame p50 {:.3} ms, p99 {:.3} ms (100 drags)",
+        percentile(&snap, 0.5),
+        percentile(&snap, 0.99),
+        percentile(&frame, 0.5),
+        percentile(&frame, 0.99),
+        percentile(&own, 0.5),
+        percentile(&own, 0.99)
+    );
+    drop(a);
+    shutdown.trigger();
+    let _ = task.await;
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+fn percentile(sorted: &[f64], p: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * p).round() as usize]
+}
+
+async fn run() {
+    nagle_baseline().await;
+    let (addr, admin, shutdown, task, data, id, viewer, mut a, icon) =
+        bench_server(true, "main").await;
+    let mut b = connect(addr, id, &viewer, "watcher").await;
+    // `connect` read b's first frame; every frame from here on is new.
+    let mut last_rev = 0;
+
+    // 0: joins.
+    let (to_snapshot, to_frame) = joins(addr, id, &viewer, 200).await;
+    println!(
+        "join: hello -> snapshot p50 {:.3} ms, p99 {:.3} ms; hello -> first frame p50 {:.3} ms, p99 {:.3} ms (200 joins)",
         percentile(&to_snapshot, 0.5),
         percentile(&to_snapshot, 0.99),
         percentile(&to_frame, 0.5),
@@ -214,24 +294,7 @@ async fn run() {
     drop(b);
 
     // 1b: the dragging editor's own frame.
-    let mut own = Vec::with_capacity(n);
-    let mut last_own = 0;
-    for k in 0..n {
-        let z = 5.0 * ((k % 40) as f64 / 40.0);
-        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
-            .to_string();
-        let t0 = Instant::now();
-        a.send(Message::text(msg)).await.unwrap();
-        loop {
-            let (t1, f, _) = next_frame(&mut a).await;
-            if f.revision > last_own.max(last_rev) {
-                last_own = f.revision;
-                own.push((t1 - t0).as_secs_f64() * 1e3);
-                break;
-            }
-        }
-    }
-    own.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    let own = own_frames(&mut a, icon, last_rev, n).await;
     println!(
         "drag -> the editor's own frame: p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms",
         percentile(&own, 0.5),
@@ -290,9 +353,116 @@ async fn run() {
         }
     }
     println!("viewers served at 60 fps (every viewer >= 57 frames/s): {best}");
+
+    // 4: export memory at 400 x 400.
+    export_memory(addr, &admin).await;
     shutdown.trigger();
     let _ = task.await;
     let _ = std::fs::remove_dir_all(&data);
+}
+
+/// This process's resident set size in MiB (Linux).
+fn rss_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmRSS:"))
+                .and_then(|l| l.split_whitespace().nth(1).map(str::to_owned))
+        })
+        .and_then(|kb| kb.parse::<f64>().ok())
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+/// Downloads `path`, counting bytes without keeping them.
+async fn download(addr: SocketAddr, path: &str, token: &str) -> usize {
+    let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let req = format!(
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nAuthorization: Bearer {token}\r\n\r\n"
+    );
+    s.write_all(req.as_bytes()).await.unwrap();
+    let mut buf = vec![0u8; 1 << 16];
+    let mut total = 0;
+    loop {
+        let n = s.read(&mut buf).await.unwrap();
+        if n == 0 {
+            return total;
+        }
+        total += n;
+    }
+}
+
+async fn export_memory(addr: SocketAddr, admin: &str) {
+    use vsculpt_server::cad::{IgesMeta, IgesSurface, write_iges};
+    let n = 400;
+    let knots = |n: usize| {
+        let mut k = vec![0.0; 4];
+        k.extend((1..n - 3).map(|s| s as f64 / (n - 3) as f64));
+        k.extend([1.0; 4]);
+        k
+    };
+    let mut points = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let (x, y) = (i as f64 / (n - 1) as f64, j as f64 / (n - 1) as f64);
+            points.push(glam::DVec3::new(
+                100.0 * x,
+                100.0 * y,
+                10.0 * (6.0 * x).sin() * (4.0 * y).cos(),
+            ));
+        }
+    }
+    let surface = IgesSurface {
+        u_degree: 3,
+        v_degree: 3,
+        u_knots: knots(n),
+        v_knots: knots(n),
+        nu: n,
+        nv: n,
+        points,
+    };
+    let igs = write_iges(&surface, &IgesMeta::now("big", "bench")).unwrap();
+    drop(surface);
+    let created = post(addr, "/api/designs", admin, r#"{"name": "big"}"#).await;
+    let id = created["id"].as_u64().unwrap();
+    let t = Instant::now();
+    let r = post(addr, &format!("/api/designs/{id}/import"), admin, &igs).await;
+    assert!(r.get("error").is_none(), "{r}");
+    println!(
+        "400 x 400 IGES import ({} bytes): {:.2} s",
+        igs.len(),
+        t.elapsed().as_secs_f64()
+    );
+    drop(igs);
+    let before = rss_mib();
+    for ext in ["stl", "obj", "gltf"] {
+        let peak = std::sync::Arc::new(std::sync::Mutex::new(0.0f64));
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let sampler = {
+            let (peak, stop) = (peak.clone(), stop.clone());
+            std::thread::spawn(move || {
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    let r = rss_mib();
+                    let mut p = peak.lock().unwrap();
+                    *p = p.max(r);
+                    drop(p);
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+            })
+        };
+        let t = Instant::now();
+        let bytes = download(addr, &format!("/api/designs/{id}/export.{ext}"), admin).await;
+        let secs = t.elapsed().as_secs_f64();
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        sampler.join().unwrap();
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        println!(
+            "export.{ext} of 400 x 400: {:.1} MB in {secs:.2} s; RSS before {before:.0} MiB, peak {:.0} MiB, after {:.0} MiB",
+            bytes as f64 / 1e6,
+            *peak.lock().unwrap(),
+            rss_mib()
+        );
+    }
 }
 
 fn main() {

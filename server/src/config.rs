@@ -82,6 +82,9 @@ pub struct Config {
     pub export_max_vertices: usize,
     /// Origins besides the server's own allowed to call `/ws` and the API.
     pub allowed_origins: Vec<String>,
+    /// Set `TCP_NODELAY` on accepted connections (always, except in the
+    /// latency bench's same-run baseline).
+    pub tcp_nodelay: bool,
 }
 
 impl Config {
@@ -96,6 +99,7 @@ impl Config {
             persist_delay: std::time::Duration::from_millis(500),
             export_max_vertices: crate::export::DEFAULT_MAX_EXPORT_VERTICES,
             allowed_origins: Vec::new(),
+            tcp_nodelay: true,
         }
     }
 }

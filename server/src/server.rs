@@ -183,8 +183,9 @@ impl Server {
         // Replies and geometry frames are small writes that must leave at
         // once: without TCP_NODELAY, Nagle holds each one until the peer's
         // delayed ACK (~40 ms on Linux) when a previous write is unacked.
-        let listener = self.listener.tap_io(|tcp| {
-            if let Err(e) = tcp.set_nodelay(true) {
+        let nodelay = shared.config.tcp_nodelay;
+        let listener = self.listener.tap_io(move |tcp| {
+            if let Err(e) = tcp.set_nodelay(nodelay) {
                 tracing::debug!("cannot set TCP_NODELAY on an accepted connection: {e}");
             }
         });

@@ -435,3 +435,17 @@ test('the page reconnects by itself after the server restarts', async () => {
   assert.ok(await page.evaluate(() => window.vsculpt.state.surface !== null));
   await page.close();
 });
+
+test('the token leaves the address bar at once, and a reload still joins', async () => {
+  const token = tokenOf(links.editor);
+  const page = await open(links.editor);
+  const url = new URL(page.url());
+  assert.equal(url.searchParams.get('token'), null, page.url());
+  assert.equal(url.searchParams.get('design'), String(new URL(links.editor).searchParams.get('design')));
+  assert.ok(!page.url().includes(token));
+  assert.ok(!(await page.evaluate(() => history.state && JSON.stringify(history.state)) || '').includes(token));
+  await page.reload();
+  await page.waitForFunction(() => window.vsculpt && window.vsculpt.state.access === 'editor', null, { timeout: 30000 });
+  assert.ok(!page.url().includes(token));
+  await page.close();
+});
