@@ -8,9 +8,10 @@ use crate::config::{Config, DeviceKind, build_driver};
 use crate::device::Sample;
 use crate::device::SourceId;
 use crate::device::runner::{DeviceRunner, DeviceStatus, RunOptions};
+use crate::device::{TapEvent, Timestamp};
 use crate::interaction::{Command, DeviceCondition, Interaction};
 use crate::link::{Link, LinkOptions, ServerEvent, Wire};
-use crate::recording::{Recorder, RecordingError, Replayer};
+use crate::recording::{Recorder, RecordingError, Replayer, recorded_config};
 use std::future::Future;
 use std::path::Path;
 use std::sync::Arc;
@@ -83,18 +84,31 @@ pub async fn drive(
     inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
 ) {
-    drive_until_ready(config, wire, inputs, shutdown, None).await
+    drive_inner(config, wire, inputs, shutdown, None).await
 }
 
-/// [`drive`], telling `ready` once the server's icons are known (the first
-/// snapshot after connecting), so a replay can wait before it starts playing.
+/// [`drive`] for a replay: tells `ready` once the server's icons are known (the
+/// first snapshot after connecting), so the replay can wait before it starts
+/// playing, and sends drags only as the recorded samples make them due (no wall
+/// clock), so every replay speed sends the same commands.
 pub async fn drive_until_ready(
+    config: &Config,
+    wire: Arc<dyn Wire>,
+    inputs: mpsc::UnboundedReceiver<Input>,
+    shutdown: impl Future<Output = ()>,
+    ready: std::sync::mpsc::Sender<()>,
+) {
+    drive_inner(config, wire, inputs, shutdown, Some(ready)).await
+}
+
+async fn drive_inner(
     config: &Config,
     wire: Arc<dyn Wire>,
     mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
     mut ready: Option<std::sync::mpsc::Sender<()>>,
 ) {
+    let live = ready.is_none();
     let mut interaction = Interaction::new(config);
     let (ev_tx, mut events) = mpsc::unbounded_channel();
     let link = (!config.server.url.is_empty()).then(|| {
@@ -107,8 +121,17 @@ pub async fn drive_until_ready(
     let mut cmds: Vec<Command> = Vec::new();
     let mut samples_open = true;
     let mut refusals = std::collections::HashSet::new();
+    let mut flush = tokio::time::interval(interaction.drag_period());
+    flush.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
         tokio::select! {
+            _ = flush.tick(), if live => {
+                cmds.clear();
+                interaction.flush_due(Timestamp::now(), &mut cmds);
+                if !cmds.is_empty() && let Some(l) = &link {
+                    l.send(cmds.drain(..));
+                }
+            }
             input = inputs.recv(), if samples_open => match input {
                 Some(input) => {
                     cmds.clear();
@@ -173,13 +196,14 @@ pub async fn run_live(
     shutdown: impl Future<Output = ()>,
 ) -> Result<(), RecordingError> {
     let recorder = match record {
-        Some(p) => Some(Recorder::create(p, &config.devices)?),
+        Some(p) => Some(Recorder::create(p, &config)?),
         None => None,
     };
     let (tx, rx) = mpsc::unbounded_channel::<Input>();
     let mut runners = Vec::new();
     for (i, d) in config.devices.iter().enumerate() {
         let mut driver = build_driver(SourceId(i as u16), d);
+        let status_tap = recorder.as_ref().map(|r| r.tap());
         if let Some(r) = &recorder {
             driver.set_tap(r.tap());
         }
@@ -190,6 +214,14 @@ pub async fn run_live(
             run_options(d.kind),
             move |s| tx.send(Input::Samples(s.to_vec())).is_ok(),
             move |st| {
+                if let Some(tap) = &status_tap {
+                    // Recorded in order with the device's frames (same thread).
+                    let _ = tap.send(TapEvent::Status {
+                        source,
+                        time: Timestamp::now(),
+                        status: st.clone(),
+                    });
+                }
                 let _ = tx_status.send(Input::Status(source, st));
             },
         ));
@@ -206,29 +238,29 @@ pub async fn run_live(
     Ok(())
 }
 
-/// Replays `path` at `speed` through the same decoders and interaction; `config`
-/// supplies the server, hands and menu (its devices must match the recording's).
+/// Replays `path` at `speed` through the same decoders and interaction, with the
+/// configuration the session was recorded with (devices, hands, calibration, menu,
+/// gates, rates); `config` supplies only the server link. Returns the number of
+/// samples replayed.
 pub async fn run_replay(
-    mut config: Config,
+    config: Config,
     wire: Arc<dyn Wire>,
     path: &Path,
     speed: f64,
     shutdown: impl Future<Output = ()>,
 ) -> Result<u64, RecordingError> {
     let replayer = Replayer::open(path)?;
-    if config.devices.is_empty() {
-        config.devices = replayer.devices().to_vec();
-    } else if config.devices.len() != replayer.devices().len()
-        || config
-            .devices
-            .iter()
-            .zip(replayer.devices())
-            .any(|(a, b)| a.name != b.name || a.kind != b.kind)
-    {
-        return Err(RecordingError::Format(
-            "the configuration's devices do not match the recording's".into(),
-        ));
+    let recorded = replayer.config().clone();
+    if !config.devices.is_empty() && recorded_config(&config) != recorded {
+        tracing::warn!(
+            "the configuration differs from the recorded one; replay uses the recorded \
+             devices, hands, calibration, menu and gates (only the server link is taken)"
+        );
     }
+    let config = Config {
+        server: config.server,
+        ..recorded
+    };
     let (tx, rx) = mpsc::unbounded_channel::<Input>();
     // With a server, play only once its icons are known (or after a timeout), so
     // the recorded grabs find what they grabbed live.
@@ -238,9 +270,9 @@ pub async fn run_replay(
         if wait {
             let _ = ready_rx.recv_timeout(REPLAY_WAIT);
         }
-        replayer.play(speed, |s| tx.send(Input::Samples(s.to_vec())).is_ok())
+        replayer.play(speed, |input| tx.send(input).is_ok())
     });
-    drive_until_ready(&config, wire, rx, shutdown, Some(ready_tx)).await;
+    drive_until_ready(&config, wire, rx, shutdown, ready_tx).await;
     player
         .await
         .map_err(|e| RecordingError::Format(e.to_string()))?

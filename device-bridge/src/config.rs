@@ -42,6 +42,7 @@ use crate::device::transport::{
     HidSelector, HidTransport, SerialTransport, TcpTransport, UnixTransport,
 };
 use crate::device::vrpn::{self, VrpnDecoder, VrpnSettings};
+use crate::gate::GateSettings;
 use crate::hand::GloveCalibration;
 use crate::interaction::MenuAction;
 use glam::{DQuat, DVec3};
@@ -110,6 +111,9 @@ impl DeviceKind {
     }
 }
 
+/// Baud rate of a serial device without `baud`.
+pub const DEFAULT_BAUD: u32 = 115_200;
+
 fn default_settle_ms() -> u64 {
     50
 }
@@ -152,6 +156,9 @@ pub struct DeviceConfig {
     /// VRPN settings.
     #[serde(default)]
     pub vrpn: VrpnSettings,
+    /// Plausibility gate of a tracker's poses ([`crate::gate`]).
+    #[serde(default)]
+    pub gate: GateSettings,
 }
 
 impl DeviceConfig {
@@ -170,7 +177,30 @@ impl DeviceConfig {
             spacemouse: SpaceMouseSettings::default(),
             spacenavd: SpacenavdSettings::default(),
             vrpn: VrpnSettings::default(),
+            gate: GateSettings::default(),
         }
+    }
+
+    /// True for the tracker families (their poses pass the [`crate::gate`]).
+    pub fn is_tracker(&self) -> bool {
+        matches!(
+            self.kind,
+            DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Vrpn
+        )
+    }
+
+    /// The shortest time between two records of this device, in seconds: the time
+    /// its serial line needs to carry one record (8N1: ten bit times a byte);
+    /// 0 for network devices.
+    pub fn record_interval(&self) -> f64 {
+        let bytes = match self.kind {
+            DeviceKind::Flock => self.flock.record_len(),
+            DeviceKind::Fastrak => fastrak::RECORD_LEN,
+            DeviceKind::Cyberglove => usize::from(self.cyberglove.sensors) + 2,
+            _ => return 0.0,
+        };
+        let baud = f64::from(self.baud.unwrap_or(DEFAULT_BAUD));
+        bytes as f64 * 10.0 / baud
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -182,6 +212,9 @@ impl DeviceConfig {
             && !(300..=921_600).contains(&b)
         {
             return Err(ctx(format!("baud {b} out of range")));
+        }
+        if self.is_tracker() {
+            self.gate.validate().map_err(ctx)?;
         }
         match self.kind {
             DeviceKind::Flock => self.flock.validate(),
@@ -341,6 +374,39 @@ impl Default for MenuConfig {
     }
 }
 
+/// How often continuous commands may leave for the server.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RatesConfig {
+    /// Drags per second per held icon at most (latest wins; the last drag before a
+    /// release is always sent). A 1 kHz tracker thus costs the server 120 solves a
+    /// second, not 1000.
+    pub drag_hz: f64,
+}
+
+impl Default for RatesConfig {
+    fn default() -> Self {
+        Self { drag_hz: 120.0 }
+    }
+}
+
+impl RatesConfig {
+    /// Minimum time between two drags of one icon, in µs (by sample time).
+    pub fn drag_period_us(&self) -> u64 {
+        (1e6 / self.drag_hz).round() as u64
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if !(self.drag_hz.is_finite() && self.drag_hz >= 1.0) {
+            return Err(format!(
+                "rates.drag_hz must be at least 1, got {}",
+                self.drag_hz
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The whole configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
@@ -357,6 +423,8 @@ pub struct Config {
     pub hands: Vec<HandConfig>,
     /// The 3D menu.
     pub menu: MenuConfig,
+    /// Send rates.
+    pub rates: RatesConfig,
 }
 
 impl Config {
@@ -384,6 +452,7 @@ impl Config {
     /// Checks cross-references and ranges.
     pub fn validate(&self) -> Result<(), String> {
         self.calibration.validate()?;
+        self.rates.validate()?;
         if self.devices.len() > usize::from(u16::MAX) {
             return Err("too many devices".into());
         }
@@ -486,7 +555,7 @@ fn build_script(d: &DeviceConfig) -> Script {
 
 fn build_transport(d: &DeviceConfig) -> Box<dyn Transport> {
     let port = d.port.clone().unwrap_or_default();
-    let baud = d.baud.unwrap_or(115_200);
+    let baud = d.baud.unwrap_or(DEFAULT_BAUD);
     match d.kind {
         DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Cyberglove => {
             Box::new(SerialTransport::new(port, baud))

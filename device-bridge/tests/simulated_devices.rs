@@ -230,6 +230,8 @@ fn spacenavd_socket() {
     while daemon.clients() == 0 && Instant::now() < end {
         std::thread::sleep(Duration::from_millis(5));
     }
+    // spacenavd's z points away from the user: -175 is the cap pulled half towards
+    // the user, +0.5 in the bridge's right-handed frame
     daemon.send_motion([350, 0, -175, 0, 35, 0], 8);
     daemon.send_button(1, true);
     let mut got = Vec::new();
@@ -242,7 +244,7 @@ fn spacenavd_socket() {
         got,
         vec![
             Reading::Motion {
-                translation: DVec3::new(1.0, 0.0, -0.5),
+                translation: DVec3::new(1.0, 0.0, 0.5),
                 rotation: DVec3::new(0.0, 0.1, 0.0)
             },
             Reading::Button {

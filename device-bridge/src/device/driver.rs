@@ -203,6 +203,15 @@ pub enum TapEvent {
     },
     /// Bytes read.
     Frame(RawFrame),
+    /// The device's availability changed (reported by its runner).
+    Status {
+        /// Which configured device.
+        source: SourceId,
+        /// When.
+        time: Timestamp,
+        /// The new status.
+        status: super::runner::DeviceStatus,
+    },
 }
 
 /// A device: open it, read samples, close it.
