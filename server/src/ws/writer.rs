@@ -41,7 +41,8 @@ async fn send_geometry(
 }
 
 /// Runs until the reader drops its sender, a close is requested, the socket
-/// fails or the design goes away.
+/// fails or the design goes away. Geometry frames go out only when `frames`
+/// (a device link must ask for them).
 pub async fn run(
     mut sink: Sink,
     mut out: mpsc::Receiver<Out>,
@@ -49,11 +50,13 @@ pub async fn run(
     handle: DesignHandle,
     client: u64,
     metrics: Arc<Metrics>,
+    frames: bool,
 ) {
     let mut geometry_live = true;
-    if send_geometry(&mut sink, &mut joined, &metrics)
-        .await
-        .is_err()
+    if frames
+        && send_geometry(&mut sink, &mut joined, &metrics)
+            .await
+            .is_err()
     {
         return;
     }
@@ -95,7 +98,7 @@ pub async fn run(
                                 let snap = convert::snapshot(&j.view);
                                 joined = j;
                                 if sink.send(Message::Text(snap)).await.is_err()
-                                    || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()
+                                    || (frames && send_geometry(&mut sink, &mut joined, &metrics).await.is_err())
                                 {
                                     break;
                                 }
@@ -137,7 +140,7 @@ pub async fn run(
                     break;
                 }
             }
-            r = joined.geometry.changed(), if geometry_live => {
+            r = joined.geometry.changed(), if geometry_live && frames => {
                 if r.is_err() {
                     geometry_live = false;
                     continue;
