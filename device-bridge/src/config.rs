@@ -118,6 +118,12 @@ fn default_settle_ms() -> u64 {
     50
 }
 
+/// A CyberGlove samples at up to about 150 records a second and a Flock streams at
+/// about 100–144; 100 polls a second follow a hand without flooding the line.
+fn default_poll_hz() -> f64 {
+    100.0
+}
+
 /// One device.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -138,6 +144,10 @@ pub struct DeviceConfig {
     /// Wait after stopping a serial device before configuring it, in ms.
     #[serde(default = "default_settle_ms")]
     pub settle_ms: u64,
+    /// Polls a second at most, for a device set to be polled rather than stream
+    /// (a CyberGlove by default; a Flock or Fastrak with `stream = false`).
+    #[serde(default = "default_poll_hz")]
+    pub poll_hz: f64,
     /// Flock of Birds settings.
     #[serde(default)]
     pub flock: FlockSettings,
@@ -171,6 +181,7 @@ impl DeviceConfig {
             baud: None,
             address: None,
             settle_ms: default_settle_ms(),
+            poll_hz: default_poll_hz(),
             flock: FlockSettings::default(),
             fastrak: FastrakSettings::default(),
             cyberglove: CyberGloveSettings::default(),
@@ -215,6 +226,12 @@ impl DeviceConfig {
         }
         if self.is_tracker() {
             self.gate.validate().map_err(ctx)?;
+        }
+        if !(self.poll_hz.is_finite() && (1.0..=1000.0).contains(&self.poll_hz)) {
+            return Err(ctx(format!(
+                "poll_hz must be 1..=1000, got {}",
+                self.poll_hz
+            )));
         }
         match self.kind {
             DeviceKind::Flock => self.flock.validate(),
@@ -543,14 +560,16 @@ pub fn build_decoder(source: SourceId, d: &DeviceConfig) -> Box<dyn Decoder> {
 
 fn build_script(d: &DeviceConfig) -> Script {
     let settle = Duration::from_millis(d.settle_ms);
-    match d.kind {
+    let mut script = match d.kind {
         DeviceKind::Flock => flock::script(&d.flock, settle),
         DeviceKind::Fastrak => fastrak::script(&d.fastrak, settle),
         DeviceKind::Cyberglove => cyberglove::script(&d.cyberglove, settle),
         DeviceKind::SpacemouseHid => spacemouse_hid::script(),
         DeviceKind::Spacenavd => spacenavd::script(),
         DeviceKind::Vrpn => vrpn::script(),
-    }
+    };
+    script.poll_interval = Duration::from_secs_f64(1.0 / d.poll_hz);
+    script
 }
 
 fn build_transport(d: &DeviceConfig) -> Box<dyn Transport> {

@@ -887,6 +887,56 @@ mod tests {
     }
 
     #[test]
+    fn drags_leave_at_the_drag_rate_latest_wins_and_the_last_before_a_release() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([icon(1, DVec3::ZERO, IconRole::Constraint)]);
+        let at = |us: u64, x: f64| {
+            let mut s = pose(DVec3::X * x);
+            s.time = Timestamp(us);
+            s
+        };
+        run(&mut i, &[at(0, 0.0), hand(1.0, 1.0)]);
+        // a 1 kHz tracker for 105 ms: at 120 Hz the drags leave at records 1, 10, 19 …
+        // 100 (each ≥ 8.33 ms after the one before), 12 of 105
+        let mut sent = Vec::new();
+        for k in 1..=105u64 {
+            for c in run(&mut i, &[at(k * 1000, k as f64 * 1e-4)]) {
+                if let Command::Drag { target, .. } = c {
+                    sent.push((k, target.x));
+                }
+            }
+        }
+        let ks: Vec<u64> = sent.iter().map(|s| s.0).collect();
+        assert_eq!(ks, (0..12).map(|n| 1 + 9 * n).collect::<Vec<_>>());
+        // the hand stops reporting: the waiting drag (record 105) leaves once due
+        let mut out = Vec::new();
+        i.flush_due(Timestamp(105_000), &mut out);
+        assert!(out.is_empty(), "not due yet: {out:?}");
+        i.flush_due(Timestamp(108_400), &mut out);
+        assert_eq!(
+            out,
+            vec![Command::Drag {
+                icon: 1,
+                target: DVec3::X * 105.0 * 1e-4
+            }]
+        );
+        // two more records inside the slot, then the hand opens: the latest drag
+        // goes out before the release
+        run(&mut i, &[at(109_000, 0.0107), at(110_000, 0.011)]);
+        let out = run(&mut i, &[hand(0.0, 0.0)]);
+        assert_eq!(
+            out,
+            vec![
+                Command::Drag {
+                    icon: 1,
+                    target: DVec3::X * 0.011
+                },
+                release(1)
+            ]
+        );
+    }
+
+    #[test]
     fn hand_samples_carry_pose_and_flexion() {
         let mut i = Interaction::new(&config());
         let mut out = Vec::new();

@@ -255,6 +255,7 @@ pub fn script(s: &CyberGloveSettings, settle: Duration) -> Script {
         open,
         poll: (!s.stream).then(|| vec![b'G']),
         close: if s.stream { vec![0x03] } else { Vec::new() },
+        ..Default::default()
     }
 }
 

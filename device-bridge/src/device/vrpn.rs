@@ -293,6 +293,7 @@ pub fn script() -> Script {
         open: vec![Step::Send(cookie().to_vec())],
         poll: None,
         close: Vec::new(),
+        ..Default::default()
     }
 }
 
