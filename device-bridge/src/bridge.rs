@@ -25,6 +25,9 @@ const MAX_REFUSALS: usize = 64;
 /// How long a replay waits for the server before playing anyway.
 const REPLAY_WAIT: Duration = Duration::from_secs(10);
 
+/// Silence after which a VRPN server counts as hung (it is pinged every 200 ms).
+pub const VRPN_SILENCE: Duration = Duration::from_millis(800);
+
 /// What the devices (or a replay) hand to the interaction.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Input {
@@ -42,8 +45,12 @@ pub fn run_options(kind: DeviceKind) -> RunOptions {
             DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Cyberglove => {
                 Some(Duration::from_secs(3))
             }
-            // An untouched 3D mouse and an idle VRPN server are legitimately quiet.
-            DeviceKind::SpacemouseHid | DeviceKind::Spacenavd | DeviceKind::Vrpn => None,
+            // A VRPN server answers the bridge's pings (every 200 ms) even when its
+            // tracker is still: silence means it hung, and a grab must not outlive
+            // it by more than a second.
+            DeviceKind::Vrpn => Some(VRPN_SILENCE),
+            // An untouched 3D mouse is legitimately quiet.
+            DeviceKind::SpacemouseHid | DeviceKind::Spacenavd => None,
         },
         ..RunOptions::default()
     }

@@ -239,28 +239,66 @@ impl DeviceConfig {
             DeviceKind::Cyberglove => self.cyberglove.validate(),
             DeviceKind::SpacemouseHid => self.spacemouse.validate(),
             DeviceKind::Spacenavd => self.spacenavd.validate(),
-            DeviceKind::Vrpn => {
-                if self.address.is_none() {
-                    Err("a VRPN device needs `address` (host:port)".into())
-                } else {
-                    Ok(())
-                }
-            }
+            DeviceKind::Vrpn => self.vrpn_target().map(|_| ()),
         }
         .map_err(ctx)
     }
 
-    /// The VRPN address with the default port added when missing.
+    /// The VRPN address with the default port added when missing (`host:port`).
     pub fn vrpn_address(&self) -> Option<String> {
-        self.address.as_ref().map(|a| {
-            if a.rsplit_once(':')
-                .is_some_and(|(_, p)| p.parse::<u16>().is_ok())
-            {
-                a.clone()
-            } else {
-                format!("{a}:3883")
+        self.vrpn_target().ok().map(|t| t.1)
+    }
+
+    /// The VRPN device name and `host:port` this entry reads, from `address` in any
+    /// of the forms VRPN users write (`vrpn.cfg`, `vrpn_print_devices`):
+    /// `host`, `host:port`, `Device@host`, `Device@host:port`, `Device@tcp://host:port`,
+    /// `Device@tcp:host[:port]` — a device named in the address wins over
+    /// `vrpn.device`; the port defaults to 3883.
+    pub fn vrpn_target(&self) -> Result<(String, String), String> {
+        let a = self
+            .address
+            .as_deref()
+            .map(str::trim)
+            .filter(|a| !a.is_empty())
+            .ok_or("a VRPN device needs `address` (Tracker0@host[:port] or host[:port])")?;
+        let (device, rest) = match a.split_once('@') {
+            Some((d, r)) if !d.is_empty() => (d.to_owned(), r),
+            Some(_) => return Err(format!("VRPN address {a:?}: no device name before '@'")),
+            None => (self.vrpn.device.clone(), a),
+        };
+        let host_port = rest
+            .strip_prefix("tcp://")
+            .or_else(|| rest.strip_prefix("tcp:"))
+            .unwrap_or(rest);
+        if host_port.contains("://") {
+            return Err(format!(
+                "VRPN address {a:?}: only tcp:// is supported (the bridge connects over TCP)"
+            ));
+        }
+        let (host, port) = match host_port.strip_prefix('[') {
+            // an IPv6 literal: [::1] or [::1]:3883
+            Some(v6) => {
+                let (h, after) = v6
+                    .split_once(']')
+                    .ok_or_else(|| format!("VRPN address {a:?}: unclosed '['"))?;
+                (format!("[{h}]"), after.strip_prefix(':'))
             }
-        })
+            None => match host_port.rsplit_once(':') {
+                Some((h, p)) => (h.to_owned(), Some(p)),
+                None => (host_port.to_owned(), None),
+            },
+        };
+        if host.is_empty() || host == "[]" {
+            return Err(format!("VRPN address {a:?}: no host"));
+        }
+        let port = match port {
+            Some(p) => p
+                .parse::<u16>()
+                .map_err(|_| format!("VRPN address {a:?}: bad port {p:?}"))?,
+            None => 3883,
+        };
+        let addr = format!("{host}:{port}");
+        Ok((device, addr))
     }
 }
 
@@ -554,7 +592,13 @@ pub fn build_decoder(source: SourceId, d: &DeviceConfig) -> Box<dyn Decoder> {
         DeviceKind::Cyberglove => Box::new(CyberGloveDecoder::new(source, d.cyberglove.clone())),
         DeviceKind::SpacemouseHid => Box::new(SpaceMouseDecoder::new(source, d.spacemouse.clone())),
         DeviceKind::Spacenavd => Box::new(SpacenavdDecoder::new(source, d.spacenavd.clone())),
-        DeviceKind::Vrpn => Box::new(VrpnDecoder::new(source, d.vrpn.clone())),
+        DeviceKind::Vrpn => {
+            let mut v = d.vrpn.clone();
+            if let Ok((device, _)) = d.vrpn_target() {
+                v.device = device;
+            }
+            Box::new(VrpnDecoder::new(source, v))
+        }
     }
 }
 
@@ -566,9 +610,11 @@ fn build_script(d: &DeviceConfig) -> Script {
         DeviceKind::Cyberglove => cyberglove::script(&d.cyberglove, settle),
         DeviceKind::SpacemouseHid => spacemouse_hid::script(),
         DeviceKind::Spacenavd => spacenavd::script(),
-        DeviceKind::Vrpn => vrpn::script(),
+        DeviceKind::Vrpn => vrpn::script(&d.vrpn_target().map(|t| t.0).unwrap_or_default()),
     };
-    script.poll_interval = Duration::from_secs_f64(1.0 / d.poll_hz);
+    if script.poll_interval.is_zero() {
+        script.poll_interval = Duration::from_secs_f64(1.0 / d.poll_hz);
+    }
     script
 }
 

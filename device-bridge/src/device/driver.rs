@@ -59,6 +59,9 @@ pub struct DecodeStats {
     pub discarded_bytes: u64,
     /// Complete records rejected by a validity check (bad framing, values out of range).
     pub rejected_records: u64,
+    /// Well-formed messages of any kind (for framed protocols whose peers also
+    /// send non-sample messages: proof the peer is alive).
+    pub messages: u64,
 }
 
 impl DecodeStats {

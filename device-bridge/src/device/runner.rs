@@ -175,6 +175,7 @@ fn run(
             tracing::info!(device = %name, "device open");
         }
         let mut last_sample = Instant::now();
+        let mut activity = device.stats().messages;
         let failure = loop {
             if stop.load(Ordering::SeqCst) {
                 break None;
@@ -193,9 +194,15 @@ fn run(
             if let Err(e) = r {
                 break Some(e);
             }
+            let messages = device.stats().messages;
+            if messages != activity {
+                // A message that is no sample (a VRPN pong) proves the peer alive too.
+                activity = messages;
+                last_sample = Instant::now();
+            }
             if o.silence.is_some_and(|s| last_sample.elapsed() > s) {
                 break Some(DeviceError::Handshake(format!(
-                    "no valid record for {:?}",
+                    "nothing valid received for {:?}",
                     o.silence.unwrap_or_default()
                 )));
             }

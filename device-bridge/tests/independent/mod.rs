@@ -156,3 +156,48 @@ pub fn wrong_baud(bytes: &[u8], tx_baud: f64, rx_baud: f64) -> Vec<u8> {
     }
     out
 }
+
+/// VRPN's 24-byte cookie (`vrpn_Connection.C` `write_vrpn_cookie`): the magic
+/// `vrpn: ver. 07.38`, two spaces, the log-mode digit, NUL padding.
+pub fn vrpn_cookie() -> Vec<u8> {
+    let mut c = b"vrpn: ver. 07.38  0".to_vec();
+    c.resize(24, 0);
+    c
+}
+
+/// A VRPN message: a 24-byte big-endian header (length without padding, seconds,
+/// microseconds, sender, type, sequence), the payload padded to 8 bytes.
+pub fn vrpn_message(sender: i32, kind: i32, payload: &[u8]) -> Vec<u8> {
+    let mut m = Vec::new();
+    m.extend(((24 + payload.len()) as u32).to_be_bytes());
+    m.extend(1u32.to_be_bytes());
+    m.extend(500_000u32.to_be_bytes());
+    m.extend(sender.to_be_bytes());
+    m.extend(kind.to_be_bytes());
+    m.extend(0u32.to_be_bytes());
+    m.extend(payload);
+    while m.len() % 8 != 0 {
+        m.push(0);
+    }
+    m
+}
+
+/// A sender (−1) or type (−2) description: the id in the sender field, the payload
+/// the name's length with its NUL as a BE u32, the name, the NUL.
+pub fn vrpn_description(kind: i32, id: i32, name: &str) -> Vec<u8> {
+    let mut p = ((name.len() + 1) as u32).to_be_bytes().to_vec();
+    p.extend(name.as_bytes());
+    p.push(0);
+    vrpn_message(id, kind, &p)
+}
+
+/// A `vrpn_Tracker Pos_Quat` payload: sensor, sensor again, position (m), quaternion
+/// x, y, z, w, all big-endian.
+pub fn vrpn_pos_quat(sensor: i32, pos: [f64; 3], xyzw: [f64; 4]) -> Vec<u8> {
+    let mut p = sensor.to_be_bytes().to_vec();
+    p.extend(sensor.to_be_bytes());
+    for v in pos.iter().chain(&xyzw) {
+        p.extend(v.to_be_bytes());
+    }
+    p
+}
