@@ -80,17 +80,31 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
         ServerEvent::IconRemoved(id) => interaction.remove_icon(id),
         ServerEvent::Feedback { icon, actual } => interaction.feedback(icon, actual),
         ServerEvent::Error(e) => tracing::debug!(error = %e, "server refused a command"),
+        ServerEvent::Rejected(..) => {}
     }
+}
+
+/// Why the bridge stopped short.
+#[derive(Debug, thiserror::Error)]
+pub enum BridgeError {
+    /// The recording could not be written or read.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// The server refused the bridge for good (token, design, protocol version);
+    /// the text says what to do.
+    #[error("{0}")]
+    Rejected(String),
 }
 
 /// Drives the interaction from `inputs` until they end (plus a grace period to
 /// flush) or `shutdown` completes. Without a server URL, commands are only logged.
+/// `Err` when the server rejected the bridge for good (the text says why).
 pub async fn drive(
     config: &Config,
     wire: Arc<dyn Wire>,
     inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
-) {
+) -> Result<(), String> {
     drive_inner(config, wire, inputs, shutdown, None).await
 }
 
@@ -104,7 +118,7 @@ pub async fn drive_until_ready(
     inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
     ready: std::sync::mpsc::Sender<()>,
-) {
+) -> Result<(), String> {
     drive_inner(config, wire, inputs, shutdown, Some(ready)).await
 }
 
@@ -114,7 +128,7 @@ async fn drive_inner(
     mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
     mut ready: Option<std::sync::mpsc::Sender<()>>,
-) {
+) -> Result<(), String> {
     let live = ready.is_none();
     let mut interaction = Interaction::new(config);
     let (ev_tx, mut events) = mpsc::unbounded_channel();
@@ -174,6 +188,9 @@ async fn drive_inner(
                 None => samples_open = false,
             },
             ev = events.recv() => if let Some(ev) = ev {
+                if let ServerEvent::Rejected(_, text) = &ev {
+                    return Err(text.clone());
+                }
                 if let ServerEvent::Error(e) = &ev && refusals.insert(e.clone()) {
                     // Each distinct refusal is logged once (a refused drag would repeat at
                     // the device rate); the set is bounded.
@@ -192,6 +209,7 @@ async fn drive_inner(
             _ = &mut shutdown => break,
         }
     }
+    Ok(())
 }
 
 /// Runs every configured device (recording raw traffic to `record` when given)
@@ -201,7 +219,7 @@ pub async fn run_live(
     wire: Arc<dyn Wire>,
     record: Option<&Path>,
     shutdown: impl Future<Output = ()>,
-) -> Result<(), RecordingError> {
+) -> Result<(), BridgeError> {
     let recorder = match record {
         Some(p) => Some(Recorder::create(p, &config)?),
         None => None,
@@ -234,7 +252,7 @@ pub async fn run_live(
         ));
     }
     drop(tx);
-    drive(&config, wire, rx, shutdown).await;
+    let driven = drive(&config, wire, rx, shutdown).await;
     for mut r in runners {
         tokio::task::block_in_place(|| r.stop());
     }
@@ -242,7 +260,7 @@ pub async fn run_live(
         let n = tokio::task::block_in_place(|| r.finish())?;
         tracing::info!(events = n, "recording written");
     }
-    Ok(())
+    driven.map_err(BridgeError::Rejected)
 }
 
 /// Replays `path` at `speed` through the same decoders and interaction, with the
@@ -255,7 +273,7 @@ pub async fn run_replay(
     path: &Path,
     speed: f64,
     shutdown: impl Future<Output = ()>,
-) -> Result<u64, RecordingError> {
+) -> Result<u64, BridgeError> {
     let replayer = Replayer::open(path)?;
     let recorded = replayer.config().clone();
     if !config.devices.is_empty() && recorded_config(&config) != recorded {
@@ -279,8 +297,12 @@ pub async fn run_replay(
         }
         replayer.play(speed, |input| tx.send(input).is_ok())
     });
-    drive_until_ready(&config, wire, rx, shutdown, ready_tx).await;
-    player
+    let driven = drive_until_ready(&config, wire, rx, shutdown, ready_tx).await;
+    if let Err(text) = driven {
+        player.abort();
+        return Err(BridgeError::Rejected(text));
+    }
+    Ok(player
         .await
-        .map_err(|e| RecordingError::Format(e.to_string()))?
+        .map_err(|e| RecordingError::Format(e.to_string()))??)
 }

@@ -114,6 +114,61 @@ impl DeviceKind {
 /// Baud rate of a serial device without `baud`.
 pub const DEFAULT_BAUD: u32 = 115_200;
 
+/// The rates a serial tracker or glove can be set to (the Flock's DIP switches
+/// give 2400–115200; Fastrak and CyberGlove use 9600–115200).
+pub const STANDARD_BAUDS: [u32; 9] = [
+    1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
+];
+
+/// The standard rate a mistyped `baud` most likely meant: one whose digits begin
+/// with the typed ones (11520 → 115200), else the nearest by ratio.
+pub fn nearest_baud(b: u32) -> u32 {
+    let typed = b.to_string();
+    if let Some(s) = STANDARD_BAUDS
+        .iter()
+        .find(|s| s.to_string().starts_with(&typed) || typed.starts_with(&s.to_string()))
+    {
+        return *s;
+    }
+    let ratio = |s: u32| (f64::from(s) / f64::from(b.max(1))).ln().abs();
+    STANDARD_BAUDS
+        .iter()
+        .copied()
+        .min_by(|a, c| ratio(*a).total_cmp(&ratio(*c)))
+        .unwrap_or(DEFAULT_BAUD)
+}
+
+impl DeviceConfig {
+    /// For a serial device, what to say when its line yields bytes but no valid
+    /// record: the configured rate and the others the device may be set to.
+    pub fn line_hint(&self) -> Option<String> {
+        if !self.kind.is_serial() {
+            return None;
+        }
+        let baud = self.baud.unwrap_or(DEFAULT_BAUD);
+        let others: Vec<String> = STANDARD_BAUDS
+            .iter()
+            .filter(|b| **b != baud && (9600..=115_200).contains(*b))
+            .map(u32::to_string)
+            .collect();
+        let format = match self.kind {
+            DeviceKind::Flock => format!(
+                ", or the record format ({:?}, {} birds, group mode {})",
+                self.flock.format, self.flock.birds, self.flock.group_mode
+            ),
+            DeviceKind::Cyberglove => format!(
+                ", or the sensor count ({}) and record options",
+                self.cyberglove.sensors
+            ),
+            _ => String::new(),
+        };
+        Some(format!(
+            "wrong baud rate? configured {baud}; the device may be set to {}{format}",
+            others.join(", ")
+        ))
+    }
+}
+
 fn default_settle_ms() -> u64 {
     50
 }
@@ -220,9 +275,13 @@ impl DeviceConfig {
             return Err(ctx("a serial device needs `port`".into()));
         }
         if let Some(b) = self.baud
-            && !(300..=921_600).contains(&b)
+            && !STANDARD_BAUDS.contains(&b)
         {
-            return Err(ctx(format!("baud {b} out of range")));
+            return Err(ctx(format!(
+                "baud {b} is not a standard rate; did you mean {}? (standard: {})",
+                nearest_baud(b),
+                STANDARD_BAUDS.map(|b| b.to_string()).join(", ")
+            )));
         }
         if self.is_tracker() {
             self.gate.validate().map_err(ctx)?;
@@ -636,13 +695,17 @@ fn build_transport(d: &DeviceConfig) -> Box<dyn Transport> {
 
 /// A ready driver for device entry `d` (not yet opened).
 pub fn build_driver(source: SourceId, d: &DeviceConfig) -> Driver {
-    Driver::new(
+    let mut driver = Driver::new(
         d.name.clone(),
         source,
         build_transport(d),
         build_decoder(source, d),
         build_script(d),
-    )
+    );
+    if let Some(hint) = d.line_hint() {
+        driver.set_garbage_hint(hint);
+    }
+    driver
 }
 
 #[cfg(test)]
@@ -745,6 +808,14 @@ buttons = { 0 = "next_entry", 1 = "apply_entry" }
                 "bogus",
             ),
             (SAMPLE.replace("baud = 38400", "baud = 7"), "baud"),
+            (
+                SAMPLE.replace("baud = 38400", "baud = 11520"),
+                "baud 11520 is not a standard rate; did you mean 115200?",
+            ),
+            (
+                SAMPLE.replace("baud = 38400", "baud = 3840"),
+                "did you mean 38400?",
+            ),
             (
                 SAMPLE.replace("name = \"glove\"", "name = \"tracker\""),
                 "twice",

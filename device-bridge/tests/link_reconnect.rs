@@ -210,7 +210,7 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
         "{got:?}"
     );
     stop_tx.send(()).unwrap();
-    bridge.await.unwrap();
+    bridge.await.unwrap().unwrap();
     s2.abort();
 }
 

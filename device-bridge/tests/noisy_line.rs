@@ -303,3 +303,70 @@ fn a_record_that_fails_its_checks_is_counted() {
     assert_eq!(out.len(), 1);
     assert_eq!(d.stats().rejected_records, 2);
 }
+
+/// A line that plays back fixed bytes, 64 at a time.
+struct Playback(Vec<u8>, usize, bool);
+
+impl vsculpt_bridge::device::Transport for Playback {
+    fn open(&mut self) -> Result<(), vsculpt_bridge::device::DeviceError> {
+        self.2 = true;
+        Ok(())
+    }
+    fn read(
+        &mut self,
+        buf: &mut [u8],
+        _timeout: std::time::Duration,
+    ) -> Result<usize, vsculpt_bridge::device::DeviceError> {
+        let n = (self.0.len() - self.1).min(64).min(buf.len());
+        buf[..n].copy_from_slice(&self.0[self.1..self.1 + n]);
+        self.1 += n;
+        Ok(n)
+    }
+    fn write(&mut self, _bytes: &[u8]) -> Result<(), vsculpt_bridge::device::DeviceError> {
+        Ok(())
+    }
+    fn close(&mut self) {
+        self.2 = false;
+    }
+    fn is_open(&self) -> bool {
+        self.2
+    }
+    fn describe(&self) -> String {
+        "playback".into()
+    }
+}
+
+#[test]
+fn a_wrong_baud_rate_is_named_with_the_likely_rates() {
+    use vsculpt_bridge::device::{Device, Driver, Script};
+    // the Flock's DIP switches say 115200; the configuration says 38400
+    let mut c = config(DeviceKind::Flock, FlockFormat::PosQuat);
+    c.devices[0].baud = Some(38_400);
+    let mut sent = Vec::new();
+    for k in 0..3000 {
+        let p = DVec3::from_array(P0) + DVec3::X * 1e-4 * k as f64;
+        sent.extend(flock_pos_quat(p.to_array(), [0.99997, 0.0, 0.0, 0.0]));
+    }
+    let line = wrong_baud(&sent, 115_200.0, 38_400.0);
+    let mut d = Driver::new(
+        "tracker",
+        SourceId(0),
+        Box::new(Playback(line, 0, false)),
+        build_decoder(SourceId(0), &c.devices[0]),
+        Script::default(),
+    );
+    d.set_garbage_hint(c.devices[0].line_hint().unwrap());
+    d.open().unwrap();
+    let mut out = Vec::new();
+    let mut err = None;
+    for _ in 0..1000 {
+        if let Err(e) = d.read(std::time::Duration::from_millis(1), &mut out) {
+            err = Some(e.to_string());
+            break;
+        }
+    }
+    let err = err.expect("the garbage is reported");
+    assert!(out.is_empty(), "{} records decoded from garbage", out.len());
+    assert!(err.contains("wrong baud rate? configured 38400"), "{err}");
+    assert!(err.contains("115200"), "{err}");
+}

@@ -184,13 +184,19 @@ fn cyberglove_polled_on_a_pty() {
         }
         ref r => panic!("{r:?}"),
     }
-    // an unplugged glove (e g) never yields values
+    // an unplugged glove (e g) never yields values, and the driver says why
     sim.device().unplugged = true;
     let mut out = Vec::new();
-    for _ in 0..10 {
-        d.read(Duration::from_millis(20), &mut out).unwrap();
+    let mut err = None;
+    for _ in 0..50 {
+        if let Err(e) = d.read(Duration::from_millis(20), &mut out) {
+            err = Some(e.to_string());
+            break;
+        }
     }
     assert!(out.is_empty());
+    let err = err.expect("an unplugged glove is reported");
+    assert!(err.contains("not plugged into its box"), "{err}");
 }
 
 #[test]

@@ -250,7 +250,14 @@ pub struct Driver {
     faults_seen: u64,
     in_fault: bool,
     last_poll: Option<Instant>,
+    garbage_hint: Option<String>,
+    /// Decoder counters when the device was last opened.
+    opened_at: DecodeStats,
 }
+
+/// Bytes of garbage, with not one valid record since the device opened, after which
+/// the line is called wrong (baud rate or record format) and reopened.
+pub const GARBAGE_LIMIT: u64 = 1024;
 
 impl Driver {
     /// Assembles a driver.
@@ -272,7 +279,15 @@ impl Driver {
             faults_seen: 0,
             in_fault: false,
             last_poll: None,
+            garbage_hint: None,
+            opened_at: DecodeStats::default(),
         }
+    }
+
+    /// What to say when the line yields only garbage (the configured baud rate and
+    /// the likely ones): without it, garbage is only resynchronised on.
+    pub fn set_garbage_hint(&mut self, hint: String) {
+        self.garbage_hint = Some(hint);
     }
 
     /// Copies every raw chunk read from now on to `tap` (for `record`).
@@ -353,6 +368,15 @@ impl Driver {
             if let Some(reason) = self.decoder.fatal() {
                 return Err(DeviceError::Handshake(reason));
             }
+            if let Some(hint) = &self.garbage_hint {
+                let st = self.decoder.stats();
+                let garbage = st.faults() - self.opened_at.faults();
+                if st.records == self.opened_at.records && garbage >= GARBAGE_LIMIT {
+                    return Err(DeviceError::Handshake(format!(
+                        "{garbage} bytes and not one valid record: {hint}"
+                    )));
+                }
+            }
             if produced {
                 return Ok(());
             }
@@ -387,6 +411,7 @@ impl Device for Driver {
         self.transport.open()?;
         self.decoder.reset();
         self.last_poll = None;
+        self.opened_at = self.decoder.stats();
         let identity = self.transport.identity();
         if let Some(ids) = identity {
             self.decoder.set_identity(ids);
@@ -551,5 +576,62 @@ mod tests {
         for pair in w.windows(2) {
             assert!(pair[1] - pair[0] >= interval, "{:?}", pair[1] - pair[0]);
         }
+    }
+
+    /// A line that only ever yields bytes without a valid record.
+    struct Noise(u64, bool);
+
+    impl Transport for Noise {
+        fn open(&mut self) -> Result<(), DeviceError> {
+            self.1 = true;
+            Ok(())
+        }
+        fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, DeviceError> {
+            for b in buf.iter_mut().take(64) {
+                self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1);
+                // bytes without the Flock's phasing bit
+                *b = (self.0 >> 33) as u8 & 0x7f;
+            }
+            Ok(64)
+        }
+        fn write(&mut self, _bytes: &[u8]) -> Result<(), DeviceError> {
+            Ok(())
+        }
+        fn close(&mut self) {
+            self.1 = false;
+        }
+        fn is_open(&self) -> bool {
+            self.1
+        }
+        fn describe(&self) -> String {
+            "noise".into()
+        }
+    }
+
+    #[test]
+    fn a_line_of_garbage_names_the_likely_cause() {
+        let mut d = Driver::new(
+            "tracker",
+            SourceId(0),
+            Box::new(Noise(7, false)),
+            Box::new(crate::device::flock::FlockDecoder::new(
+                SourceId(0),
+                Default::default(),
+            )),
+            Script::default(),
+        );
+        d.set_garbage_hint("wrong baud rate? configured 115200".into());
+        d.open().unwrap();
+        let mut out = Vec::new();
+        let err = loop {
+            if let Err(e) = d.read(Duration::from_millis(10), &mut out) {
+                break e.to_string();
+            }
+        };
+        assert!(out.is_empty());
+        assert!(
+            err.contains("not one valid record: wrong baud rate? configured 115200"),
+            "{err}"
+        );
     }
 }
