@@ -154,6 +154,7 @@ fn run(
     let name = device.name().to_owned();
     let mut backoff = o.backoff_min;
     let mut last_error: Option<DeviceError> = None;
+    let mut last_loss: Option<DeviceError> = None;
     let mut buf = Vec::with_capacity(64);
     while !stop.load(Ordering::SeqCst) {
         if let Err(e) = device.open() {
@@ -170,12 +171,18 @@ fn run(
         stats.opens.fetch_add(1, Ordering::Relaxed);
         status(DeviceStatus::Open);
         if last_error.take().is_some() {
-            tracing::info!(device = %name, "device open again");
+            if last_loss.is_some() {
+                // The same failure repeating (a glove off its box): said once.
+                tracing::debug!(device = %name, "device open again");
+            } else {
+                tracing::info!(device = %name, "device open again");
+            }
         } else {
             tracing::info!(device = %name, "device open");
         }
         let mut last_sample = Instant::now();
         let mut activity = device.stats().messages;
+        let mut delivered = false;
         let failure = loop {
             if stop.load(Ordering::SeqCst) {
                 break None;
@@ -183,6 +190,11 @@ fn run(
             buf.clear();
             let r = device.read(o.read_timeout, &mut buf);
             if !buf.is_empty() {
+                if !delivered && last_loss.is_some() {
+                    // Samples flow again: the next failure is news.
+                    last_loss = None;
+                }
+                delivered = true;
                 last_sample = Instant::now();
                 backoff = o.backoff_min;
                 stats.samples.fetch_add(buf.len() as u64, Ordering::Relaxed);
@@ -210,7 +222,12 @@ fn run(
         device.close();
         if let Some(e) = failure {
             stats.failures.fetch_add(1, Ordering::Relaxed);
-            tracing::warn!(device = %name, error = %e, "device lost; reopening");
+            if last_loss.as_ref() == Some(&e) {
+                tracing::debug!(device = %name, error = %e, "device lost again; reopening");
+            } else {
+                tracing::warn!(device = %name, error = %e, "device lost; reopening");
+            }
+            last_loss = Some(e.clone());
             status(DeviceStatus::Lost(e.to_string()));
             last_error = Some(e);
             sleep_unless_stopped(backoff, stop);
