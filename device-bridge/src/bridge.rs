@@ -142,6 +142,10 @@ async fn drive_inner(
     let mut cmds: Vec<Command> = Vec::new();
     let mut samples_open = true;
     let mut refusals = std::collections::HashSet::new();
+    // Once the inputs end, a grace period for the last commands to leave (one
+    // deadline: the flush timer's wake-ups must not restart it).
+    let drain = tokio::time::sleep(Duration::from_secs(1 << 30));
+    tokio::pin!(drain);
     let mut flush = tokio::time::interval(interaction.drag_period());
     flush.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
@@ -185,7 +189,10 @@ async fn drive_inner(
                         }
                     }
                 }
-                None => samples_open = false,
+                None => {
+                    samples_open = false;
+                    drain.as_mut().reset(tokio::time::Instant::now() + DRAIN_GRACE);
+                }
             },
             ev = events.recv() => if let Some(ev) = ev {
                 if let ServerEvent::Rejected(_, text) = &ev {
@@ -205,7 +212,7 @@ async fn drive_inner(
                     let _ = r.send(());
                 }
             },
-            _ = tokio::time::sleep(DRAIN_GRACE), if !samples_open => break,
+            _ = &mut drain, if !samples_open => break,
             _ = &mut shutdown => break,
         }
     }
