@@ -8,9 +8,10 @@ use crate::config::{Config, DeviceKind, build_driver};
 use crate::device::Sample;
 use crate::device::SourceId;
 use crate::device::runner::{DeviceRunner, DeviceStatus, RunOptions};
+use crate::device::{TapEvent, Timestamp};
 use crate::interaction::{Command, DeviceCondition, Interaction};
 use crate::link::{Link, LinkOptions, ServerEvent, Wire};
-use crate::recording::{Recorder, RecordingError, Replayer};
+use crate::recording::{Recorder, RecordingError, Replayer, recorded_config};
 use std::future::Future;
 use std::path::Path;
 use std::sync::Arc;
@@ -23,6 +24,9 @@ const DRAIN_GRACE: Duration = Duration::from_millis(500);
 const MAX_REFUSALS: usize = 64;
 /// How long a replay waits for the server before playing anyway.
 const REPLAY_WAIT: Duration = Duration::from_secs(10);
+
+/// Silence after which a VRPN server counts as hung (it is pinged every 200 ms).
+pub const VRPN_SILENCE: Duration = Duration::from_millis(800);
 
 /// What the devices (or a replay) hand to the interaction.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,8 +45,12 @@ pub fn run_options(kind: DeviceKind) -> RunOptions {
             DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Cyberglove => {
                 Some(Duration::from_secs(3))
             }
-            // An untouched 3D mouse and an idle VRPN server are legitimately quiet.
-            DeviceKind::SpacemouseHid | DeviceKind::Spacenavd | DeviceKind::Vrpn => None,
+            // A VRPN server answers the bridge's pings (every 200 ms) even when its
+            // tracker is still: silence means it hung, and a grab must not outlive
+            // it by more than a second.
+            DeviceKind::Vrpn => Some(VRPN_SILENCE),
+            // An untouched 3D mouse is legitimately quiet.
+            DeviceKind::SpacemouseHid | DeviceKind::Spacenavd => None,
         },
         ..RunOptions::default()
     }
@@ -72,29 +80,56 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
         ServerEvent::IconRemoved(id) => interaction.remove_icon(id),
         ServerEvent::Feedback { icon, actual } => interaction.feedback(icon, actual),
         ServerEvent::Error(e) => tracing::debug!(error = %e, "server refused a command"),
+        ServerEvent::Rejected(..) => {}
     }
+}
+
+/// Why the bridge stopped short.
+#[derive(Debug, thiserror::Error)]
+pub enum BridgeError {
+    /// The recording could not be written or read.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// The server refused the bridge for good (token, design, protocol version);
+    /// the text says what to do.
+    #[error("{0}")]
+    Rejected(String),
 }
 
 /// Drives the interaction from `inputs` until they end (plus a grace period to
 /// flush) or `shutdown` completes. Without a server URL, commands are only logged.
+/// `Err` when the server rejected the bridge for good (the text says why).
 pub async fn drive(
     config: &Config,
     wire: Arc<dyn Wire>,
     inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
-) {
-    drive_until_ready(config, wire, inputs, shutdown, None).await
+) -> Result<(), String> {
+    drive_inner(config, wire, inputs, shutdown, None).await
 }
 
-/// [`drive`], telling `ready` once the server's icons are known (the first
-/// snapshot after connecting), so a replay can wait before it starts playing.
+/// [`drive`] for a replay: tells `ready` once the server's icons are known (the
+/// first snapshot after connecting), so the replay can wait before it starts
+/// playing, and sends drags only as the recorded samples make them due (no wall
+/// clock), so every replay speed sends the same commands.
 pub async fn drive_until_ready(
+    config: &Config,
+    wire: Arc<dyn Wire>,
+    inputs: mpsc::UnboundedReceiver<Input>,
+    shutdown: impl Future<Output = ()>,
+    ready: std::sync::mpsc::Sender<()>,
+) -> Result<(), String> {
+    drive_inner(config, wire, inputs, shutdown, Some(ready)).await
+}
+
+async fn drive_inner(
     config: &Config,
     wire: Arc<dyn Wire>,
     mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
     mut ready: Option<std::sync::mpsc::Sender<()>>,
-) {
+) -> Result<(), String> {
+    let live = ready.is_none();
     let mut interaction = Interaction::new(config);
     let (ev_tx, mut events) = mpsc::unbounded_channel();
     let link = (!config.server.url.is_empty()).then(|| {
@@ -107,8 +142,21 @@ pub async fn drive_until_ready(
     let mut cmds: Vec<Command> = Vec::new();
     let mut samples_open = true;
     let mut refusals = std::collections::HashSet::new();
+    // Once the inputs end, a grace period for the last commands to leave (one
+    // deadline: the flush timer's wake-ups must not restart it).
+    let drain = tokio::time::sleep(Duration::from_secs(1 << 30));
+    tokio::pin!(drain);
+    let mut flush = tokio::time::interval(interaction.drag_period());
+    flush.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
         tokio::select! {
+            _ = flush.tick(), if live => {
+                cmds.clear();
+                interaction.flush_due(Timestamp::now(), &mut cmds);
+                if !cmds.is_empty() && let Some(l) = &link {
+                    l.send(cmds.drain(..));
+                }
+            }
             input = inputs.recv(), if samples_open => match input {
                 Some(input) => {
                     cmds.clear();
@@ -141,9 +189,15 @@ pub async fn drive_until_ready(
                         }
                     }
                 }
-                None => samples_open = false,
+                None => {
+                    samples_open = false;
+                    drain.as_mut().reset(tokio::time::Instant::now() + DRAIN_GRACE);
+                }
             },
             ev = events.recv() => if let Some(ev) = ev {
+                if let ServerEvent::Rejected(_, text) = &ev {
+                    return Err(text.clone());
+                }
                 if let ServerEvent::Error(e) = &ev && refusals.insert(e.clone()) {
                     // Each distinct refusal is logged once (a refused drag would repeat at
                     // the device rate); the set is bounded.
@@ -158,10 +212,11 @@ pub async fn drive_until_ready(
                     let _ = r.send(());
                 }
             },
-            _ = tokio::time::sleep(DRAIN_GRACE), if !samples_open => break,
+            _ = &mut drain, if !samples_open => break,
             _ = &mut shutdown => break,
         }
     }
+    Ok(())
 }
 
 /// Runs every configured device (recording raw traffic to `record` when given)
@@ -171,15 +226,16 @@ pub async fn run_live(
     wire: Arc<dyn Wire>,
     record: Option<&Path>,
     shutdown: impl Future<Output = ()>,
-) -> Result<(), RecordingError> {
+) -> Result<(), BridgeError> {
     let recorder = match record {
-        Some(p) => Some(Recorder::create(p, &config.devices)?),
+        Some(p) => Some(Recorder::create(p, &config)?),
         None => None,
     };
     let (tx, rx) = mpsc::unbounded_channel::<Input>();
     let mut runners = Vec::new();
     for (i, d) in config.devices.iter().enumerate() {
         let mut driver = build_driver(SourceId(i as u16), d);
+        let status_tap = recorder.as_ref().map(|r| r.tap());
         if let Some(r) = &recorder {
             driver.set_tap(r.tap());
         }
@@ -190,12 +246,20 @@ pub async fn run_live(
             run_options(d.kind),
             move |s| tx.send(Input::Samples(s.to_vec())).is_ok(),
             move |st| {
+                if let Some(tap) = &status_tap {
+                    // Recorded in order with the device's frames (same thread).
+                    let _ = tap.send(TapEvent::Status {
+                        source,
+                        time: Timestamp::now(),
+                        status: st.clone(),
+                    });
+                }
                 let _ = tx_status.send(Input::Status(source, st));
             },
         ));
     }
     drop(tx);
-    drive(&config, wire, rx, shutdown).await;
+    let driven = drive(&config, wire, rx, shutdown).await;
     for mut r in runners {
         tokio::task::block_in_place(|| r.stop());
     }
@@ -203,32 +267,32 @@ pub async fn run_live(
         let n = tokio::task::block_in_place(|| r.finish())?;
         tracing::info!(events = n, "recording written");
     }
-    Ok(())
+    driven.map_err(BridgeError::Rejected)
 }
 
-/// Replays `path` at `speed` through the same decoders and interaction; `config`
-/// supplies the server, hands and menu (its devices must match the recording's).
+/// Replays `path` at `speed` through the same decoders and interaction, with the
+/// configuration the session was recorded with (devices, hands, calibration, menu,
+/// gates, rates); `config` supplies only the server link. Returns the number of
+/// samples replayed.
 pub async fn run_replay(
-    mut config: Config,
+    config: Config,
     wire: Arc<dyn Wire>,
     path: &Path,
     speed: f64,
     shutdown: impl Future<Output = ()>,
-) -> Result<u64, RecordingError> {
+) -> Result<u64, BridgeError> {
     let replayer = Replayer::open(path)?;
-    if config.devices.is_empty() {
-        config.devices = replayer.devices().to_vec();
-    } else if config.devices.len() != replayer.devices().len()
-        || config
-            .devices
-            .iter()
-            .zip(replayer.devices())
-            .any(|(a, b)| a.name != b.name || a.kind != b.kind)
-    {
-        return Err(RecordingError::Format(
-            "the configuration's devices do not match the recording's".into(),
-        ));
+    let recorded = replayer.config().clone();
+    if !config.devices.is_empty() && recorded_config(&config) != recorded {
+        tracing::warn!(
+            "the configuration differs from the recorded one; replay uses the recorded \
+             devices, hands, calibration, menu and gates (only the server link is taken)"
+        );
     }
+    let config = Config {
+        server: config.server,
+        ..recorded
+    };
     let (tx, rx) = mpsc::unbounded_channel::<Input>();
     // With a server, play only once its icons are known (or after a timeout), so
     // the recorded grabs find what they grabbed live.
@@ -238,10 +302,14 @@ pub async fn run_replay(
         if wait {
             let _ = ready_rx.recv_timeout(REPLAY_WAIT);
         }
-        replayer.play(speed, |s| tx.send(Input::Samples(s.to_vec())).is_ok())
+        replayer.play(speed, |input| tx.send(input).is_ok())
     });
-    drive_until_ready(&config, wire, rx, shutdown, Some(ready_tx)).await;
-    player
+    let driven = drive_until_ready(&config, wire, rx, shutdown, ready_tx).await;
+    if let Err(text) = driven {
+        player.abort();
+        return Err(BridgeError::Rejected(text));
+    }
+    Ok(player
         .await
-        .map_err(|e| RecordingError::Format(e.to_string()))?
+        .map_err(|e| RecordingError::Format(e.to_string()))??)
 }

@@ -14,9 +14,27 @@ use std::sync::Arc;
 /// Default configuration file, used when present and no `--config` is given.
 pub const DEFAULT_CONFIG: &str = "vsculpt-bridge.toml";
 
+/// What `--help` says about the configuration file.
+pub const CONFIG_HELP: &str = "\
+Configuration: a TOML file (--config FILE, else ./vsculpt-bridge.toml when it exists).
+Every setting is shown, with its default, in vsculpt-bridge.example.toml next to this
+program's sources; `vsculpt-bridge check-config FILE` validates a file and prints the
+effective settings. Sections and keys:
+  [server]       url (the server's \"device:\" link), token, design
+  [calibration]  translation, rotation (x, y, z, w), scale
+  [[device]]     name, kind (flock | fastrak | cyberglove | spacemouse_hid | spacenavd | vrpn),
+                 port, baud, address (VRPN: Tracker0@host[:port] or Tracker0@tcp://host:port),
+                 settle_ms, poll_hz, and per kind flock = {…}, fastrak = {…},
+                 cyberglove = {…}, spacemouse = {…}, spacenavd = {…}, vrpn = {…};
+                 trackers also gate = {max_speed, max_acceleration, noise,
+                 max_angular_speed, angular_noise, confirm, max_gap}
+  [[hand]]       name, tracker, sensor, glove, reach, calibration = {open, closed}
+  [menu]         device, buttons, speed, deadzone
+  [rates]        drag_hz";
+
 /// vsculpt device bridge: 3D mice, 6-DOF trackers and data gloves driving icons.
 #[derive(Debug, Parser)]
-#[command(name = "vsculpt-bridge", version)]
+#[command(name = "vsculpt-bridge", version, after_help = CONFIG_HELP)]
 pub struct Args {
     /// TOML configuration (default: ./vsculpt-bridge.toml when it exists).
     #[arg(long, short)]
@@ -43,6 +61,12 @@ pub enum Action {
     /// Run, and keep every raw device frame with its timestamp in FILE.
     Record {
         /// Recording to write.
+        file: PathBuf,
+    },
+    /// Validate a configuration file and print the effective settings (defaults
+    /// filled in, tokens hidden); exit code 2 when it is not valid.
+    CheckConfig {
+        /// The TOML file.
         file: PathBuf,
     },
     /// Feed a recording back through the same parsers to the server.
@@ -100,9 +124,44 @@ fn say(line: &str) {
     let _ = writeln!(std::io::stderr(), "vsculpt-bridge: {line}");
 }
 
+/// The effective settings of `c` as TOML, with the server token hidden.
+pub fn effective_settings(c: &Config) -> String {
+    let mut c = c.clone();
+    if let Some((head, tail)) = c.server.url.split_once("token=") {
+        let rest = tail.find('&').map_or("", |i| &tail[i..]);
+        c.server.url = format!("{head}token=<hidden>{rest}");
+    }
+    if c.server.token.is_some() {
+        c.server.token = Some("<hidden>".into());
+    }
+    c.to_toml()
+}
+
+fn check_config(file: &Path) -> ExitCode {
+    match Config::load(file) {
+        Ok(c) => {
+            println!(
+                "# {}: valid — {} device(s), {} hand(s); effective settings:",
+                file.display(),
+                c.devices.len(),
+                c.hands.len()
+            );
+            print!("{}", effective_settings(&c));
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            say(&format!("{}: {e}", file.display()));
+            ExitCode::from(2)
+        }
+    }
+}
+
 /// Runs the command line with `wire` as the protocol mapping.
 pub fn main(wire: Arc<dyn Wire>) -> ExitCode {
     let args = Args::parse();
+    if let Some(Action::CheckConfig { file }) = &args.command {
+        return check_config(file);
+    }
     let logging = match vsculpt_logging::init(&args.log, "info") {
         Ok(l) => l,
         Err(e) => {
@@ -145,7 +204,7 @@ fn run(args: Args, wire: Arc<dyn Wire>) -> ExitCode {
     };
     let result = rt.block_on(async {
         match args.command.unwrap_or(Action::Run) {
-            Action::Run => run_live(config, wire, None, stop_signal())
+            Action::Run | Action::CheckConfig { .. } => run_live(config, wire, None, stop_signal())
                 .await
                 .map(|_| ()),
             Action::Record { file } => run_live(config, wire, Some(&file), stop_signal())
@@ -153,9 +212,9 @@ fn run(args: Args, wire: Arc<dyn Wire>) -> ExitCode {
                 .map(|_| ()),
             Action::Replay { file, speed } => {
                 if !(speed.is_finite() && speed > 0.0) {
-                    return Err(RecordingError::Format(
-                        "--speed must be a positive number".into(),
-                    ));
+                    return Err(
+                        RecordingError::Format("--speed must be a positive number".into()).into(),
+                    );
                 }
                 run_replay(config, wire, &file, speed, stop_signal())
                     .await

@@ -42,6 +42,7 @@ use crate::device::transport::{
     HidSelector, HidTransport, SerialTransport, TcpTransport, UnixTransport,
 };
 use crate::device::vrpn::{self, VrpnDecoder, VrpnSettings};
+use crate::gate::GateSettings;
 use crate::hand::GloveCalibration;
 use crate::interaction::MenuAction;
 use glam::{DQuat, DVec3};
@@ -110,8 +111,72 @@ impl DeviceKind {
     }
 }
 
+/// Baud rate of a serial device without `baud`.
+pub const DEFAULT_BAUD: u32 = 115_200;
+
+/// The rates a serial tracker or glove can be set to (the Flock's DIP switches
+/// give 2400–115200; Fastrak and CyberGlove use 9600–115200).
+pub const STANDARD_BAUDS: [u32; 9] = [
+    1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
+];
+
+/// The standard rate a mistyped `baud` most likely meant: one whose digits begin
+/// with the typed ones (11520 → 115200), else the nearest by ratio.
+pub fn nearest_baud(b: u32) -> u32 {
+    let typed = b.to_string();
+    if let Some(s) = STANDARD_BAUDS
+        .iter()
+        .find(|s| s.to_string().starts_with(&typed) || typed.starts_with(&s.to_string()))
+    {
+        return *s;
+    }
+    let ratio = |s: u32| (f64::from(s) / f64::from(b.max(1))).ln().abs();
+    STANDARD_BAUDS
+        .iter()
+        .copied()
+        .min_by(|a, c| ratio(*a).total_cmp(&ratio(*c)))
+        .unwrap_or(DEFAULT_BAUD)
+}
+
+impl DeviceConfig {
+    /// For a serial device, what to say when its line yields bytes but no valid
+    /// record: the configured rate and the others the device may be set to.
+    pub fn line_hint(&self) -> Option<String> {
+        if !self.kind.is_serial() {
+            return None;
+        }
+        let baud = self.baud.unwrap_or(DEFAULT_BAUD);
+        let others: Vec<String> = STANDARD_BAUDS
+            .iter()
+            .filter(|b| **b != baud && (9600..=115_200).contains(*b))
+            .map(u32::to_string)
+            .collect();
+        let format = match self.kind {
+            DeviceKind::Flock => format!(
+                ", or the record format ({:?}, {} birds, group mode {})",
+                self.flock.format, self.flock.birds, self.flock.group_mode
+            ),
+            DeviceKind::Cyberglove => format!(
+                ", or the sensor count ({}) and record options",
+                self.cyberglove.sensors
+            ),
+            _ => String::new(),
+        };
+        Some(format!(
+            "wrong baud rate? configured {baud}; the device may be set to {}{format}",
+            others.join(", ")
+        ))
+    }
+}
+
 fn default_settle_ms() -> u64 {
     50
+}
+
+/// A CyberGlove samples at up to about 150 records a second and a Flock streams at
+/// about 100–144; 100 polls a second follow a hand without flooding the line.
+fn default_poll_hz() -> f64 {
+    100.0
 }
 
 /// One device.
@@ -134,6 +199,10 @@ pub struct DeviceConfig {
     /// Wait after stopping a serial device before configuring it, in ms.
     #[serde(default = "default_settle_ms")]
     pub settle_ms: u64,
+    /// Polls a second at most, for a device set to be polled rather than stream
+    /// (a CyberGlove by default; a Flock or Fastrak with `stream = false`).
+    #[serde(default = "default_poll_hz")]
+    pub poll_hz: f64,
     /// Flock of Birds settings.
     #[serde(default)]
     pub flock: FlockSettings,
@@ -152,6 +221,9 @@ pub struct DeviceConfig {
     /// VRPN settings.
     #[serde(default)]
     pub vrpn: VrpnSettings,
+    /// Plausibility gate of a tracker's poses ([`crate::gate`]).
+    #[serde(default)]
+    pub gate: GateSettings,
 }
 
 impl DeviceConfig {
@@ -164,13 +236,37 @@ impl DeviceConfig {
             baud: None,
             address: None,
             settle_ms: default_settle_ms(),
+            poll_hz: default_poll_hz(),
             flock: FlockSettings::default(),
             fastrak: FastrakSettings::default(),
             cyberglove: CyberGloveSettings::default(),
             spacemouse: SpaceMouseSettings::default(),
             spacenavd: SpacenavdSettings::default(),
             vrpn: VrpnSettings::default(),
+            gate: GateSettings::default(),
         }
+    }
+
+    /// True for the tracker families (their poses pass the [`crate::gate`]).
+    pub fn is_tracker(&self) -> bool {
+        matches!(
+            self.kind,
+            DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Vrpn
+        )
+    }
+
+    /// The shortest time between two records of this device, in seconds: the time
+    /// its serial line needs to carry one record (8N1: ten bit times a byte);
+    /// 0 for network devices.
+    pub fn record_interval(&self) -> f64 {
+        let bytes = match self.kind {
+            DeviceKind::Flock => self.flock.record_len(),
+            DeviceKind::Fastrak => fastrak::RECORD_LEN,
+            DeviceKind::Cyberglove => usize::from(self.cyberglove.sensors) + 2,
+            _ => return 0.0,
+        };
+        let baud = f64::from(self.baud.unwrap_or(DEFAULT_BAUD));
+        bytes as f64 * 10.0 / baud
     }
 
     fn validate(&self) -> Result<(), String> {
@@ -179,9 +275,22 @@ impl DeviceConfig {
             return Err(ctx("a serial device needs `port`".into()));
         }
         if let Some(b) = self.baud
-            && !(300..=921_600).contains(&b)
+            && !STANDARD_BAUDS.contains(&b)
         {
-            return Err(ctx(format!("baud {b} out of range")));
+            return Err(ctx(format!(
+                "baud {b} is not a standard rate; did you mean {}? (standard: {})",
+                nearest_baud(b),
+                STANDARD_BAUDS.map(|b| b.to_string()).join(", ")
+            )));
+        }
+        if self.is_tracker() {
+            self.gate.validate().map_err(ctx)?;
+        }
+        if !(self.poll_hz.is_finite() && (1.0..=1000.0).contains(&self.poll_hz)) {
+            return Err(ctx(format!(
+                "poll_hz must be 1..=1000, got {}",
+                self.poll_hz
+            )));
         }
         match self.kind {
             DeviceKind::Flock => self.flock.validate(),
@@ -189,28 +298,66 @@ impl DeviceConfig {
             DeviceKind::Cyberglove => self.cyberglove.validate(),
             DeviceKind::SpacemouseHid => self.spacemouse.validate(),
             DeviceKind::Spacenavd => self.spacenavd.validate(),
-            DeviceKind::Vrpn => {
-                if self.address.is_none() {
-                    Err("a VRPN device needs `address` (host:port)".into())
-                } else {
-                    Ok(())
-                }
-            }
+            DeviceKind::Vrpn => self.vrpn_target().map(|_| ()),
         }
         .map_err(ctx)
     }
 
-    /// The VRPN address with the default port added when missing.
+    /// The VRPN address with the default port added when missing (`host:port`).
     pub fn vrpn_address(&self) -> Option<String> {
-        self.address.as_ref().map(|a| {
-            if a.rsplit_once(':')
-                .is_some_and(|(_, p)| p.parse::<u16>().is_ok())
-            {
-                a.clone()
-            } else {
-                format!("{a}:3883")
+        self.vrpn_target().ok().map(|t| t.1)
+    }
+
+    /// The VRPN device name and `host:port` this entry reads, from `address` in any
+    /// of the forms VRPN users write (`vrpn.cfg`, `vrpn_print_devices`):
+    /// `host`, `host:port`, `Device@host`, `Device@host:port`, `Device@tcp://host:port`,
+    /// `Device@tcp:host[:port]` — a device named in the address wins over
+    /// `vrpn.device`; the port defaults to 3883.
+    pub fn vrpn_target(&self) -> Result<(String, String), String> {
+        let a = self
+            .address
+            .as_deref()
+            .map(str::trim)
+            .filter(|a| !a.is_empty())
+            .ok_or("a VRPN device needs `address` (Tracker0@host[:port] or host[:port])")?;
+        let (device, rest) = match a.split_once('@') {
+            Some((d, r)) if !d.is_empty() => (d.to_owned(), r),
+            Some(_) => return Err(format!("VRPN address {a:?}: no device name before '@'")),
+            None => (self.vrpn.device.clone(), a),
+        };
+        let host_port = rest
+            .strip_prefix("tcp://")
+            .or_else(|| rest.strip_prefix("tcp:"))
+            .unwrap_or(rest);
+        if host_port.contains("://") {
+            return Err(format!(
+                "VRPN address {a:?}: only tcp:// is supported (the bridge connects over TCP)"
+            ));
+        }
+        let (host, port) = match host_port.strip_prefix('[') {
+            // an IPv6 literal: [::1] or [::1]:3883
+            Some(v6) => {
+                let (h, after) = v6
+                    .split_once(']')
+                    .ok_or_else(|| format!("VRPN address {a:?}: unclosed '['"))?;
+                (format!("[{h}]"), after.strip_prefix(':'))
             }
-        })
+            None => match host_port.rsplit_once(':') {
+                Some((h, p)) => (h.to_owned(), Some(p)),
+                None => (host_port.to_owned(), None),
+            },
+        };
+        if host.is_empty() || host == "[]" {
+            return Err(format!("VRPN address {a:?}: no host"));
+        }
+        let port = match port {
+            Some(p) => p
+                .parse::<u16>()
+                .map_err(|_| format!("VRPN address {a:?}: bad port {p:?}"))?,
+            None => 3883,
+        };
+        let addr = format!("{host}:{port}");
+        Ok((device, addr))
     }
 }
 
@@ -341,6 +488,39 @@ impl Default for MenuConfig {
     }
 }
 
+/// How often continuous commands may leave for the server.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RatesConfig {
+    /// Drags per second per held icon at most (latest wins; the last drag before a
+    /// release is always sent). A 1 kHz tracker thus costs the server 120 solves a
+    /// second, not 1000.
+    pub drag_hz: f64,
+}
+
+impl Default for RatesConfig {
+    fn default() -> Self {
+        Self { drag_hz: 120.0 }
+    }
+}
+
+impl RatesConfig {
+    /// Minimum time between two drags of one icon, in µs (by sample time).
+    pub fn drag_period_us(&self) -> u64 {
+        (1e6 / self.drag_hz).round() as u64
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if !(self.drag_hz.is_finite() && self.drag_hz >= 1.0) {
+            return Err(format!(
+                "rates.drag_hz must be at least 1, got {}",
+                self.drag_hz
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The whole configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
 #[serde(default, deny_unknown_fields)]
@@ -357,6 +537,8 @@ pub struct Config {
     pub hands: Vec<HandConfig>,
     /// The 3D menu.
     pub menu: MenuConfig,
+    /// Send rates.
+    pub rates: RatesConfig,
 }
 
 impl Config {
@@ -384,6 +566,7 @@ impl Config {
     /// Checks cross-references and ranges.
     pub fn validate(&self) -> Result<(), String> {
         self.calibration.validate()?;
+        self.rates.validate()?;
         if self.devices.len() > usize::from(u16::MAX) {
             return Err("too many devices".into());
         }
@@ -468,25 +651,35 @@ pub fn build_decoder(source: SourceId, d: &DeviceConfig) -> Box<dyn Decoder> {
         DeviceKind::Cyberglove => Box::new(CyberGloveDecoder::new(source, d.cyberglove.clone())),
         DeviceKind::SpacemouseHid => Box::new(SpaceMouseDecoder::new(source, d.spacemouse.clone())),
         DeviceKind::Spacenavd => Box::new(SpacenavdDecoder::new(source, d.spacenavd.clone())),
-        DeviceKind::Vrpn => Box::new(VrpnDecoder::new(source, d.vrpn.clone())),
+        DeviceKind::Vrpn => {
+            let mut v = d.vrpn.clone();
+            if let Ok((device, _)) = d.vrpn_target() {
+                v.device = device;
+            }
+            Box::new(VrpnDecoder::new(source, v))
+        }
     }
 }
 
 fn build_script(d: &DeviceConfig) -> Script {
     let settle = Duration::from_millis(d.settle_ms);
-    match d.kind {
+    let mut script = match d.kind {
         DeviceKind::Flock => flock::script(&d.flock, settle),
         DeviceKind::Fastrak => fastrak::script(&d.fastrak, settle),
         DeviceKind::Cyberglove => cyberglove::script(&d.cyberglove, settle),
         DeviceKind::SpacemouseHid => spacemouse_hid::script(),
         DeviceKind::Spacenavd => spacenavd::script(),
-        DeviceKind::Vrpn => vrpn::script(),
+        DeviceKind::Vrpn => vrpn::script(&d.vrpn_target().map(|t| t.0).unwrap_or_default()),
+    };
+    if script.poll_interval.is_zero() {
+        script.poll_interval = Duration::from_secs_f64(1.0 / d.poll_hz);
     }
+    script
 }
 
 fn build_transport(d: &DeviceConfig) -> Box<dyn Transport> {
     let port = d.port.clone().unwrap_or_default();
-    let baud = d.baud.unwrap_or(115_200);
+    let baud = d.baud.unwrap_or(DEFAULT_BAUD);
     match d.kind {
         DeviceKind::Flock | DeviceKind::Fastrak | DeviceKind::Cyberglove => {
             Box::new(SerialTransport::new(port, baud))
@@ -502,13 +695,17 @@ fn build_transport(d: &DeviceConfig) -> Box<dyn Transport> {
 
 /// A ready driver for device entry `d` (not yet opened).
 pub fn build_driver(source: SourceId, d: &DeviceConfig) -> Driver {
-    Driver::new(
+    let mut driver = Driver::new(
         d.name.clone(),
         source,
         build_transport(d),
         build_decoder(source, d),
         build_script(d),
-    )
+    );
+    if let Some(hint) = d.line_hint() {
+        driver.set_garbage_hint(hint);
+    }
+    driver
 }
 
 #[cfg(test)]
@@ -611,6 +808,14 @@ buttons = { 0 = "next_entry", 1 = "apply_entry" }
                 "bogus",
             ),
             (SAMPLE.replace("baud = 38400", "baud = 7"), "baud"),
+            (
+                SAMPLE.replace("baud = 38400", "baud = 11520"),
+                "baud 11520 is not a standard rate; did you mean 115200?",
+            ),
+            (
+                SAMPLE.replace("baud = 38400", "baud = 3840"),
+                "did you mean 38400?",
+            ),
             (
                 SAMPLE.replace("name = \"glove\"", "name = \"tracker\""),
                 "twice",

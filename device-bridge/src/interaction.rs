@@ -14,6 +14,7 @@
 
 use crate::config::{Config, MenuConfig};
 use crate::device::{Reading, Sample, SourceId, Timestamp};
+use crate::gate::{MotionGate, Verdict};
 use crate::hand::{Gesture, Hand};
 use crate::spring::DragSpring;
 use glam::{DQuat, DVec3};
@@ -239,9 +240,36 @@ struct Hold {
     offset: DVec3,
     /// The spring of a load drag.
     spring: Option<DragSpring>,
+    /// When a drag of this hold last left (sample time).
+    sent_at: Option<Timestamp>,
+    /// A newer drag than the last one sent is waiting for its slot.
+    pending: bool,
 }
 
 impl Hold {
+    /// Queues the current drag: it leaves now when the rate allows (`period_us`
+    /// since the last one, by sample time), else it waits as the latest.
+    fn drag_at(&mut self, time: Timestamp, period_us: u64, out: &mut Vec<Command>) {
+        let due = self
+            .sent_at
+            .is_none_or(|t| time.0.saturating_sub(t.0) >= period_us);
+        if due {
+            self.sent_at = Some(time);
+            self.pending = false;
+            out.push(self.drag());
+        } else {
+            self.pending = true;
+        }
+    }
+
+    /// Sends the waiting drag, if any.
+    fn flush(&mut self, out: &mut Vec<Command>) {
+        if self.pending {
+            self.pending = false;
+            out.push(self.drag());
+        }
+    }
+
     fn drag(&self) -> Command {
         let target = match &self.spring {
             Some(s) => s.pull_point(self.icon_origin, self.offset),
@@ -253,7 +281,9 @@ impl Hold {
         }
     }
 
-    fn release(&self, out: &mut Vec<Command>) {
+    /// Lets go: the last drag (if one is waiting) first, then the release.
+    fn release(mut self, out: &mut Vec<Command>) {
+        self.flush(out);
         out.push(Command::Release {
             icon: self.icon,
             sensor: self.sensor.clone(),
@@ -274,6 +304,10 @@ struct HandSlot {
     reach: f64,
     hand: Hand,
     hold: Option<Hold>,
+    gate: MotionGate,
+    tracker_name: String,
+    /// Rejected count at the last log line.
+    logged_rejects: u64,
 }
 
 /// The interaction state machine.
@@ -288,6 +322,7 @@ pub struct Interaction {
     mouse_hold: Option<Hold>,
     mouse_time: Option<Timestamp>,
     surface_area: f64,
+    drag_period_us: u64,
 }
 
 impl Interaction {
@@ -297,9 +332,12 @@ impl Interaction {
             .hands
             .iter()
             .filter_map(|h| {
-                let (tracker, _) = config.device(&h.tracker)?;
+                let (tracker, device) = config.device(&h.tracker)?;
                 let glove = h.glove.as_ref().and_then(|g| config.device(g)).map(|g| g.0);
                 Some(HandSlot {
+                    gate: MotionGate::new(device.gate, device.record_interval()),
+                    tracker_name: device.name.clone(),
+                    logged_rejects: 0,
                     last_report: None,
                     tracker,
                     sensor: h.sensor,
@@ -326,6 +364,7 @@ impl Interaction {
             mouse_hold: None,
             mouse_time: None,
             surface_area: 1.0,
+            drag_period_us: config.rates.drag_period_us(),
         }
     }
 
@@ -351,6 +390,31 @@ impl Interaction {
             .iter()
             .filter_map(|h| h.hold.as_ref())
             .chain(self.mouse_hold.as_ref())
+    }
+
+    /// Sends the drags that waited for their slot and are due at `now` (on the
+    /// sample clock): a hand that stops moving, or a tracker that only reports
+    /// changes, still gets its latest drag out within one drag period.
+    pub fn flush_due(&mut self, now: Timestamp, out: &mut Vec<Command>) {
+        let period = self.drag_period_us;
+        let holds = self
+            .hands
+            .iter_mut()
+            .filter_map(|h| h.hold.as_mut())
+            .chain(self.mouse_hold.as_mut());
+        for g in holds.filter(|g| g.pending) {
+            g.drag_at(now, period, out);
+        }
+    }
+
+    /// The minimum time between two drags of one icon.
+    pub fn drag_period(&self) -> std::time::Duration {
+        std::time::Duration::from_micros(self.drag_period_us)
+    }
+
+    /// Tracker records the plausibility gates refused so far (all hands).
+    pub fn rejected_poses(&self) -> u64 {
+        self.hands.iter().map(|h| h.gate.rejected()).sum()
     }
 
     /// Held icons with the sensor holding each.
@@ -443,6 +507,8 @@ impl Interaction {
             icon_origin: icon.position,
             offset: DVec3::ZERO,
             spring: load.then(|| DragSpring::new(self.surface_area)),
+            sent_at: None,
+            pending: false,
         }
     }
 
@@ -465,8 +531,22 @@ impl Interaction {
                 position,
                 orientation,
             } => {
+                let period = self.drag_period_us;
                 for h in &mut self.hands {
                     if h.tracker != sample.source || h.sensor != sensor {
+                        continue;
+                    }
+                    let verdict = h.gate.check(position, orientation, sample.time);
+                    if verdict == Verdict::Reject {
+                        let n = h.gate.rejected();
+                        if n > h.logged_rejects && (n.is_power_of_two() || n % 1000 == 0) {
+                            tracing::warn!(
+                                device = %h.tracker_name,
+                                dropped = n,
+                                "implausible tracker records dropped (bad bytes on the line?)"
+                            );
+                            h.logged_rejects = n;
+                        }
                         continue;
                     }
                     let pose = h.hand.update_pose(position, orientation, sample.time);
@@ -484,8 +564,13 @@ impl Interaction {
                         });
                     }
                     if let Some(g) = &mut h.hold {
-                        g.offset = pose.position - g.origin;
-                        out.push(g.drag());
+                        if verdict == Verdict::Reacquired {
+                            // A new track: the drag continues from where it is.
+                            g.origin = pose.position - g.offset;
+                        } else {
+                            g.offset = pose.position - g.origin;
+                            g.drag_at(sample.time, period, out);
+                        }
                     }
                 }
             }
@@ -523,6 +608,9 @@ impl Interaction {
             let h = &self.hands[i];
             if h.tracker == source || h.glove == Some(source) {
                 self.gesture(i, Gesture::Open, out);
+            }
+            if self.hands[i].tracker == source {
+                self.hands[i].gate.reset();
             }
         }
         if self.menu_device == Some(source) {
@@ -620,20 +708,24 @@ impl Interaction {
     }
 
     fn mouse_motion(&mut self, t: DVec3, time: Timestamp, out: &mut Vec<Command>) {
-        let dt = self
-            .mouse_time
-            .map_or(0.0, |p| time.since(p).as_secs_f64().min(0.1));
-        self.mouse_time = Some(time);
         let dz = self.menu.deadzone;
         let cut = |v: f64| if v.abs() < dz { 0.0 } else { v };
         let t = DVec3::new(cut(t.x), cut(t.y), cut(t.z));
         if t == DVec3::ZERO {
-            // The cap is back at rest: the mouse drag ends, the shape is kept.
+            // The cap is back at rest: the mouse drag ends, the shape is kept, and the
+            // integration clock stops, so the next push starts from zero motion.
             if let Some(g) = self.mouse_hold.take() {
                 g.release(out);
             }
+            self.mouse_time = None;
             return;
         }
+        // The first event of a push only starts the clock; each later one moves by
+        // its deflection over the time since the previous event (at most 0.1 s).
+        let dt = self
+            .mouse_time
+            .map_or(0.0, |p| time.since(p).as_secs_f64().min(0.1));
+        self.mouse_time = Some(time);
         let Some(icon) = self.selected.and_then(|s| self.icons.get(&s)).copied() else {
             return;
         };
@@ -656,9 +748,10 @@ impl Interaction {
             self.mouse_hold = Some(hold);
         }
         let speed = self.menu.speed;
+        let period = self.drag_period_us;
         if let Some(g) = &mut self.mouse_hold {
             g.offset += t * speed * dt;
-            out.push(g.drag());
+            g.drag_at(time, period, out);
         }
     }
 }
@@ -670,9 +763,30 @@ mod tests {
     use crate::device::GloveValues;
     use crate::hand::{GloveCalibration, glove_shape};
 
+    /// A gate that lets any motion through at once (these tests are about the
+    /// interaction; the gate has its own).
+    fn permissive() -> crate::gate::GateSettings {
+        crate::gate::GateSettings {
+            max_speed: 1e9,
+            max_acceleration: 1e12,
+            noise: 1e3,
+            confirm: 1,
+            max_angular_speed: 1e9,
+            ..Default::default()
+        }
+    }
+
+    /// Sample times 10 ms apart, in call order.
+    fn tick() -> Timestamp {
+        use std::sync::atomic::{AtomicU64, Ordering};
+        static NOW: AtomicU64 = AtomicU64::new(1_000_000);
+        Timestamp(NOW.fetch_add(10_000, Ordering::Relaxed))
+    }
+
     fn config() -> Config {
         let mut tracker = DeviceConfig::new("tracker", DeviceKind::Flock);
         tracker.port = Some("/dev/null".into());
+        tracker.gate = permissive();
         let mut glove = DeviceConfig::new("glove", DeviceKind::Cyberglove);
         glove.port = Some("/dev/null".into());
         let mouse = DeviceConfig::new("mouse", DeviceKind::Spacenavd);
@@ -706,7 +820,7 @@ mod tests {
     fn pose(p: DVec3) -> Sample {
         Sample {
             source: SourceId(0),
-            time: Timestamp(0),
+            time: tick(),
             reading: Reading::Pose {
                 sensor: 0,
                 position: p,
@@ -770,6 +884,56 @@ mod tests {
         assert_eq!(out, vec![release(2)]);
         // moving an open hand drags nothing
         assert!(run(&mut i, &[pose(DVec3::ZERO)]).is_empty());
+    }
+
+    #[test]
+    fn drags_leave_at_the_drag_rate_latest_wins_and_the_last_before_a_release() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([icon(1, DVec3::ZERO, IconRole::Constraint)]);
+        let at = |us: u64, x: f64| {
+            let mut s = pose(DVec3::X * x);
+            s.time = Timestamp(us);
+            s
+        };
+        run(&mut i, &[at(0, 0.0), hand(1.0, 1.0)]);
+        // a 1 kHz tracker for 105 ms: at 120 Hz the drags leave at records 1, 10, 19 …
+        // 100 (each ≥ 8.33 ms after the one before), 12 of 105
+        let mut sent = Vec::new();
+        for k in 1..=105u64 {
+            for c in run(&mut i, &[at(k * 1000, k as f64 * 1e-4)]) {
+                if let Command::Drag { target, .. } = c {
+                    sent.push((k, target.x));
+                }
+            }
+        }
+        let ks: Vec<u64> = sent.iter().map(|s| s.0).collect();
+        assert_eq!(ks, (0..12).map(|n| 1 + 9 * n).collect::<Vec<_>>());
+        // the hand stops reporting: the waiting drag (record 105) leaves once due
+        let mut out = Vec::new();
+        i.flush_due(Timestamp(105_000), &mut out);
+        assert!(out.is_empty(), "not due yet: {out:?}");
+        i.flush_due(Timestamp(108_400), &mut out);
+        assert_eq!(
+            out,
+            vec![Command::Drag {
+                icon: 1,
+                target: DVec3::X * 105.0 * 1e-4
+            }]
+        );
+        // two more records inside the slot, then the hand opens: the latest drag
+        // goes out before the release
+        run(&mut i, &[at(109_000, 0.0107), at(110_000, 0.011)]);
+        let out = run(&mut i, &[hand(0.0, 0.0)]);
+        assert_eq!(
+            out,
+            vec![
+                Command::Drag {
+                    icon: 1,
+                    target: DVec3::X * 0.011
+                },
+                release(1)
+            ]
+        );
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! * [`sim`] — simulated devices (pty serial devices, fake spacenavd and VRPN servers, recorded HID streams).
 //! * [`cli`] — the command line.
 //! * [`config`] — the TOML configuration and the driver factory.
+//! * [`gate`] — plausibility of tracker motion (a constant-velocity gate).
 //! * [`hand`] — tracker + glove → hand pose and gesture.
 //! * [`spring`] — the adaptive spring of a load drag.
 //! * [`wire`] — the mapping onto the vsculpt protocol.
@@ -19,6 +20,7 @@ pub mod bridge;
 pub mod cli;
 pub mod config;
 pub mod device;
+pub mod gate;
 pub mod hand;
 pub mod interaction;
 pub mod link;

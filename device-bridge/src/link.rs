@@ -48,6 +48,35 @@ pub enum ServerEvent {
     },
     /// The server refused something; the text says what.
     Error(String),
+    /// The server will never accept this hello (bad token, unknown design, other
+    /// protocol version): retrying cannot help, the bridge stops.
+    Rejected(Rejection, String),
+}
+
+/// Why the server refused the hello for good.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rejection {
+    /// The token is not valid for the design.
+    Token,
+    /// No such design.
+    Design,
+    /// The server speaks another protocol version.
+    Version,
+}
+
+impl Rejection {
+    /// What to tell the person running the bridge.
+    pub fn explain(self, design: Option<u64>, detail: &str) -> String {
+        let design = design.unwrap_or(1);
+        match self {
+            Rejection::Token => format!(
+                "token rejected for design {design} ({detail}): use the \"device:\" link the \
+                 server prints for this design"
+            ),
+            Rejection::Design => format!("design {design} does not exist on the server ({detail})"),
+            Rejection::Version => format!("the server speaks another protocol version ({detail})"),
+        }
+    }
 }
 
 /// Maps bridge commands and server messages to the protocol's JSON.
@@ -268,7 +297,7 @@ async fn run(
     let token = o.token();
     let design = o.design();
     loop {
-        match session(
+        let outcome = session(
             &o.url,
             &token,
             design,
@@ -278,8 +307,14 @@ async fn run(
             &notify,
             &stats,
         )
-        .await
-        {
+        .await;
+        if let Err(End::Rejected(why, detail)) = &outcome {
+            let text = why.explain(design, detail);
+            tracing::error!(url = %o.url, "{text}");
+            let _ = events.send(ServerEvent::Rejected(*why, text));
+            return;
+        }
+        match outcome {
             Ok(accepted) => {
                 if accepted {
                     backoff = o.backoff_min;
@@ -287,18 +322,33 @@ async fn run(
                     tracing::warn!(url = %o.url, "server connection closed; reconnecting");
                 }
             }
-            Err(e) => {
+            Err(End::Failed(e)) => {
                 if !outage_logged {
                     tracing::warn!(url = %o.url, error = %e, "server unreachable; retrying with backoff");
                     outage_logged = true;
                 }
             }
+            Err(End::Rejected(..)) => return,
         }
         if events.send(ServerEvent::Disconnected).is_err() {
             return;
         }
         tokio::time::sleep(backoff).await;
         backoff = (backoff * 2).min(o.backoff_max);
+    }
+}
+
+/// How a connection that was never accepted ended.
+enum End {
+    /// Unreachable, closed, broken: retry.
+    Failed(String),
+    /// Refused for good.
+    Rejected(Rejection, String),
+}
+
+impl From<String> for End {
+    fn from(e: String) -> Self {
+        End::Failed(e)
     }
 }
 
@@ -313,10 +363,10 @@ async fn session(
     outbox: &Mutex<Outbox>,
     notify: &Notify,
     stats: &watch::Sender<LinkStats>,
-) -> Result<bool, String> {
+) -> Result<bool, End> {
     let (ws, _) = tokio_tungstenite::connect_async(url)
         .await
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| End::Failed(e.to_string()))?;
     if let Ok(tcp) = match ws.get_ref() {
         tokio_tungstenite::MaybeTlsStream::Plain(s) => Ok(s),
         _ => Err(()),
@@ -326,14 +376,14 @@ async fn session(
     let (mut tx, mut rx) = ws.split();
     tx.send(Message::text(wire.hello(token, design)))
         .await
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| End::Failed(e.to_string()))?;
     let mut accepted = false;
     loop {
         tokio::select! {
             msg = rx.next() => {
                 let evs = match msg {
                     None => return Ok(accepted),
-                    Some(Err(e)) => return if accepted { Ok(true) } else { Err(e.to_string()) },
+                    Some(Err(e)) => return if accepted { Ok(true) } else { Err(End::Failed(e.to_string())) },
                     Some(Ok(Message::Text(t))) => match wire.decode(t.as_str()) {
                         Ok(evs) => evs,
                         Err(e) => {
@@ -342,7 +392,7 @@ async fn session(
                         }
                     },
                     Some(Ok(Message::Binary(b))) => wire.decode_binary(&b),
-                    Some(Ok(Message::Close(_))) => return if accepted { Ok(true) } else { Err("closed by server".into()) },
+                    Some(Ok(Message::Close(_))) => return if accepted { Ok(true) } else { Err(End::Failed("closed by server".into())) },
                     Some(Ok(_)) => Vec::new(),
                 };
                 for ev in evs {
@@ -354,8 +404,14 @@ async fn session(
                             return Ok(true);
                         }
                     }
-                    if let ServerEvent::Error(e) = &ev && !accepted {
-                        return Err(e.clone());
+                    if !accepted {
+                        match &ev {
+                            ServerEvent::Rejected(why, detail) => {
+                                return Err(End::Rejected(*why, detail.clone()));
+                            }
+                            ServerEvent::Error(e) => return Err(End::Failed(e.clone())),
+                            _ => {}
+                        }
                     }
                     if events.send(ev).is_err() {
                         return Ok(accepted);
@@ -367,7 +423,7 @@ async fn session(
                 for (c, ordered) in &cmds {
                     for text in wire.encode(c, *ordered) {
                         tracing::trace!(%text, "to server");
-                        tx.send(Message::text(text)).await.map_err(|e| e.to_string())?;
+                        tx.send(Message::text(text)).await.map_err(|e| End::Failed(e.to_string()))?;
                         stats.send_modify(|s| s.sent += 1);
                     }
                 }

@@ -1,19 +1,27 @@
-//! Record and replay of raw device traffic.
+//! Record and replay of a session.
 //!
-//! `vsculpt-bridge record FILE` keeps every raw chunk each device delivered, with
-//! its arrival time, plus the moments devices were (re)opened; `replay FILE` feeds
-//! the chunks back through the very same decoders ([`crate::config::build_decoder`]),
-//! so a replayed session produces exactly the samples the live one did.
+//! `vsculpt-bridge record FILE` keeps the whole effective configuration (devices,
+//! hands, calibration, menu, gates, rates — everything but the server link and its
+//! token), every raw chunk each device delivered with its arrival time, the moments
+//! devices were (re)opened and every change of a device's availability; `replay
+//! FILE` feeds the chunks back through the very same decoders
+//! ([`crate::config::build_decoder`]) and the same interaction, with the recorded
+//! timestamps, so a replayed session produces exactly the commands the live one
+//! did. `--speed` only paces the delivery.
 //!
 //! File layout (all integers little-endian):
-//! * magic `VSBREC01`, `u32` length, then that many bytes of JSON: the device list
-//!   of the configuration that recorded (so replay builds the same decoders);
+//! * magic `VSBREC02`, `u32` length, then that many bytes of JSON: the
+//!   configuration (a `VSBREC01` file holds only the device list);
 //! * events until the end of the file, each `u8` tag, `u64` time in µs, `u16` device:
 //!   tag 0 (frame) — `u32` length and the bytes; tag 1 (opened) — `u8` 1 and
-//!   `u16` vendor, `u16` product when the device has a USB identity, else `u8` 0.
+//!   `u16` vendor, `u16` product when the device has a USB identity, else `u8` 0;
+//!   tag 2 (status) — `u8` 0 open / 1 unavailable / 2 lost, `u32` length and the
+//!   UTF-8 reason.
 
-use crate::config::{DeviceConfig, build_decoder};
-use crate::device::{Decoder, RawFrame, Sample, SourceId, TapEvent, Timestamp};
+use crate::bridge::Input;
+use crate::config::{Config, DeviceConfig, build_decoder};
+use crate::device::runner::DeviceStatus;
+use crate::device::{Decoder, RawFrame, SourceId, TapEvent, Timestamp};
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::Path;
 use std::sync::mpsc::{Sender, channel};
@@ -22,7 +30,11 @@ use std::time::{Duration, Instant};
 use thiserror::Error;
 
 /// File magic.
-pub const MAGIC: &[u8; 8] = b"VSBREC01";
+pub const MAGIC: &[u8; 8] = b"VSBREC02";
+/// Magic of the first format (device list only).
+pub const MAGIC_V1: &[u8; 8] = b"VSBREC01";
+/// Longest status reason kept.
+const MAX_REASON: u32 = 4096;
 /// Largest frame accepted when reading (a device chunk is at most a few KiB).
 const MAX_FRAME: u32 = 1 << 20;
 /// Largest header accepted.
@@ -65,7 +77,33 @@ fn write_event<W: Write>(w: &mut W, e: &TapEvent) -> std::io::Result<()> {
                 None => w.write_all(&[0]),
             }
         }
+        TapEvent::Status {
+            source,
+            time,
+            status,
+        } => {
+            w.write_all(&[2])?;
+            w.write_all(&time.0.to_le_bytes())?;
+            w.write_all(&source.0.to_le_bytes())?;
+            let (kind, reason) = match status {
+                DeviceStatus::Open => (0u8, ""),
+                DeviceStatus::Unavailable(r) => (1, r.as_str()),
+                DeviceStatus::Lost(r) => (2, r.as_str()),
+            };
+            let reason = &reason.as_bytes()[..reason.len().min(MAX_REASON as usize)];
+            w.write_all(&[kind])?;
+            w.write_all(&(reason.len() as u32).to_le_bytes())?;
+            w.write_all(reason)
+        }
     }
+}
+
+/// The configuration as a recording keeps it: without the server link, whose URL
+/// carries a token.
+pub fn recorded_config(config: &Config) -> Config {
+    let mut c = config.clone();
+    c.server = Default::default();
+    c
 }
 
 /// Writes a recording from the events sent to its [`Recorder::tap`].
@@ -75,11 +113,12 @@ pub struct Recorder {
 }
 
 impl Recorder {
-    /// Creates `path` for the devices `devices` and starts the writer thread.
-    pub fn create(path: &Path, devices: &[DeviceConfig]) -> Result<Self, RecordingError> {
+    /// Creates `path` for a session run with `config` (kept without its server
+    /// link, see [`recorded_config`]) and starts the writer thread.
+    pub fn create(path: &Path, config: &Config) -> Result<Self, RecordingError> {
         let mut w = BufWriter::new(std::fs::File::create(path)?);
-        let header =
-            serde_json::to_vec(devices).map_err(|e| RecordingError::Format(e.to_string()))?;
+        let header = serde_json::to_vec(&recorded_config(config))
+            .map_err(|e| RecordingError::Format(e.to_string()))?;
         w.write_all(MAGIC)?;
         w.write_all(&(header.len() as u32).to_le_bytes())?;
         w.write_all(&header)?;
@@ -131,8 +170,8 @@ impl Recorder {
 
 /// A recording opened for replay.
 pub struct Recording {
-    /// The devices that were recorded.
-    pub devices: Vec<DeviceConfig>,
+    /// The configuration the session ran with (server link omitted).
+    pub config: Config,
     reader: BufReader<std::fs::File>,
 }
 
@@ -153,7 +192,7 @@ impl Recording {
     pub fn open(path: &Path) -> Result<Self, RecordingError> {
         let mut reader = BufReader::new(std::fs::File::open(path)?);
         let mut magic = [0u8; 8];
-        if !read_exact_or_eof(&mut reader, &mut magic)? || &magic != MAGIC {
+        if !read_exact_or_eof(&mut reader, &mut magic)? || (&magic != MAGIC && &magic != MAGIC_V1) {
             return Err(RecordingError::Format("bad magic".into()));
         }
         let mut len = [0u8; 4];
@@ -168,9 +207,25 @@ impl Recording {
         if !read_exact_or_eof(&mut reader, &mut header)? {
             return Err(RecordingError::Format("no header".into()));
         }
-        let devices: Vec<DeviceConfig> =
-            serde_json::from_slice(&header).map_err(|e| RecordingError::Format(e.to_string()))?;
-        Ok(Self { devices, reader })
+        let bad = |e: serde_json::Error| RecordingError::Format(e.to_string());
+        let config = if &magic == MAGIC_V1 {
+            let devices: Vec<DeviceConfig> = serde_json::from_slice(&header).map_err(bad)?;
+            Config {
+                devices,
+                ..Default::default()
+            }
+        } else {
+            serde_json::from_slice(&header).map_err(bad)?
+        };
+        config
+            .validate()
+            .map_err(|e| RecordingError::Format(format!("recorded configuration: {e}")))?;
+        Ok(Self { config, reader })
+    }
+
+    /// The recorded devices.
+    pub fn devices(&self) -> &[DeviceConfig] {
+        &self.config.devices
     }
 
     /// The next event; `Ok(None)` at the end.
@@ -184,7 +239,7 @@ impl Recording {
             head[1..9].try_into().unwrap_or_default(),
         ));
         let source = SourceId(u16::from_le_bytes([head[9], head[10]]));
-        if usize::from(source.0) >= self.devices.len() {
+        if usize::from(source.0) >= self.config.devices.len() {
             return Err(RecordingError::Format(format!(
                 "unknown device {}",
                 source.0
@@ -233,6 +288,32 @@ impl Recording {
                     identity,
                 }))
             }
+            2 => {
+                let mut head = [0u8; 5];
+                if !read_exact_or_eof(r, &mut head)? {
+                    return Err(RecordingError::Format("truncated status event".into()));
+                }
+                let len = u32::from_le_bytes([head[1], head[2], head[3], head[4]]);
+                if len > MAX_REASON {
+                    return Err(RecordingError::Format("status reason too long".into()));
+                }
+                let mut reason = vec![0u8; len as usize];
+                if len > 0 && !read_exact_or_eof(r, &mut reason)? {
+                    return Err(RecordingError::Format("truncated status event".into()));
+                }
+                let reason = String::from_utf8_lossy(&reason).into_owned();
+                let status = match head[0] {
+                    0 => DeviceStatus::Open,
+                    1 => DeviceStatus::Unavailable(reason),
+                    2 => DeviceStatus::Lost(reason),
+                    k => return Err(RecordingError::Format(format!("unknown status {k}"))),
+                };
+                Ok(Some(TapEvent::Status {
+                    source,
+                    time,
+                    status,
+                }))
+            }
             t => Err(RecordingError::Format(format!("unknown event tag {t}"))),
         }
     }
@@ -249,6 +330,7 @@ impl Replayer {
     pub fn open(path: &Path) -> Result<Self, RecordingError> {
         let recording = Recording::open(path)?;
         let decoders = recording
+            .config
             .devices
             .iter()
             .enumerate()
@@ -262,17 +344,22 @@ impl Replayer {
 
     /// The recorded devices.
     pub fn devices(&self) -> &[DeviceConfig] {
-        &self.recording.devices
+        self.recording.devices()
+    }
+
+    /// The recorded configuration (server link omitted).
+    pub fn config(&self) -> &Config {
+        &self.recording.config
     }
 
     /// Plays the recording at `speed` × real time (`f64::INFINITY` = as fast as
-    /// possible), handing each batch of samples to `sink` (false stops). Sample
-    /// times are the recorded times, compressed by `speed`, on the current clock.
-    /// Returns the number of samples produced.
+    /// possible), handing each batch of samples and each recorded status change to
+    /// `sink` (false stops). Samples carry their recorded times whatever the speed:
+    /// the speed only paces the delivery. Returns the number of samples produced.
     pub fn play(
         mut self,
         speed: f64,
-        mut sink: impl FnMut(&[Sample]) -> bool,
+        mut sink: impl FnMut(Input) -> bool,
     ) -> Result<u64, RecordingError> {
         if speed.is_nan() || speed <= 0.0 {
             return Err(RecordingError::Format(format!(
@@ -280,14 +367,15 @@ impl Replayer {
             )));
         }
         let start = Instant::now();
-        let start_ts = Timestamp::from_instant(start);
         let mut first: Option<Timestamp> = None;
         let mut out = Vec::new();
         let mut produced = 0u64;
         while let Some(event) = self.recording.next_event()? {
             let (source, time) = match &event {
                 TapEvent::Frame(f) => (f.source, f.time),
-                TapEvent::Opened { source, time, .. } => (*source, *time),
+                TapEvent::Opened { source, time, .. } | TapEvent::Status { source, time, .. } => {
+                    (*source, *time)
+                }
             };
             let t0 = *first.get_or_insert(time);
             let offset = time
@@ -300,7 +388,6 @@ impl Replayer {
                     std::thread::sleep(due - now);
                 }
             }
-            let at = Timestamp(start_ts.0 + offset.as_micros() as u64);
             let decoder = &mut self.decoders[usize::from(source.0)];
             match event {
                 TapEvent::Opened { identity, .. } => {
@@ -309,16 +396,21 @@ impl Replayer {
                         decoder.set_identity(ids);
                     }
                 }
+                TapEvent::Status { status, .. } => {
+                    if !sink(Input::Status(source, status)) {
+                        break;
+                    }
+                }
                 TapEvent::Frame(f) => {
                     out.clear();
-                    decoder.feed(&f.bytes, at, &mut out);
+                    decoder.feed(&f.bytes, f.time, &mut out);
                     if decoder.fatal().is_some() {
                         // As live: the link would be reopened; start the decoder afresh.
                         decoder.reset();
                     }
                     if !out.is_empty() {
                         produced += out.len() as u64;
-                        if !sink(&out) {
+                        if !sink(Input::Samples(std::mem::take(&mut out))) {
                             break;
                         }
                     }
@@ -347,7 +439,11 @@ mod tests {
         flock.port = Some("/dev/null".into());
         let mouse = DeviceConfig::new("mouse", DeviceKind::SpacemouseHid);
         let devices = vec![flock.clone(), mouse];
-        let rec = Recorder::create(&path, &devices).unwrap();
+        let config = Config {
+            devices: devices.clone(),
+            ..Default::default()
+        };
+        let rec = Recorder::create(&path, &config).unwrap();
         let tap = rec.tap();
         let s = FlockSettings::default();
         let rec_bytes = encode_record(
@@ -398,8 +494,10 @@ mod tests {
         assert_eq!(r.devices(), &devices[..]);
         let mut got = Vec::new();
         let n = r
-            .play(f64::INFINITY, |s| {
-                got.extend_from_slice(s);
+            .play(f64::INFINITY, |i| {
+                if let Input::Samples(s) = i {
+                    got.extend(s);
+                }
                 true
             })
             .unwrap();
@@ -421,7 +519,11 @@ mod tests {
         assert!(Replayer::open(&path).is_err());
         let mut flock = DeviceConfig::new("tracker", DeviceKind::Flock);
         flock.port = Some("/dev/null".into());
-        let rec = Recorder::create(&path, &[flock]).unwrap();
+        let config = Config {
+            devices: vec![flock],
+            ..Default::default()
+        };
+        let rec = Recorder::create(&path, &config).unwrap();
         rec.tap()
             .send(TapEvent::Frame(RawFrame {
                 source: SourceId(0),
@@ -446,7 +548,11 @@ mod tests {
         let path = temp("pace");
         let mut flock = DeviceConfig::new("tracker", DeviceKind::Flock);
         flock.port = Some("/dev/null".into());
-        let rec = Recorder::create(&path, &[flock]).unwrap();
+        let config = Config {
+            devices: vec![flock],
+            ..Default::default()
+        };
+        let rec = Recorder::create(&path, &config).unwrap();
         let s = FlockSettings::default();
         let bytes = encode_record(&pose_words(&s, DVec3::ZERO, DQuat::IDENTITY), None, None);
         for i in 0..3u64 {
@@ -463,15 +569,20 @@ mod tests {
         let t = Instant::now();
         Replayer::open(&path)
             .unwrap()
-            .play(2.0, |s| {
-                times.push(s[0].time);
+            .play(2.0, |i| {
+                if let Input::Samples(s) = i {
+                    times.push(s[0].time);
+                }
                 true
             })
             .unwrap();
-        // 200 ms recorded at speed 2 takes at least 100 ms, and sample times are 50 ms apart
+        // 200 ms recorded at speed 2 takes at least 100 ms; the samples keep their
+        // recorded times (100 ms apart): the speed paces the delivery only
         assert!(t.elapsed() >= Duration::from_millis(100));
-        assert_eq!(times[1].since(times[0]), Duration::from_millis(50));
-        assert_eq!(times[2].since(times[1]), Duration::from_millis(50));
+        assert_eq!(
+            times,
+            vec![Timestamp(0), Timestamp(100_000), Timestamp(200_000)]
+        );
         let _ = std::fs::remove_file(&path);
     }
 }

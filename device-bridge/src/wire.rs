@@ -13,11 +13,11 @@
 //!   k0 = κ S; `icon_created` / `icon_updated` / `icon_deleted`; `icon_feedback` → Δy.
 
 use crate::interaction::{Command, DeviceCondition, IconKind, IconRole, IconState, IconView};
-use crate::link::{ServerEvent, Wire};
+use crate::link::{Rejection, ServerEvent, Wire};
 use glam::DVec3;
 use std::sync::atomic::{AtomicU64, Ordering};
 use vsculpt_protocol::{
-    ClientEnvelope, ClientKind, ClientMessage, Derivative, Icon, PROTOCOL_VERSION, Role,
+    ClientEnvelope, ClientKind, ClientMessage, Derivative, ErrorCode, Icon, PROTOCOL_VERSION, Role,
     ServerMessage, SurfaceData,
 };
 
@@ -217,9 +217,12 @@ impl Wire for ProtocolWire {
                     Vec::new()
                 }
             }
-            ServerMessage::Error { code, message, .. } => {
-                vec![ServerEvent::Error(format!("{code:?}: {message}"))]
-            }
+            ServerMessage::Error { code, message, .. } => match code {
+                ErrorCode::BadToken => vec![ServerEvent::Rejected(Rejection::Token, message)],
+                ErrorCode::UnknownDesign => vec![ServerEvent::Rejected(Rejection::Design, message)],
+                ErrorCode::BadVersion => vec![ServerEvent::Rejected(Rejection::Version, message)],
+                _ => vec![ServerEvent::Error(format!("{code:?}: {message}"))],
+            },
             _ => Vec::new(),
         })
     }
@@ -393,7 +396,11 @@ mod tests {
         let ev = w
             .decode(r#"{"type": "error", "code": "bad_token", "message": "no"}"#)
             .unwrap();
-        assert!(matches!(&ev[0], ServerEvent::Error(e) if e.contains("no")));
+        assert_eq!(ev[0], ServerEvent::Rejected(Rejection::Token, "no".into()));
+        let ev = w
+            .decode(r#"{"type": "error", "code": "forbidden", "message": "viewer"}"#)
+            .unwrap();
+        assert!(matches!(&ev[0], ServerEvent::Error(e) if e.contains("viewer")));
         assert!(w.decode("{\"type\": \"nonsense\"}").is_err());
         assert!(w.decode("not json").is_err());
         assert_eq!(w.decode(r#"{"type": "pong"}"#).unwrap(), vec![]);

@@ -64,7 +64,11 @@ fn replay_without_a_server_plays_and_exits() {
     let rec = temp("play.vsbrec");
     let mut d = DeviceConfig::new("tracker", DeviceKind::Flock);
     d.port = Some("/dev/null".into());
-    let r = Recorder::create(&rec, &[d]).unwrap();
+    let config = vsculpt_bridge::config::Config {
+        devices: vec![d],
+        ..Default::default()
+    };
+    let r = Recorder::create(&rec, &config).unwrap();
     let bytes = encode_record(
         &pose_words(
             &FlockSettings::default(),

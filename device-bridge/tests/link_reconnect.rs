@@ -165,22 +165,29 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
     };
     // wait until the icon is known, then grab it
     tokio::time::sleep(Duration::from_millis(300)).await;
+    // (the tracker's gate confirms a track over three records before the hand has a pose)
     samples_tx
-        .send(Input::Samples(vec![pose(0.0), glove(1.0)]))
+        .send(Input::Samples(vec![
+            pose(0.0),
+            pose(0.0),
+            pose(0.0),
+            glove(1.0),
+        ]))
         .unwrap();
     let got = recv_until(&mut seen, |m| m.starts_with("Grab")).await;
     assert!(
         got[0].starts_with("Grab { icon: 1, sensor: \"right\""),
         "{got:?}"
     );
-    // a burst of 200 poses in one batch: only the newest drag is sent
+    // a burst of 200 poses in one batch: the first drag leaves, the rest wait for
+    // the next drag slot and only the newest of them is sent
     samples_tx
         .send(Input::Samples(
             (1..=200).map(|i| pose(i as f64 * 1e-4)).collect(),
         ))
         .unwrap();
     let got = recv_until(&mut seen, |m| m.contains("DVec3(0.02,")).await;
-    assert_eq!(got.len(), 1, "{got:?}");
+    assert!(got.len() <= 2, "{got:?}");
 
     // the server restarts
     close1.send(()).unwrap();
@@ -203,7 +210,7 @@ async fn reconnects_and_restores_bindings_and_coalesces_drags() {
         "{got:?}"
     );
     stop_tx.send(()).unwrap();
-    bridge.await.unwrap();
+    bridge.await.unwrap().unwrap();
     s2.abort();
 }
 

@@ -184,13 +184,19 @@ fn cyberglove_polled_on_a_pty() {
         }
         ref r => panic!("{r:?}"),
     }
-    // an unplugged glove (e g) never yields values
+    // an unplugged glove (e g) never yields values, and the driver says why
     sim.device().unplugged = true;
     let mut out = Vec::new();
-    for _ in 0..10 {
-        d.read(Duration::from_millis(20), &mut out).unwrap();
+    let mut err = None;
+    for _ in 0..50 {
+        if let Err(e) = d.read(Duration::from_millis(20), &mut out) {
+            err = Some(e.to_string());
+            break;
+        }
     }
     assert!(out.is_empty());
+    let err = err.expect("an unplugged glove is reported");
+    assert!(err.contains("not plugged into its box"), "{err}");
 }
 
 #[test]
@@ -230,6 +236,8 @@ fn spacenavd_socket() {
     while daemon.clients() == 0 && Instant::now() < end {
         std::thread::sleep(Duration::from_millis(5));
     }
+    // spacenavd's z points away from the user: -175 is the cap pulled half towards
+    // the user, +0.5 in the bridge's right-handed frame
     daemon.send_motion([350, 0, -175, 0, 35, 0], 8);
     daemon.send_button(1, true);
     let mut got = Vec::new();
@@ -242,7 +250,7 @@ fn spacenavd_socket() {
         got,
         vec![
             Reading::Motion {
-                translation: DVec3::new(1.0, 0.0, -0.5),
+                translation: DVec3::new(1.0, 0.0, 0.5),
                 rotation: DVec3::new(0.0, 0.1, 0.0)
             },
             Reading::Button {

@@ -231,11 +231,12 @@ async fn space_mouse_selects_moves_and_puts_an_icon_to_sleep() {
     let connected = eventually(10, || async { (daemon.clients() > 0).then_some(()) }).await;
     assert!(connected.is_some());
     wait_bridge(&server).await;
-    // button 2 selects the first icon; push the cap up (z) at full scale for 0.5 s
+    // button 2 selects the first icon; pull the cap towards the user at full scale
+    // for 0.5 s: spacenavd's z is -350 (its z points away), the bridge's +1
     daemon.send_button(2, true);
     daemon.send_button(2, false);
     for _ in 0..50 {
-        daemon.send_motion([0, 0, 350, 0, 0, 0], 10);
+        daemon.send_motion([0, 0, -350, 0, 0, 0], 10);
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
     daemon.send_motion([0, 0, 0, 0, 0, 0], 10);

@@ -212,3 +212,30 @@ async fn server_restart_mid_drag_restores_the_binding() {
     bridge.await.unwrap();
     server.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_rejected_token_stops_the_bridge_with_a_clear_message() {
+    init_logs();
+    let dir = temp_dir("bridge-token");
+    let server = RunningServer::start(&dir.join("data"), None).await;
+    // a device that keeps retrying (its socket does not exist) keeps the bridge up
+    let mut mouse = vsculpt_bridge::config::DeviceConfig::new(
+        "mouse",
+        vsculpt_bridge::config::DeviceKind::Spacenavd,
+    );
+    mouse.spacenavd.socket = Some(dir.join("no-such.sock").display().to_string());
+    let mut config = vsculpt_bridge::config::Config {
+        devices: vec![mouse],
+        ..Default::default()
+    };
+    config.server.url = format!("ws://{}/ws?design=1&token=not-a-token", server.addr);
+    let run = run_live(config, Arc::new(ProtocolWire), None, std::future::pending());
+    let err = tokio::time::timeout(Duration::from_secs(15), run)
+        .await
+        .expect("the bridge stops instead of retrying forever")
+        .expect_err("a rejected token is an error");
+    let text = err.to_string();
+    assert!(text.contains("token rejected for design 1"), "{text}");
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -217,6 +217,15 @@ impl Decoder for CyberGloveDecoder {
 
     fn reset(&mut self) {
         self.buf.clear();
+        self.unplugged = false;
+    }
+
+    fn fatal(&self) -> Option<String> {
+        self.unplugged.then(|| {
+            "the glove is not plugged into its box (the CyberGlove answers 'e','g'): \
+             connect the glove's cable to the CyberGlove box"
+                .to_owned()
+        })
     }
 }
 
@@ -255,6 +264,7 @@ pub fn script(s: &CyberGloveSettings, settle: Duration) -> Script {
         open,
         poll: (!s.stream).then(|| vec![b'G']),
         close: if s.stream { vec![0x03] } else { Vec::new() },
+        ..Default::default()
     }
 }
 

@@ -59,6 +59,9 @@ pub struct DecodeStats {
     pub discarded_bytes: u64,
     /// Complete records rejected by a validity check (bad framing, values out of range).
     pub rejected_records: u64,
+    /// Well-formed messages of any kind (for framed protocols whose peers also
+    /// send non-sample messages: proof the peer is alive).
+    pub messages: u64,
 }
 
 impl DecodeStats {
@@ -174,6 +177,9 @@ pub struct Script {
     pub open: Vec<Step>,
     /// Sent before each read cycle in polled mode (`None` when the device streams).
     pub poll: Option<Vec<u8>>,
+    /// Least time between two polls: a device is polled at its own rate, not as
+    /// fast as the line answers.
+    pub poll_interval: Duration,
     /// Sent before the transport closes.
     pub close: Vec<u8>,
 }
@@ -203,6 +209,15 @@ pub enum TapEvent {
     },
     /// Bytes read.
     Frame(RawFrame),
+    /// The device's availability changed (reported by its runner).
+    Status {
+        /// Which configured device.
+        source: SourceId,
+        /// When.
+        time: Timestamp,
+        /// The new status.
+        status: super::runner::DeviceStatus,
+    },
 }
 
 /// A device: open it, read samples, close it.
@@ -234,7 +249,15 @@ pub struct Driver {
     buf: Vec<u8>,
     faults_seen: u64,
     in_fault: bool,
+    last_poll: Option<Instant>,
+    garbage_hint: Option<String>,
+    /// Decoder counters when the device was last opened.
+    opened_at: DecodeStats,
 }
+
+/// Bytes of garbage, with not one valid record since the device opened, after which
+/// the line is called wrong (baud rate or record format) and reopened.
+pub const GARBAGE_LIMIT: u64 = 1024;
 
 impl Driver {
     /// Assembles a driver.
@@ -255,7 +278,16 @@ impl Driver {
             buf: vec![0; READ_CHUNK],
             faults_seen: 0,
             in_fault: false,
+            last_poll: None,
+            garbage_hint: None,
+            opened_at: DecodeStats::default(),
         }
+    }
+
+    /// What to say when the line yields only garbage (the configured baud rate and
+    /// the likely ones): without it, garbage is only resynchronised on.
+    pub fn set_garbage_hint(&mut self, hint: String) {
+        self.garbage_hint = Some(hint);
     }
 
     /// Copies every raw chunk read from now on to `tap` (for `record`).
@@ -305,6 +337,52 @@ impl Driver {
         }
     }
 
+    /// Reads and decodes until `end`, or until a sample beyond `start_len` is decoded.
+    fn read_until(
+        &mut self,
+        end: Instant,
+        out: &mut Vec<Sample>,
+        start_len: usize,
+    ) -> Result<(), DeviceError> {
+        loop {
+            let now = Instant::now();
+            if now >= end {
+                return Ok(());
+            }
+            let n = self.transport.read(&mut self.buf, end - now)?;
+            if n == 0 {
+                continue;
+            }
+            let at = Timestamp::now();
+            if let Some(tap) = &self.tap {
+                // A closed recorder only stops the recording, never the device.
+                let _ = tap.send(TapEvent::Frame(RawFrame {
+                    source: self.source,
+                    time: at,
+                    bytes: self.buf[..n].to_vec(),
+                }));
+            }
+            self.decoder.feed(&self.buf[..n], at, out);
+            let produced = out.len() > start_len;
+            self.note_faults(produced);
+            if let Some(reason) = self.decoder.fatal() {
+                return Err(DeviceError::Handshake(reason));
+            }
+            if let Some(hint) = &self.garbage_hint {
+                let st = self.decoder.stats();
+                let garbage = st.faults() - self.opened_at.faults();
+                if st.records == self.opened_at.records && garbage >= GARBAGE_LIMIT {
+                    return Err(DeviceError::Handshake(format!(
+                        "{garbage} bytes and not one valid record: {hint}"
+                    )));
+                }
+            }
+            if produced {
+                return Ok(());
+            }
+        }
+    }
+
     fn note_faults(&mut self, produced: bool) {
         let faults = self.decoder.stats().faults();
         if faults > self.faults_seen {
@@ -332,6 +410,8 @@ impl Device for Driver {
     fn open(&mut self) -> Result<(), DeviceError> {
         self.transport.open()?;
         self.decoder.reset();
+        self.last_poll = None;
+        self.opened_at = self.decoder.stats();
         let identity = self.transport.identity();
         if let Some(ids) = identity {
             self.decoder.set_identity(ids);
@@ -357,41 +437,23 @@ impl Device for Driver {
         if !self.transport.is_open() {
             return Err(DeviceError::NotOpen);
         }
-        if let Some(poll) = &self.script.poll {
-            let poll = poll.clone();
-            self.transport.write(&poll)?;
-        }
         let start_len = out.len();
         let end = Instant::now() + timeout;
-        loop {
-            let now = Instant::now();
-            if now >= end {
-                break;
+        if let Some(poll) = self.script.poll.clone() {
+            if let Some(last) = self.last_poll {
+                let next = last + self.script.poll_interval;
+                if next > Instant::now() {
+                    // Not due yet: take what arrives meanwhile (a late answer).
+                    self.read_until(next.min(end), out, start_len)?;
+                    if out.len() > start_len || Instant::now() < next {
+                        return Ok(());
+                    }
+                }
             }
-            let n = self.transport.read(&mut self.buf, end - now)?;
-            if n == 0 {
-                continue;
-            }
-            let at = Timestamp::now();
-            if let Some(tap) = &self.tap {
-                // A closed recorder only stops the recording, never the device.
-                let _ = tap.send(TapEvent::Frame(RawFrame {
-                    source: self.source,
-                    time: at,
-                    bytes: self.buf[..n].to_vec(),
-                }));
-            }
-            self.decoder.feed(&self.buf[..n], at, out);
-            let produced = out.len() > start_len;
-            self.note_faults(produced);
-            if let Some(reason) = self.decoder.fatal() {
-                return Err(DeviceError::Handshake(reason));
-            }
-            if produced {
-                break;
-            }
+            self.transport.write(&poll)?;
+            self.last_poll = Some(Instant::now());
         }
-        Ok(())
+        self.read_until(end, out, start_len)
     }
 
     fn close(&mut self) {
@@ -412,5 +474,164 @@ impl Device for Driver {
 impl Drop for Driver {
     fn drop(&mut self) {
         self.close();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::sample::Reading;
+    use std::sync::{Arc, Mutex};
+
+    /// A device that answers every write at once with one byte.
+    struct Instant1 {
+        writes: Arc<Mutex<Vec<Instant>>>,
+        pending: usize,
+        open: bool,
+    }
+
+    impl Transport for Instant1 {
+        fn open(&mut self) -> Result<(), DeviceError> {
+            self.open = true;
+            Ok(())
+        }
+        fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, DeviceError> {
+            if self.pending > 0 {
+                self.pending -= 1;
+                buf[0] = 1;
+                return Ok(1);
+            }
+            std::thread::sleep(timeout.min(Duration::from_millis(1)));
+            Ok(0)
+        }
+        fn write(&mut self, _bytes: &[u8]) -> Result<(), DeviceError> {
+            self.writes.lock().unwrap().push(Instant::now());
+            self.pending += 1;
+            Ok(())
+        }
+        fn close(&mut self) {
+            self.open = false;
+        }
+        fn is_open(&self) -> bool {
+            self.open
+        }
+        fn describe(&self) -> String {
+            "instant".into()
+        }
+    }
+
+    /// Every byte is a sample.
+    struct Bytes(DecodeStats);
+
+    impl Decoder for Bytes {
+        fn feed(&mut self, chunk: &[u8], at: Timestamp, out: &mut Vec<Sample>) {
+            for _ in chunk {
+                self.0.records += 1;
+                out.push(Sample {
+                    source: SourceId(0),
+                    time: at,
+                    reading: Reading::Button {
+                        button: 0,
+                        pressed: true,
+                    },
+                });
+            }
+        }
+        fn stats(&self) -> DecodeStats {
+            self.0
+        }
+        fn reset(&mut self) {}
+    }
+
+    #[test]
+    fn a_polled_device_is_polled_at_its_own_rate() {
+        let writes = Arc::new(Mutex::new(Vec::new()));
+        let transport = Instant1 {
+            writes: writes.clone(),
+            pending: 0,
+            open: false,
+        };
+        let interval = Duration::from_millis(15);
+        let script = Script {
+            poll: Some(vec![b'G']),
+            poll_interval: interval,
+            ..Default::default()
+        };
+        let mut d = Driver::new(
+            "glove",
+            SourceId(0),
+            Box::new(transport),
+            Box::new(Bytes(DecodeStats::default())),
+            script,
+        );
+        d.open().unwrap();
+        let mut out = Vec::new();
+        // a line that answers at once would be polled thousands of times a second;
+        // read calls as fast as they return give one poll per interval
+        while out.len() < 5 {
+            d.read(Duration::from_millis(50), &mut out).unwrap();
+        }
+        let w = writes.lock().unwrap();
+        assert_eq!(w.len(), 5);
+        for pair in w.windows(2) {
+            assert!(pair[1] - pair[0] >= interval, "{:?}", pair[1] - pair[0]);
+        }
+    }
+
+    /// A line that only ever yields bytes without a valid record.
+    struct Noise(u64, bool);
+
+    impl Transport for Noise {
+        fn open(&mut self) -> Result<(), DeviceError> {
+            self.1 = true;
+            Ok(())
+        }
+        fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, DeviceError> {
+            for b in buf.iter_mut().take(64) {
+                self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1);
+                // bytes without the Flock's phasing bit
+                *b = (self.0 >> 33) as u8 & 0x7f;
+            }
+            Ok(64)
+        }
+        fn write(&mut self, _bytes: &[u8]) -> Result<(), DeviceError> {
+            Ok(())
+        }
+        fn close(&mut self) {
+            self.1 = false;
+        }
+        fn is_open(&self) -> bool {
+            self.1
+        }
+        fn describe(&self) -> String {
+            "noise".into()
+        }
+    }
+
+    #[test]
+    fn a_line_of_garbage_names_the_likely_cause() {
+        let mut d = Driver::new(
+            "tracker",
+            SourceId(0),
+            Box::new(Noise(7, false)),
+            Box::new(crate::device::flock::FlockDecoder::new(
+                SourceId(0),
+                Default::default(),
+            )),
+            Script::default(),
+        );
+        d.set_garbage_hint("wrong baud rate? configured 115200".into());
+        d.open().unwrap();
+        let mut out = Vec::new();
+        let err = loop {
+            if let Err(e) = d.read(Duration::from_millis(10), &mut out) {
+                break e.to_string();
+            }
+        };
+        assert!(out.is_empty());
+        assert!(
+            err.contains("not one valid record: wrong baud rate? configured 115200"),
+            "{err}"
+        );
     }
 }

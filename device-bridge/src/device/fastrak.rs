@@ -249,6 +249,7 @@ pub fn script(s: &FastrakSettings, settle: Duration) -> Script {
         open,
         poll: (!s.stream).then(|| vec![b'P']),
         close: vec![b'c'],
+        ..Default::default()
     }
 }
 

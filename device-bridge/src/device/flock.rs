@@ -391,6 +391,7 @@ pub fn script(s: &FlockSettings, settle: Duration) -> Script {
         open,
         poll: (!s.stream).then(|| vec![b'B']),
         close: vec![b'B', b'G'],
+        ..Default::default()
     }
 }
 

@@ -207,6 +207,7 @@ fn run(
     let name = device.name().to_owned();
     let mut backoff = o.backoff_min;
     let mut last_error: Option<DeviceError> = None;
+    let mut last_loss: Option<DeviceError> = None;
     let mut buf = Vec::with_capacity(64);
     while !stop.load(Ordering::SeqCst) {
         if let Err(e) = device.open() {
@@ -223,11 +224,18 @@ fn run(
         stats.opens.fetch_add(1, Ordering::Relaxed);
         status(DeviceStatus::Open);
         if last_error.take().is_some() {
-            tracing::info!(device = %name, "device open again");
+            if last_loss.is_some() {
+                // The same failure repeating (a glove off its box): said once.
+                tracing::debug!(device = %name, "device open again");
+            } else {
+                tracing::info!(device = %name, "device open again");
+            }
         } else {
             tracing::info!(device = %name, "device open");
         }
         let mut last_sample = Instant::now();
+        let mut activity = device.stats().messages;
+        let mut delivered = false;
         let failure = loop {
             if stop.load(Ordering::SeqCst) {
                 break None;
@@ -235,6 +243,11 @@ fn run(
             buf.clear();
             let r = device.read(o.read_timeout, &mut buf);
             if !buf.is_empty() {
+                if !delivered && last_loss.is_some() {
+                    // Samples flow again: the next failure is news.
+                    last_loss = None;
+                }
+                delivered = true;
                 last_sample = Instant::now();
                 backoff = o.backoff_min;
                 stats.samples.fetch_add(buf.len() as u64, Ordering::Relaxed);
@@ -246,9 +259,15 @@ fn run(
             if let Err(e) = r {
                 break Some(e);
             }
+            let messages = device.stats().messages;
+            if messages != activity {
+                // A message that is no sample (a VRPN pong) proves the peer alive too.
+                activity = messages;
+                last_sample = Instant::now();
+            }
             if o.silence.is_some_and(|s| last_sample.elapsed() > s) {
                 break Some(DeviceError::Handshake(format!(
-                    "no valid record for {:?}",
+                    "nothing valid received for {:?}",
                     o.silence.unwrap_or_default()
                 )));
             }
@@ -256,7 +275,12 @@ fn run(
         device.close();
         if let Some(e) = failure {
             stats.failures.fetch_add(1, Ordering::Relaxed);
-            tracing::warn!(device = %name, error = %e, "device lost; reopening");
+            if last_loss.as_ref() == Some(&e) {
+                tracing::debug!(device = %name, error = %e, "device lost again; reopening");
+            } else {
+                tracing::warn!(device = %name, error = %e, "device lost; reopening");
+            }
+            last_loss = Some(e.clone());
             status(DeviceStatus::Lost(e.to_string()));
             last_error = Some(e);
             sleep_unless_stopped(backoff, stop);

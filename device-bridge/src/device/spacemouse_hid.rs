@@ -15,7 +15,9 @@
 //! Values are roughly ±350 at full deflection; they are divided by `full_scale` and
 //! clamped to [-1, 1]. spacenavd marks almost every USB model "swap y-z, invert y-z"
 //! (and adds both flags to unknown 3Dconnexion models); the table below carries the
-//! same per-model flags so that the axes come out as x right, y up, z towards the user.
+//! same per-model flags, which give spacenavd's axes (x right, y up, z away from the
+//! user); [`super::spacenavd::to_bridge_frame`] then makes them the bridge's
+//! right-handed frame (z towards the user), as libspnav does.
 
 use super::driver::{DecodeStats, Decoder, Script};
 use super::sample::{Reading, Sample, SourceId, Timestamp};
@@ -217,6 +219,11 @@ impl SpaceMouseDecoder {
                 v[base + 2] = -y;
             }
         }
+        let (t, r) = super::spacenavd::to_bridge_frame(
+            DVec3::new(v[0], v[1], v[2]),
+            DVec3::new(v[3], v[4], v[5]),
+        );
+        let mut v = [t.x, t.y, t.z, r.x, r.y, r.z];
         for (x, sign) in v.iter_mut().zip(s.axis_signs) {
             *x *= sign;
         }
@@ -363,7 +370,7 @@ mod tests {
         assert_eq!(
             r[0],
             Reading::Motion {
-                translation: DVec3::new(100.0, -200.0, 300.0) / 350.0,
+                translation: DVec3::new(100.0, -200.0, -300.0) / 350.0,
                 rotation: DVec3::new(1.0, -1.0, 0.0)
             }
         );

@@ -6,7 +6,11 @@
 //! and reads; nothing needs to be sent. Every event is 32 bytes: eight `i32` in the
 //! host's byte order.
 //! * motion `[0, x, y, z, rx, ry, rz, period_ms]` — values already scaled by the
-//!   client's sensitivity and mapped to spacenavd's axes (about ±350 full scale);
+//!   client's sensitivity and mapped to spacenavd's axes (about ±350 full scale):
+//!   x right, y up, z *away* from the user (pushing the cap forward is +z), a
+//!   left-handed frame; libspnav's own `spnav_posrot_moveobj` (`src/spnav.c`) turns
+//!   it into a right-handed object motion by negating z and rz, and so does
+//!   [`to_bridge_frame`];
 //! * button `[1 (press) | 2 (release), button, press, 0…]`;
 //! * v1 only: 3 device, 4 config, 5 raw axis, 6 raw button (ignored here).
 //!
@@ -69,6 +73,16 @@ impl SpacenavdSettings {
     }
 }
 
+/// spacenavd's axes (x right, y up, z away from the user) to the bridge's
+/// right-handed frame (x right, y up, z towards the user), as libspnav's
+/// `spnav_posrot_moveobj` does: translation `(x, y, −z)`, rotation `(rx, ry, −rz)`.
+pub fn to_bridge_frame(translation: DVec3, rotation: DVec3) -> (DVec3, DVec3) {
+    (
+        DVec3::new(translation.x, translation.y, -translation.z),
+        DVec3::new(rotation.x, rotation.y, -rotation.z),
+    )
+}
+
 /// Encodes an event in host byte order (for the fake daemon and tests).
 pub fn encode_event(words: [i32; 8]) -> [u8; EVENT_LEN] {
     let mut b = [0u8; EVENT_LEN];
@@ -120,12 +134,19 @@ impl SpacenavdDecoder {
             }
             0 => {
                 let s = &self.settings;
-                let v = |i: usize| {
-                    (f64::from(w[i + 1]) / s.full_scale).clamp(-1.0, 1.0) * s.axis_signs[i]
+                let v = |i: usize| (f64::from(w[i + 1]) / s.full_scale).clamp(-1.0, 1.0);
+                let (t, r) =
+                    to_bridge_frame(DVec3::new(v(0), v(1), v(2)), DVec3::new(v(3), v(4), v(5)));
+                let sign = |v: DVec3, k: usize| {
+                    DVec3::new(
+                        v.x * s.axis_signs[k],
+                        v.y * s.axis_signs[k + 1],
+                        v.z * s.axis_signs[k + 2],
+                    )
                 };
                 Reading::Motion {
-                    translation: DVec3::new(v(0), v(1), v(2)),
-                    rotation: DVec3::new(v(3), v(4), v(5)),
+                    translation: sign(t, 0),
+                    rotation: sign(r, 3),
                 }
             }
             1 | 2 => match u16::try_from(w[1]) {
@@ -211,7 +232,7 @@ mod tests {
             out[0].reading,
             Reading::Motion {
                 translation: DVec3::new(1.0, -0.5, 0.0),
-                rotation: DVec3::new(1.0, 0.0, -0.1)
+                rotation: DVec3::new(1.0, 0.0, 0.1)
             }
         );
         assert_eq!(
@@ -226,6 +247,28 @@ mod tests {
             Reading::Button {
                 button: 3,
                 pressed: false
+            }
+        );
+    }
+
+    /// spacenavd's convention: the cap pushed away from the user is +z, twisted
+    /// clockwise seen from above is +rz (left-handed); in the bridge's right-handed
+    /// frame that is −z, −rz, as libspnav's `spnav_posrot_moveobj` computes
+    /// (`pos[2] -= ev->z`, axis z = `-ev->rz`).
+    #[test]
+    fn pushing_the_cap_away_is_minus_z() {
+        let mut d = SpacenavdDecoder::new(SourceId(0), SpacenavdSettings::default());
+        let mut out = Vec::new();
+        let ev: Vec<u8> = [0i32, 0, 0, 350, 0, 0, 175, 16]
+            .iter()
+            .flat_map(|w| w.to_ne_bytes())
+            .collect();
+        d.feed(&ev, Timestamp(0), &mut out);
+        assert_eq!(
+            out[0].reading,
+            Reading::Motion {
+                translation: DVec3::new(0.0, 0.0, -1.0),
+                rotation: DVec3::new(0.0, 0.0, -0.5)
             }
         );
     }

@@ -20,6 +20,7 @@ use super::sample::{QUAT_NORM_TOLERANCE, Reading, Sample, SourceId, Timestamp, i
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
+use std::time::Duration;
 
 /// Length of the cookie each side sends.
 pub const COOKIE_LEN: usize = 24;
@@ -158,6 +159,7 @@ pub struct VrpnDecoder {
     source: SourceId,
     buf: Vec<u8>,
     cookie_ok: bool,
+    checked_name: bool,
     senders: HashMap<i32, String>,
     types: HashMap<i32, String>,
     stats: DecodeStats,
@@ -172,6 +174,7 @@ impl VrpnDecoder {
             source,
             buf: Vec::with_capacity(4096),
             cookie_ok: false,
+            checked_name: false,
             senders: HashMap::new(),
             types: HashMap::new(),
             stats: DecodeStats::default(),
@@ -192,6 +195,25 @@ impl VrpnDecoder {
         at: Timestamp,
         out: &mut Vec<Sample>,
     ) {
+        self.stats.messages += 1;
+        if kind >= 0 && !self.checked_name {
+            // The server describes every sender before its first data message.
+            self.checked_name = true;
+            if !self.senders.values().any(|s| *s == self.device) {
+                let mut served: Vec<&str> = self.senders.values().map(String::as_str).collect();
+                served.sort_unstable();
+                self.fatal = Some(format!(
+                    "the VRPN server serves no device {:?}; it serves: {}",
+                    self.device,
+                    if served.is_empty() {
+                        "nothing".to_owned()
+                    } else {
+                        served.join(", ")
+                    }
+                ));
+                return;
+            }
+        }
         match kind {
             SENDER_DESCRIPTION | TYPE_DESCRIPTION => match description_name(payload) {
                 Some(name) => {
@@ -266,6 +288,10 @@ impl Decoder for VrpnDecoder {
             let payload = self.buf[pos + HEADER_LEN..pos + len].to_vec();
             self.handle(sender, kind, &payload, at, out);
             pos += total;
+            if self.fatal.is_some() {
+                self.buf.clear();
+                return;
+            }
         }
         self.buf.drain(..pos);
     }
@@ -277,6 +303,7 @@ impl Decoder for VrpnDecoder {
     fn reset(&mut self) {
         self.buf.clear();
         self.cookie_ok = false;
+        self.checked_name = false;
         self.senders.clear();
         self.types.clear();
         self.fatal = None;
@@ -287,11 +314,31 @@ impl Decoder for VrpnDecoder {
     }
 }
 
-/// The client's script: send our cookie; the server then sends its cookie and descriptions.
-pub fn script() -> Script {
+/// Name of VRPN's liveness request type (`vrpn_BaseClass.C`).
+pub const PING: &str = "vrpn_Base ping_message";
+/// How often the bridge pings (VRPN's own clients ping once a second; the bridge
+/// must notice a hung server within one).
+pub const PING_INTERVAL: Duration = Duration::from_millis(200);
+
+/// Our ping to `device`: the sender and type descriptions VRPN sends for every
+/// local sender and type before their first use (`pack_sender_description`,
+/// `pack_type_description`), then an empty `ping_message` from sender 0, type 0.
+/// The server's `vrpn_BaseClass` of `device` answers with a `pong_message`.
+pub fn ping(device: &str) -> Vec<u8> {
+    let mut m = encode_description(SENDER_DESCRIPTION, 0, device);
+    m.extend(encode_description(TYPE_DESCRIPTION, 0, PING));
+    m.extend(encode_message(0, 0, 0, 0, &[]));
+    m
+}
+
+/// The client's script for `device`: send our cookie (the server then sends its
+/// cookie and descriptions), and ping every [`PING_INTERVAL`] — every message back
+/// proves the server alive, so a hung one is noticed by silence.
+pub fn script(device: &str) -> Script {
     Script {
         open: vec![Step::Send(cookie().to_vec())],
-        poll: None,
+        poll: Some(ping(device)),
+        poll_interval: PING_INTERVAL,
         close: Vec::new(),
     }
 }

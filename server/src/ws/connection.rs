@@ -225,6 +225,13 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
             .await;
         return;
     }
+    // A device link (the bridge) gets no geometry frames unless its URL asks
+    // for them with `geometry=1`: it only needs the icon events and its drag
+    // feedback, and a frame per drag would cost it megabytes a second.
+    let frames = role != Role::Device
+        || query
+            .get("geometry")
+            .is_some_and(|v| v == "1" || v == "true");
     let (sink, stream) = socket.split();
     let (out_tx, out_rx) = mpsc::channel(REPLY_CAPACITY);
     let writer = tokio::spawn(writer::run(
@@ -235,6 +242,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         client,
         state.metrics.clone(),
         compact,
+        frames,
     ));
     let mut session = Session {
         state: state.clone(),

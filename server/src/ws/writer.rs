@@ -58,7 +58,8 @@ pub fn snapshot_frame(joined: &mut Joined, metrics: &Metrics) -> Bytes {
 /// Runs until the reader drops its sender, a close is requested, the socket
 /// fails or the design goes away. `compact` is the compact join: the
 /// connection already sent the current frame, and snapshots go without
-/// their points.
+/// their points. Geometry frames go out only when `frames` (a device link
+/// must ask for them).
 pub async fn run(
     mut sink: Sink,
     mut out: mpsc::Receiver<Out>,
@@ -67,10 +68,12 @@ pub async fn run(
     client: u64,
     metrics: Arc<Metrics>,
     compact: bool,
+    frames: bool,
 ) {
     let mut geometry_live = true;
     let mut deleted = false;
-    if !compact
+    if frames
+        && !compact
         && send_geometry(&mut sink, &mut joined, &metrics)
             .await
             .is_err()
@@ -116,7 +119,7 @@ pub async fn run(
                                 let snap = convert::snapshot(&j.view, !compact);
                                 joined = j;
                                 if sink.send(Message::Text(snap)).await.is_err()
-                                    || send_geometry(&mut sink, &mut joined, &metrics).await.is_err()
+                                    || (frames && send_geometry(&mut sink, &mut joined, &metrics).await.is_err())
                                 {
                                     break;
                                 }
@@ -186,7 +189,7 @@ pub async fn run(
                     }
                 }
             }
-            r = joined.geometry.changed(), if geometry_live => {
+            r = joined.geometry.changed(), if geometry_live && frames => {
                 if r.is_err() {
                     geometry_live = false;
                     continue;
