@@ -59,11 +59,24 @@ fn paper_surface(nu: usize, nv: usize) -> BSplineSurface {
     s
 }
 
+/// The (u,v) a client shows an anchor at (the server's `AnchorDoc::centre`):
+/// the point, a curve's middle control point, a region's centre.
+fn centre(anchor: &Anchor) -> (f64, f64) {
+    match anchor {
+        Anchor::Point { u, v } => (*u, *v),
+        Anchor::Curve(c) => {
+            let p = c.points()[c.points().len() / 2];
+            (p.x, p.y)
+        }
+        Anchor::Region { u0, v0, u1, v1, .. } => ((u0 + u1) / 2.0, (v0 + v1) / 2.0),
+    }
+}
+
 /// What a client sends as a new icon's target: the surface's point,
-/// derivative or normal at the anchor's handle; for a load, a hand somewhere
+/// derivative or normal at the anchor's centre; for a load, a hand somewhere
 /// off the surface (a new load must ignore it).
 fn client_target(s: &BSplineSurface, anchor: &Anchor, role: Role) -> DVec3 {
-    let (u, v) = anchor.handle_uv();
+    let (u, v) = centre(anchor);
     let d = s.derivs(u, v);
     match role {
         Role::Position => d.p,
@@ -164,7 +177,7 @@ fn point_constraint_error(d: &Design) -> f64 {
                 && matches!(i.anchor, Anchor::Point { .. })
         })
         .map(|i| {
-            let (u, v) = i.handle_uv();
+            let (u, v) = centre(&i.anchor);
             (d.surface().point(u, v) - i.target).length()
         })
         .fold(0.0, f64::max)
@@ -205,7 +218,7 @@ fn create_everything(d: &mut Design, seed: u64, what: &str) {
         );
         // The new icon sits on the surface, at its handle.
         let icon = d.icon(id).unwrap();
-        let (u, v) = icon.handle_uv();
+        let (u, v) = centre(&icon.anchor);
         assert!(
             (icon.xyz - d.surface().point(u, v)).length() <= tol,
             "{label}"
