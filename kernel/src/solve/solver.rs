@@ -48,7 +48,33 @@ pub struct SolveReport {
     pub rank_deficiency: usize,
     /// The number of scalar equations.
     pub equations: usize,
+    /// Set when the answer does not meet every equation: see [`SolveWarning`].
+    pub warning: Option<SolveWarning>,
 }
+
+/// Why an `Ok` answer does not meet every equation to tolerance
+/// ([`RESIDUAL_TOLERANCE`] of the shape's size).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SolveWarning {
+    /// The equations are dependent to working precision (S numerically
+    /// singular: `dropped` eigen-directions below 1e-12 of the largest) and
+    /// their targets disagree: the answer is the least-squares compromise and
+    /// `residual` is max |C P − d|. Genuinely contradictory constraints (the
+    /// same point held at two places) end here; so, today, do some
+    /// independent but nearly dependent sets (issue 15).
+    Dependent {
+        /// Dropped eigen-directions of S.
+        dropped: usize,
+        /// max |C P − d|.
+        residual: f64,
+    },
+}
+
+/// A solve whose equations are independent (nothing dropped) must meet each
+/// to this fraction of the shape's size (max(|P|, |d|, 1), or the size of
+/// the loads' unconstrained pull ‖K⁻¹b‖ when larger: the answer cancels
+/// against it); otherwise it is [`SolveError::Inexact`], never `Ok`.
+pub const RESIDUAL_TOLERANCE: f64 = 1e-9;
 
 /// One term α · (a_col applied to coordinate k).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -463,7 +489,7 @@ impl Solver {
                 reference: reference.to_vec(),
                 start,
             });
-            return Ok(self.report(out, None, DVec3::ZERO));
+            return self.checked(self.report(out, None, DVec3::ZERO), out, None);
         }
         let cx = self.c_times(reference);
         let inputs = self.inputs(None, DVec3::ZERO);
@@ -479,8 +505,9 @@ impl Solver {
             reference: reference.to_vec(),
             start: out.to_vec(),
         });
+        let report = self.checked(self.report(out, None, DVec3::ZERO), out, None)?;
         self.last = Some(self.last_solve(reference, out, &lambda));
-        Ok(self.report(out, None, DVec3::ZERO))
+        Ok(report)
     }
 
     /// What [`Self::still_optimal`] needs of a full solve: its problem, its
@@ -636,7 +663,8 @@ impl Solver {
                 }
             }
         }
-        Ok(self.report(out, Some(group), t))
+        let report = self.report(out, Some(group), t);
+        self.checked(report, out, Some((group, t)))
     }
 
     fn check_io(&self, reference: &[DVec3], out: &[DVec3]) -> Result<(), SolveError> {
@@ -1019,6 +1047,48 @@ impl Solver {
         }
     }
 
+    /// `report` as a result: a residual above [`RESIDUAL_TOLERANCE`] of the
+    /// shape's size is [`SolveError::Inexact`] when no equation was dropped,
+    /// and a [`SolveWarning::Dependent`] when some were. Allocation-free.
+    fn checked(
+        &self,
+        mut report: SolveReport,
+        out: &[DVec3],
+        shifted: Option<(usize, DVec3)>,
+    ) -> Result<SolveReport, SolveError> {
+        // The scale is at least 1: most frames stop here, with no pass over
+        // the shape.
+        if report.constraint_residual <= RESIDUAL_TOLERANCE {
+            return Ok(report);
+        }
+        let targets = self.eqs.iter().fold(0.0f64, |m, e| m.max(e.target.abs()));
+        // How far the loads alone would move the shape (‖K⁻¹b‖∞ bound): the
+        // constrained answer cancels against it, so its rounding scales
+        // with it.
+        let pull = self.loads.iter().fold(0.0f64, |m, l| {
+            let force = match shifted {
+                Some((g, t)) if l.group == g => l.force + t * l.gain,
+                _ => l.force,
+            };
+            m + force.abs().max_element() * self.z[l.col].norm
+        });
+        let tolerance = RESIDUAL_TOLERANCE * max_extent(out).max(targets).max(pull);
+        if report.constraint_residual <= tolerance {
+            return Ok(report);
+        }
+        if report.rank_deficiency == 0 {
+            return Err(SolveError::Inexact {
+                residual: report.constraint_residual,
+                tolerance,
+            });
+        }
+        report.warning = Some(SolveWarning::Dependent {
+            dropped: report.rank_deficiency,
+            residual: report.constraint_residual,
+        });
+        Ok(report)
+    }
+
     /// The report of `out` with group `shifted`'s drag input at `t`.
     /// Allocation-free: it runs on every drag frame.
     fn report(&self, out: &[DVec3], shifted: Option<usize>, t: DVec3) -> SolveReport {
@@ -1042,6 +1112,7 @@ impl Solver {
             constraint_residual: residual,
             rank_deficiency: self.rank_deficiency,
             equations: self.eqs.len(),
+            warning: None,
         }
     }
 }
