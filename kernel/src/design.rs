@@ -22,8 +22,7 @@ use crate::analysis::{Tessellation, tessellate};
 use crate::bspline::{BSplineSurface, BasisDerivs, GeometryError, basis_derivs_into};
 use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
 use crate::icon::{
-    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, centroid, icon_group,
-    samples,
+    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, icon_group, samples,
 };
 use crate::solve::{Problem, SolveError, SolveReport, Solver};
 use crate::spring::{Adaptation, Spring};
@@ -112,6 +111,12 @@ struct ActiveDrag {
     /// The icon's surface position when grabbed (for the spring ratio).
     grabbed_at: DVec3,
 }
+
+/// Most adaptation steps of the spring in one drag frame. Each step scales
+/// κ by at most 100 (see [`crate::spring`]), so 16 steps span the whole
+/// range [κ_min, κ_max] = [1e-6, 1e9] twice over; each costs one fast drag
+/// solve (3N multiply-adds).
+pub const SPRING_STEPS: usize = 16;
 
 /// A sculptable design.
 #[derive(Debug)]
@@ -296,11 +301,12 @@ impl Design {
         Ok(())
     }
 
-    /// The surface's current value of what `role` constrains at `icon`.
-    fn current_target(&self, role: Role, anchor_uv: (f64, f64), shape: &[DVec3]) -> DVec3 {
+    /// The surface's current value of what `role` constrains at the handle
+    /// `anchor_uv` (for a load: where its spring is attached).
+    fn current_target(&self, role: Role, anchor_uv: (f64, f64)) -> DVec3 {
         let d = self.surface.derivs(anchor_uv.0, anchor_uv.1);
         match role {
-            Role::Load | Role::Position => centroid(shape),
+            Role::Load | Role::Position => d.p,
             Role::Normal => self.surface.normal(anchor_uv.0, anchor_uv.1),
             Role::Derivative(k) => match k.orders() {
                 (1, 0) => d.u,
@@ -312,7 +318,10 @@ impl Design {
         }
     }
 
-    /// Adds an icon; its target defaults to the surface's current value.
+    /// Adds an icon; its target defaults to the surface's current value at
+    /// its handle. A load always starts attached where the surface is (its
+    /// target is the handle's surface point, whatever `spec.target` says):
+    /// a new load carries no force.
     pub fn add_icon(&mut self, spec: IconSpec) -> Result<IconId, DesignError> {
         Self::check_role(&spec.anchor, spec.role)?;
         if let Some(t) = spec.target
@@ -326,20 +335,23 @@ impl Design {
             .map(|&(u, v)| self.surface.point(u, v))
             .collect();
         let id = IconId(self.next_id);
+        let (hu, hv) = spec.anchor.handle_uv();
+        let handle = self.surface.point(hu, hv);
         let mut icon = Icon {
             id,
             anchor: spec.anchor,
             role: spec.role,
             state: spec.state,
             sensors: Vec::new(),
-            xyz: centroid(&shape),
+            xyz: handle,
             target: DVec3::ZERO,
             shape,
+            handle,
             samples,
         };
         icon.target = match spec.target {
-            Some(t) => t,
-            None => self.current_target(icon.role, icon.handle_uv(), &icon.shape),
+            Some(t) if icon.role != Role::Load => t,
+            _ => self.current_target(icon.role, icon.handle_uv()),
         };
         if icon.role == Role::Normal {
             icon.target = icon
@@ -382,8 +394,10 @@ impl Design {
         icon.anchor = anchor;
         icon.samples = samples;
         icon.shape = shape;
-        icon.xyz = centroid(&icon.shape);
-        icon.target = self.current_target(role, icon.handle_uv(), &icon.shape);
+        let (hu, hv) = icon.handle_uv();
+        icon.handle = self.surface.point(hu, hv);
+        icon.xyz = icon.handle;
+        icon.target = self.current_target(role, (hu, hv));
         self.icons.insert(id, icon);
         self.problem_dirty = true;
         Ok(())
@@ -397,7 +411,7 @@ impl Design {
         self.finish_drag_of(id);
         self.rebase_shape(id);
         let icon = &self.icons[&id];
-        let target = self.current_target(role, icon.handle_uv(), &icon.shape);
+        let target = self.current_target(role, icon.handle_uv());
         let icon = self.icon_mut(id)?;
         icon.role = role;
         icon.target = target;
@@ -416,11 +430,14 @@ impl Design {
         if was == IconState::Driving {
             self.release(id)?;
         }
-        if state == IconState::Sleeping || was == IconState::Sleeping {
-            // Waking up or going to sleep: hold the surface as it is now.
+        let is_load = self.icons[&id].role == Role::Load;
+        if state == IconState::Sleeping || was == IconState::Sleeping || is_load {
+            // Waking up or going to sleep: hold the surface as it is now. A
+            // load changing state is re-attached where the surface is: it
+            // starts driving with no force.
             self.rebase_shape(id);
             let icon = &self.icons[&id];
-            let target = self.current_target(icon.role, icon.handle_uv(), &icon.shape);
+            let target = self.current_target(icon.role, icon.handle_uv());
             self.icon_mut(id)?.target = target;
         }
         self.icon_mut(id)?.state = state;
@@ -470,14 +487,25 @@ impl Design {
         let target = self.pointer_target(icon, xyz);
         let before = self.snapshot();
         self.set_target(id, target)?;
+        if self.icons[&id].role == Role::Load {
+            // A load pulls only while driven: drive it for this solve.
+            let icon = self.icon_mut(id)?;
+            icon.state = IconState::Driving;
+        }
         let result = self.solve();
         match result {
             Ok(report) => {
                 if self.icons[&id].role == Role::Load {
                     self.bake();
                     self.rebase_shape(id);
+                    let was = before
+                        .icons
+                        .iter()
+                        .find(|i| i.id == id)
+                        .map_or(IconState::Passive, |i| i.state);
                     let icon = self.icon_mut(id)?;
-                    icon.target = icon.shape_centroid();
+                    icon.target = icon.handle;
+                    icon.state = was;
                     self.problem_dirty = true;
                 }
                 Ok(report)
@@ -497,6 +525,12 @@ impl Design {
         }
         if icon.state != IconState::Driving {
             icon.state = IconState::Driving;
+            if icon.role == Role::Load {
+                // Attached where the surface is: it starts with no force.
+                self.rebase_shape(id);
+                let icon = self.icon_mut(id)?;
+                icon.target = icon.handle;
+            }
             self.problem_dirty = true;
         }
         Ok(())
@@ -536,6 +570,8 @@ impl Design {
                 .iter()
                 .map(|&(u, v)| surface.point(u, v))
                 .collect();
+            let (hu, hv) = icon.handle_uv();
+            icon.handle = surface.point(hu, hv);
             icons.insert(*id, icon);
         }
         self.drag = None;
@@ -577,6 +613,7 @@ impl Design {
         self.replace_surface(refined)
     }
 
+    /// Re-captures an icon's held shape and handle point from the surface.
     fn rebase_shape(&mut self, id: IconId) {
         let surface = &self.surface;
         if let Some(icon) = self.icons.get_mut(&id) {
@@ -585,6 +622,8 @@ impl Design {
                 .iter()
                 .map(|&(u, v)| surface.point(u, v))
                 .collect();
+            let (hu, hv) = icon.handle_uv();
+            icon.handle = surface.point(hu, hv);
         }
     }
 
@@ -678,23 +717,16 @@ impl Design {
         Ok(report)
     }
 
-    /// Every icon's position (the centroid of its samples) on the solved
-    /// surface; allocation-free, it runs on every drag frame.
+    /// Every icon's position (the surface point at its handle) on the
+    /// solved surface; allocation-free, it runs on every drag frame.
     fn replace_icons(&mut self) {
         let surface = &self.surface;
         let (bu, bv) = &mut self.basis;
         for icon in self.icons.values_mut() {
-            if icon.samples.is_empty() {
-                icon.xyz = DVec3::ZERO;
-                continue;
-            }
-            let mut sum = DVec3::ZERO;
-            for &(u, v) in &icon.samples {
-                basis_derivs_into(surface.u_knots(), u, 0, bu);
-                basis_derivs_into(surface.v_knots(), v, 0, bv);
-                sum += surface.combine(bu, bv, 0).p;
-            }
-            icon.xyz = sum / icon.samples.len() as f64;
+            let (u, v) = icon.anchor.handle_uv();
+            basis_derivs_into(surface.u_knots(), u, 0, bu);
+            basis_derivs_into(surface.v_knots(), v, 0, bv);
+            icon.xyz = surface.combine(bu, bv, 0).p;
         }
     }
 
@@ -713,7 +745,7 @@ impl Design {
             // Attach the spring where the surface is now: no jump at the grab.
             self.rebase_shape(id);
             let icon = self.icon_mut(id)?;
-            icon.target = icon.shape_centroid();
+            icon.target = icon.handle;
         }
         let origin = self.icons[&id].target;
         let grabbed_at = self.icons[&id].xyz;
@@ -788,8 +820,9 @@ impl Design {
         if self.adaptive && self.icons[&id].role == Role::Load {
             // Paper 003's loop, inside the frame: a load's pull is linear in
             // κ, so re-solving with a new κ is a rescaled drag input — the
-            // fast path again, no new columns.
-            for _ in 0..4 {
+            // fast path again, no new columns. It runs until the ratio is in
+            // the band, κ is at a bound, or SPRING_STEPS steps.
+            for _ in 0..SPRING_STEPS {
                 let dx = (xyz - d.grabbed_at).length();
                 let dy = (actual - d.grabbed_at).length();
                 if !matches!(
@@ -823,7 +856,7 @@ impl Design {
             self.bake();
             self.rebase_shape(id);
             let icon = self.icon_mut(id)?;
-            icon.target = icon.shape_centroid();
+            icon.target = icon.handle;
         }
         let icon = self.icon_mut(id)?;
         if icon.state == IconState::Driving {

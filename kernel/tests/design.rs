@@ -372,7 +372,16 @@ fn bad_input_changes_nothing_and_snapshots_round_trip() {
 
 #[test]
 fn the_spring_adapts_into_the_band_on_soft_and_stiff_surfaces() {
-    for beta in [0.01, 1.0, 100.0] {
+    // κ has to change by up to 1e9 from its start (β = 1e6 from κ = 1e-3,
+    // β = 1e-4 from κ = 1e3): four steps of at most 100× were not enough
+    // (β = 1e6 landed at 0.173).
+    for (beta, kappa) in [
+        (0.01, 1e-3),
+        (1.0, 1e-3),
+        (100.0, 1e-3),
+        (1e6, 1e-3),
+        (1e-4, 1e3),
+    ] {
         let m = SurfaceMaterial {
             beta11: beta,
             beta12: beta,
@@ -382,7 +391,7 @@ fn the_spring_adapts_into_the_band_on_soft_and_stiff_surfaces() {
         let mut d = Design::new(dome(), m).unwrap();
         pin_corners(&mut d);
         let load = d.add_icon(point(0.5, 0.5, Role::Load)).unwrap();
-        d.set_kappa(1e-3).unwrap();
+        d.set_kappa(kappa).unwrap();
         let start = d.icon(load).unwrap().xyz;
         let hand = start + DVec3::new(0.0, 0.0, 0.1);
         // The adaptation runs inside the frame: the first frame already lands in the band.

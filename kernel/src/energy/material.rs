@@ -24,6 +24,13 @@ fn check(name: &str, x: f64, positive: bool) -> Result<(), MaterialError> {
 
 /// The surface energy's coefficients:
 /// ∫∫ α11|w_u|² + 2α12 w_u·w_v + α22|w_v|² + β11|w_uu|² + 2β12|w_uv|² + β22|w_vv|² + rest·|w − w_ref|².
+///
+/// Units: the integral is over the *parameter* domain (du dv), as in paper
+/// 003, so α and β are per unit of parameter area and a surface's stiffness
+/// does not change when it is scaled in model space. With α = 0 and
+/// β11 = β12 = β22 = β the shape obeys β Δ²w = f: a Kirchhoff plate of
+/// flexural rigidity D = β (Poisson's ratio 0) over the parameter square,
+/// loaded by f per unit parameter area (kernel README, "Units").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfaceMaterial {
     /// Stretch along u.

@@ -1,11 +1,18 @@
 //! The icon entity: id, anchor, role, state, position, target and sensors.
 //!
-//! Targets, by role: a position constraint's target is the point the surface
-//! must pass through (for curves and regions: where the centroid of the held
-//! shape must go); a derivative constraint's target is the vector
-//! w_u, w_v, w_uu, w_vv or w_uv must equal; a normal constraint's target is
-//! the unit normal N; a load's target is the point its spring is pulled to
-//! (the load's force is k·(target − attachment)).
+//! Every icon has a *handle* ([`Anchor::handle_uv`]): the point, a curve's
+//! middle control point, a region's centre. Targets, by role:
+//!
+//! * position: where the handle's surface point must go. A point icon holds
+//!   w(u,v) = target; a curve or an inside region holds its whole shape,
+//!   translated by `target − handle` (the handle's surface point when the
+//!   shape was captured); an outside region holds the rest of the surface
+//!   where it is (its target is not used and cannot be set);
+//! * derivative: the vector w_u, w_v, w_uu, w_vv or w_uv must equal;
+//! * normal: the unit normal N;
+//! * load: the hand end of the load's spring. A *driving* load pulls with
+//!   k·(target − handle); a passive or sleeping load carries no force. A new
+//!   load's spring is attached where the surface is (target = handle).
 
 use glam::DVec3;
 
@@ -38,15 +45,19 @@ pub struct Icon {
     pub state: IconState,
     /// Sensors bound to it.
     pub sensors: Vec<SensorId>,
-    /// Its position on the surface (the centroid of its samples), recomputed
-    /// after every solve.
+    /// Its position on the surface (the surface point at its handle),
+    /// recomputed after every solve.
     pub xyz: DVec3,
     /// Its target (see the module doc).
     pub target: DVec3,
-    /// The held shape: for a constraint, the positions its samples must keep
-    /// (shifted by `target − centroid(shape)`); for a load, where its springs
-    /// are attached. One point per sample of the anchor.
+    /// The held shape: for a position constraint, the positions its samples
+    /// must keep (shifted by `target − handle`). One point per sample of the
+    /// anchor.
     pub shape: Vec<DVec3>,
+    /// The surface point at the handle when `shape` was captured: where a
+    /// load's spring is attached, and what a position constraint's target is
+    /// measured from.
+    pub handle: DVec3,
     pub(crate) samples: Vec<(f64, f64)>,
 }
 
@@ -56,18 +67,18 @@ impl Icon {
         &self.samples
     }
 
-    /// The centroid of the held shape.
-    pub fn shape_centroid(&self) -> DVec3 {
-        centroid(&self.shape)
+    /// The (u,v) of the icon's handle (see [`Anchor::handle_uv`]).
+    pub fn handle_uv(&self) -> (f64, f64) {
+        self.anchor.handle_uv()
     }
 
-    /// The (u,v) of the icon's handle: the point, the middle sample of a
-    /// curve, the centre of a region.
-    pub fn handle_uv(&self) -> (f64, f64) {
-        match &self.anchor {
-            Anchor::Point { u, v } => (*u, *v),
-            Anchor::Curve(_) => self.samples[self.samples.len() / 2],
-            Anchor::Region { u0, v0, u1, v1, .. } => (0.5 * (u0 + u1), 0.5 * (v0 + v1)),
+    /// Whether the icon acts on the shape now: a constraint unless sleeping,
+    /// a load only while driving (paper 003, Table 1).
+    pub fn is_active(&self) -> bool {
+        match self.state {
+            IconState::Sleeping => false,
+            IconState::Passive => self.role.is_constraint(),
+            IconState::Driving => true,
         }
     }
 }

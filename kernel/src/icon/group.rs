@@ -1,26 +1,29 @@
 //! Each icon becomes a [`Group`] of the solver's [`Problem`]: constraint
 //! equations or loads built from rows of the surface at its samples.
 //!
-//! * position → `Vector{row of w at sample i, shape_i + (target − centroid(shape))}`
+//! * position → `Vector{row of w at sample i, shape_i + (target − handle)}`;
+//!   an outside region holds `shape_i` as it is;
 //! * derivative R/V/R2/V2/RV → `Vector{row of that derivative, target}`
 //! * normal → `Projected{row of w_u, N, 0}` and `Projected{row of w_v, N, 0}`
-//! * load → at every sample a load `k·wᵢ·(target − centroid(shape))` with
-//!   drag gain `k·wᵢ` (wᵢ the sample weights, summing to one; k the spring
-//!   stiffness), so a drag is the solver's fast path.
+//! * load → one load, `k·(target − handle)` times the consistent-load row of
+//!   the anchor ([`super::load_row`]: w at a point, ∫N_i ds along a curve,
+//!   ∫N_i dA over a region), with drag gain `k` (the spring stiffness), so a
+//!   drag is the solver's fast path.
 //!
-//! A sleeping icon contributes nothing; a passive or driving one everything.
-
+//! Only what acts contributes ([`Icon::is_active`], paper 003 Table 1): a
+//! sleeping icon nothing, a passive load nothing (it carries no force), a
+//! passive or driving constraint its equations, a driving load its force.
 use glam::DVec3;
 
-use super::{Icon, IconState, Role, surface_row};
+use super::{Anchor, Icon, Role, load_row, surface_row};
 use crate::bspline::BSplineSurface;
 use crate::solve::{Equation, Group, Load};
 
 /// The group of `icon` on `surface`, with `base` standing in for its target
 /// (the drag origin during a drag) and spring stiffness `k`; `None` when
-/// sleeping.
+/// the icon does not act (sleeping, or a load that is not driving).
 pub fn icon_group(icon: &Icon, base: DVec3, surface: &BSplineSurface, k: f64) -> Option<Group> {
-    if icon.state == IconState::Sleeping {
+    if !icon.is_active() {
         return None;
     }
     let mut group = Group {
@@ -30,7 +33,10 @@ pub fn icon_group(icon: &Icon, base: DVec3, surface: &BSplineSurface, k: f64) ->
     let (u, v) = icon.handle_uv();
     match icon.role {
         Role::Position => {
-            let shift = base - icon.shape_centroid();
+            let shift = match icon.anchor {
+                Anchor::Region { inside: false, .. } => DVec3::ZERO,
+                _ => base - icon.handle,
+            };
             for (&(su, sv), p) in icon.samples.iter().zip(&icon.shape) {
                 group.equations.push(Equation::Vector {
                     row: surface_row(surface, su, sv, 0, 0),
@@ -56,15 +62,12 @@ pub fn icon_group(icon: &Icon, base: DVec3, surface: &BSplineSurface, k: f64) ->
             }
         }
         Role::Load => {
-            let pull = base - icon.shape_centroid();
-            let w = 1.0 / icon.samples.len() as f64;
-            for &(su, sv) in &icon.samples {
-                group.loads.push(Load {
-                    row: surface_row(surface, su, sv, 0, 0),
-                    force: pull * (k * w),
-                    drag_gain: k * w,
-                });
-            }
+            let pull = base - icon.handle;
+            group.loads.push(Load {
+                row: load_row(&icon.anchor, surface),
+                force: pull * k,
+                drag_gain: k,
+            });
         }
     }
     Some(group)

@@ -33,6 +33,25 @@ pub enum Anchor {
     },
 }
 
+impl Anchor {
+    /// The (u,v) of the anchor's handle: the point itself, a curve's middle
+    /// control point (`points[len / 2]`, its (u,v) in x and y), a region's
+    /// centre. This is the point clients show and drag (the server's
+    /// `AnchorDoc::centre`), so an icon's target is the surface point or
+    /// derivative *at the handle*: a new icon whose target is the surface's
+    /// value there asks for no change.
+    pub fn handle_uv(&self) -> (f64, f64) {
+        match self {
+            Anchor::Point { u, v } => (*u, *v),
+            Anchor::Curve(c) => {
+                let p = c.points()[c.points().len() / 2];
+                (p.x, p.y)
+            }
+            Anchor::Region { u0, v0, u1, v1, .. } => (0.5 * (u0 + u1), 0.5 * (v0 + v1)),
+        }
+    }
+}
+
 /// Which derivative a derivative constraint fixes (paper 003's labels).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Derivative {

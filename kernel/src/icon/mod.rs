@@ -3,6 +3,7 @@
 //! V2, RV) and normal roles, in the states driving, passive and sleeping —
 //! and how each becomes equations or loads of a [`crate::solve::Problem`].
 
+mod distributed;
 mod entity;
 mod group;
 mod id;
@@ -11,6 +12,7 @@ mod rows;
 mod sampling;
 mod state;
 
+pub use distributed::load_row;
 pub use entity::{Icon, IconSpec, centroid};
 pub use group::icon_group;
 pub use id::{IconId, SensorId};

@@ -39,6 +39,16 @@ pub enum SolveError {
     /// Two groups share a key.
     #[error("two groups share the key {0}")]
     DuplicateGroup(GroupKey),
+    /// The answer misses an independent equation by more than the
+    /// tolerance (see [`super::RESIDUAL_TOLERANCE`]): it is refused rather
+    /// than returned as a wrong shape.
+    #[error("constraints met only to {residual:e} (tolerance {tolerance:e})")]
+    Inexact {
+        /// max |C P − d|.
+        residual: f64,
+        /// The tolerance it exceeds.
+        tolerance: f64,
+    },
     /// No group with that key in the problem.
     #[error("no group {0} in the problem")]
     UnknownGroup(GroupKey),
