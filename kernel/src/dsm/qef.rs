@@ -6,7 +6,7 @@
 use glam::{DMat3, DVec3};
 
 /// Accumulated Hermite samples of one cell.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub struct Qef {
     ata: DMat3,
     atb: DVec3,
@@ -27,6 +27,19 @@ pub struct QefSolution {
     pub mass_point: DVec3,
     /// The sum of the unit normals.
     pub normal_sum: DVec3,
+}
+
+impl Default for Qef {
+    fn default() -> Self {
+        // Not derived: glam's DMat3::default() is the identity.
+        Self {
+            ata: DMat3::ZERO,
+            atb: DVec3::ZERO,
+            mass: DVec3::ZERO,
+            normal_sum: DVec3::ZERO,
+            count: 0,
+        }
+    }
 }
 
 impl Qef {
