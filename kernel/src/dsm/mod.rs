@@ -13,6 +13,7 @@
 //! * [`inverse`] — passing-points nets and the inverse transformation (eqs. 8–11).
 //! * [`surface`] — the explicit equal density surface h(u, v) (eqs. 12–13) and its curvature.
 //! * [`mesh`], [`qef`] — dual contouring of the object.
+//! * [`shape_ops`] — round corners, shape mapping onto a box face or a cylinder (§4).
 //! * [`interval`] — interval bounds used to cull and to skip empty space.
 //!
 //! Every choice the paper leaves open is stated in the module that makes it and
@@ -30,6 +31,7 @@ pub mod mesh;
 pub mod model;
 pub mod placement;
 pub mod qef;
+pub mod shape_ops;
 pub mod surface;
 
 pub use connect::{Connecting, Profile};
