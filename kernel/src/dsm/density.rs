@@ -425,6 +425,19 @@ impl DensityPrimitive {
         (best.0, rot * best.1)
     }
 
+    /// Whether the support has boundaries of its own (an explicit range, clip planes,
+    /// a shell bore, pipe ends, sheet edges). Without them the only cut is the
+    /// culling range, where F jumps by less than τ·D_e — not a boundary of S.
+    pub fn has_cuts(&self) -> bool {
+        self.range.is_finite()
+            || !self.clip.is_empty()
+            || match &self.shape {
+                DensityShape::Sphere { radius } => *radius > 0.0,
+                DensityShape::Blobby => false,
+                _ => true,
+            }
+    }
+
     /// A ball (centre, radius) outside which F = 0 for influence range `range`.
     pub fn influence_ball(&self, range: f64) -> (DVec3, f64) {
         let c = self.placement.translation();

@@ -68,6 +68,7 @@ pub struct Model {
     groups: Vec<Group>,
     terms: Vec<Term>,
     ranges: Vec<Vec<f64>>,
+    cuts: Vec<Vec<bool>>,
     scales: Vec<f64>,
 }
 
@@ -111,6 +112,7 @@ impl Model {
             groups: Vec::new(),
             terms: Vec::new(),
             ranges: Vec::new(),
+            cuts: Vec::new(),
             scales: Vec::new(),
         })
     }
@@ -141,6 +143,7 @@ impl Model {
         check_group(k, &group)?;
         self.groups.push(group);
         self.ranges.push(Vec::new());
+        self.cuts.push(Vec::new());
         self.scales.push(0.0);
         self.refresh(k);
         Ok(k)
@@ -207,6 +210,7 @@ impl Model {
             .iter()
             .map(|d| d.effective_range(self.de, self.tau))
             .collect();
+        self.cuts[k] = g.density.iter().map(|d| d.has_cuts()).collect();
         self.scales[k] = g.density.iter().map(|d| d.reducing).fold(0.0, f64::max);
     }
 
@@ -405,8 +409,10 @@ impl Model {
             for &i in &act.density[k] {
                 let dp = &g.density[i as usize];
                 let r = self.ranges[k][i as usize];
-                let (cd, cg) = dp.cut_distance(p, r);
-                take(cd, cg);
+                if self.cuts[k][i as usize] {
+                    let (cd, cg) = dp.cut_distance(p, r);
+                    take(cd, cg);
+                }
                 let jet = dp.jet(p, r);
                 if jet.value != 0.0 {
                     any = true;
