@@ -61,7 +61,7 @@ pub struct InverseReport {
     pub condition: f64,
     /// max |h(u_j, v_j) − h_j| over the charged nodes.
     pub max_residual: f64,
-    /// Smallest h sampled on a grid 4× the node density over the net's (u, v) box
+    /// Smallest h sampled on a grid of twice the node density (per side) over the net's (u, v) box
     /// (−∞ where D ≤ 0).
     pub min_height: f64,
     /// Largest h sampled there.
@@ -365,7 +365,7 @@ pub fn inverse_transform(
     }
     // Sample between the nodes.
     let (lo, hi) = net.uv_box();
-    let m = (4.0 * (net.nodes.len() as f64).sqrt()).ceil() as usize;
+    let m = (2.0 * (net.nodes.len() as f64).sqrt()).ceil() as usize;
     let (mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY);
     for j in 0..=m {
         for i in 0..=m {
