@@ -21,11 +21,14 @@
 //! * [`curve_design`] — the same icons sculpting a deformable curve.
 //! * [`design`] — a design (surface, icons, material) as a value: edit, solve,
 //!   snapshot, restore.
+//! * [`dsm`] — the Density Spatial Model (paper 001): implicit shapes from primitives,
+//!   shape groups and passing-points nets, meshed by dual contouring.
 
 pub mod analysis;
 pub mod bspline;
 pub mod curve_design;
 pub mod design;
+pub mod dsm;
 pub mod energy;
 pub mod icon;
 pub mod quadrature;

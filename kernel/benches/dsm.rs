@@ -1,0 +1,102 @@
+//! Density Spatial Model (paper 001) at interactive rates:
+//! * `dsm_net_drag`: a node of a 20 × 20 passing-points net dragged → inverse
+//!   transformation (eqs. 8–11, 324 charges) → height-field mesh of h(u, v) (eq. 12) at
+//!   4 samples per net spacing (77 × 77 vertices); and the same drag meshed in 3-D by
+//!   dual contouring at 64 cells.
+//! * `dsm_shape_remesh`: a 20-density-primitive shape (a box rounded by 12 sector-shell
+//!   pipes and 8 octant ball shells) and a 20-primitive blobby shape, dual-contoured at
+//!   64, 128 and 256 cells along their size.
+//!
+//! Run: `cargo bench -p vsculpt-kernel --bench dsm -- --warm-up-time 1 --measurement-time 3`.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use glam::{DVec2, DVec3};
+use std::hint::black_box;
+use vsculpt_kernel::dsm::shape_ops::rounded_box;
+use vsculpt_kernel::dsm::*;
+
+fn net() -> PassingPointsNet {
+    let n = 20;
+    let heights: Vec<f64> = (0..n * n)
+        .map(|k| 1.0 + 0.4 * (0.5 * (k % n) as f64).sin() * (0.3 * (k / n) as f64).cos())
+        .collect();
+    PassingPointsNet::regular(DVec2::ZERO, DVec2::splat(0.25), n, n, &heights).unwrap()
+}
+
+fn net_drag(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dsm_net_drag");
+    g.sample_size(20);
+    let mut n = net();
+    let opts = InverseOptions::for_net(&n, 1.0);
+    let (lo, hi) = n.uv_box();
+    let node = 9 * 20 + 9;
+    let mut t = 0u32;
+    g.bench_function("inverse_only_20x20", |b| {
+        b.iter(|| {
+            t = t.wrapping_add(1);
+            n.set_height(node, 1.2 + 0.01 * (t % 50) as f64).unwrap();
+            black_box(inverse_transform(&n, &opts).unwrap())
+        })
+    });
+    g.bench_function("inverse_and_height_mesh_20x20", |b| {
+        b.iter(|| {
+            t = t.wrapping_add(1);
+            n.set_height(node, 1.2 + 0.01 * (t % 50) as f64).unwrap();
+            let (s, _) = inverse_transform(&n, &opts).unwrap();
+            black_box(s.mesh(lo, hi, 76, 76).unwrap())
+        })
+    });
+    g.bench_function("inverse_and_dc_mesh_64_20x20", |b| {
+        b.iter(|| {
+            t = t.wrapping_add(1);
+            n.set_height(node, 1.2 + 0.01 * (t % 50) as f64).unwrap();
+            let (s, _) = inverse_transform(&n, &opts).unwrap();
+            let mut m = Model::new(1.0, DEFAULT_TAU).unwrap();
+            m.add(Group {
+                density: vec![s.primitive(lo, hi, Placement::IDENTITY).unwrap()],
+                ..Default::default()
+            })
+            .unwrap();
+            black_box(mesh(&m, MeshOptions { cells: 64 }).unwrap())
+        })
+    });
+    g.finish();
+}
+
+fn shapes() -> Vec<(&'static str, Model)> {
+    let mut rounded = Model::new(1.0, DEFAULT_TAU).unwrap();
+    rounded
+        .add(rounded_box(DVec3::new(1.5, 1.0, 0.8), Placement::IDENTITY, 0.3, 1.0).unwrap())
+        .unwrap();
+    let mut blobby = Model::new(1.0, DEFAULT_TAU).unwrap();
+    let density = (0..20)
+        .map(|i| {
+            let t = i as f64 / 20.0 * std::f64::consts::TAU;
+            let c = DVec3::new(2.0 * t.cos(), 1.2 * (2.0 * t).sin(), 0.6 * (3.0 * t).cos());
+            DensityPrimitive::sphere(c, 1.6, 1.5).unwrap()
+        })
+        .collect();
+    blobby
+        .add(Group {
+            density,
+            ..Default::default()
+        })
+        .unwrap();
+    vec![("rounded_box_20", rounded), ("blobby_20", blobby)]
+}
+
+fn shape_remesh(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dsm_shape_remesh");
+    g.sample_size(10);
+    for (name, m) in shapes() {
+        for cells in [64usize, 128, 256] {
+            g.bench_with_input(BenchmarkId::new(name, cells), &cells, |b, &cells| {
+                b.iter(|| black_box(mesh(&m, MeshOptions { cells }).unwrap()))
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, net_drag, shape_remesh);
+criterion_main!(benches);
