@@ -11,9 +11,9 @@
 //! Calls block (SQLite is synchronous); async callers go through
 //! `tokio::task::spawn_blocking`.
 
-pub mod token_index;
 pub mod backup;
 pub mod lock;
+pub mod token_index;
 pub mod tokens;
 
 use rusqlite::{Connection, OptionalExtension, params};
