@@ -241,8 +241,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         handle.clone(),
         client,
         state.metrics.clone(),
-        compact,
-        frames,
+        writer::Delivery { compact, frames },
     ));
     let mut session = Session {
         state: state.clone(),

@@ -55,11 +55,19 @@ pub fn snapshot_frame(joined: &mut Joined, metrics: &Metrics) -> Bytes {
     ))
 }
 
+/// What a connection's writer sends besides events and replies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Delivery {
+    /// The compact join: the connection already sent the current frame, and
+    /// snapshots go without their points.
+    pub compact: bool,
+    /// Geometry frames at all (a device link must ask for them).
+    pub frames: bool,
+}
+
 /// Runs until the reader drops its sender, a close is requested, the socket
-/// fails or the design goes away. `compact` is the compact join: the
-/// connection already sent the current frame, and snapshots go without
-/// their points. Geometry frames go out only when `frames` (a device link
-/// must ask for them).
+/// fails or the design goes away; `delivery` says how geometry reaches this
+/// client.
 pub async fn run(
     mut sink: Sink,
     mut out: mpsc::Receiver<Out>,
@@ -67,9 +75,9 @@ pub async fn run(
     handle: DesignHandle,
     client: u64,
     metrics: Arc<Metrics>,
-    compact: bool,
-    frames: bool,
+    delivery: Delivery,
 ) {
+    let Delivery { compact, frames } = delivery;
     let mut geometry_live = true;
     let mut deleted = false;
     if frames
