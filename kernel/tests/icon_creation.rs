@@ -59,13 +59,34 @@ fn paper_surface(nu: usize, nv: usize) -> BSplineSurface {
     s
 }
 
+/// A clamped B-spline curve's point at `t` by de Boor's algorithm, written
+/// here independently of the kernel's evaluator.
+fn de_boor(knots: &[f64], degree: usize, points: &[DVec3], t: f64) -> DVec3 {
+    let n = points.len();
+    let mut k = degree;
+    while k + 1 < n && knots[k + 1] <= t {
+        k += 1;
+    }
+    let mut d: Vec<DVec3> = (0..=degree).map(|j| points[j + k - degree]).collect();
+    for r in 1..=degree {
+        for j in (r..=degree).rev() {
+            let i = j + k - degree;
+            let a = (t - knots[i]) / (knots[i + degree + 1 - r] - knots[i]);
+            d[j] = d[j - 1] * (1.0 - a) + d[j] * a;
+        }
+    }
+    d[degree]
+}
+
 /// The (u,v) a client shows an anchor at (the server's `AnchorDoc::centre`):
-/// the point, a curve's middle control point, a region's centre.
+/// the point, a curve's mid-parameter point, a region's centre.
 fn centre(anchor: &Anchor) -> (f64, f64) {
     match anchor {
         Anchor::Point { u, v } => (*u, *v),
         Anchor::Curve(c) => {
-            let p = c.points()[c.points().len() / 2];
+            let k = c.knots().knots();
+            let (a, b) = (k[c.degree()], k[c.points().len()]);
+            let p = de_boor(k, c.degree(), c.points(), 0.5 * (a + b));
             (p.x, p.y)
         }
         Anchor::Region { u0, v0, u1, v1, .. } => ((u0 + u1) / 2.0, (v0 + v1) / 2.0),

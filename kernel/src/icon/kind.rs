@@ -44,7 +44,10 @@ impl Anchor {
         match self {
             Anchor::Point { u, v } => (*u, *v),
             Anchor::Curve(c) => {
-                let p = c.points()[c.points().len() / 2];
+                // On the curve (its mid-parameter point), so a curve constraint
+                // holds its own handle and a rebuild measures no offset.
+                let (a, b) = c.domain();
+                let p = c.point(0.5 * (a + b));
                 (p.x, p.y)
             }
             Anchor::Region { u0, v0, u1, v1, .. } => (0.5 * (u0 + u1), 0.5 * (v0 + v1)),

@@ -190,6 +190,36 @@ pub struct UvCurveDoc {
     pub points: Vec<[f64; 2]>,
 }
 
+impl UvCurveDoc {
+    /// The curve's point at its mid-parameter, where its icon's handle is
+    /// (the kernel's `Anchor::handle_uv`); the middle control point when the
+    /// curve is not a valid B-spline (validation refuses it elsewhere).
+    pub fn mid_point(&self) -> [f64; 2] {
+        let fallback = self
+            .points
+            .get(self.points.len() / 2)
+            .copied()
+            .unwrap_or([0.0; 2]);
+        let Ok(knots) = vsculpt_kernel::bspline::KnotVector::new(self.degree, self.knots.clone())
+        else {
+            return fallback;
+        };
+        let points = self
+            .points
+            .iter()
+            .map(|p| glam::DVec3::new(p[0], p[1], 0.0))
+            .collect();
+        match vsculpt_kernel::bspline::BSplineCurve::new(knots, points) {
+            Ok(c) => {
+                let (a, b) = c.domain();
+                let p = c.point(0.5 * (a + b));
+                [p.x, p.y]
+            }
+            Err(_) => fallback,
+        }
+    }
+}
+
 /// Where an icon sits on the surface.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -227,7 +257,7 @@ impl AnchorDoc {
     pub fn centre(&self) -> [f64; 2] {
         match self {
             AnchorDoc::Point { u, v } => [*u, *v],
-            AnchorDoc::Curve { curve } => curve.points[curve.points.len() / 2],
+            AnchorDoc::Curve { curve } => curve.mid_point(),
             AnchorDoc::Region { u0, v0, u1, v1, .. } => [(u0 + u1) / 2.0, (v0 + v1) / 2.0],
         }
     }
@@ -415,5 +445,33 @@ pub fn finite_point(p: [f64; 3]) -> Result<DVec3, CommandError> {
             ErrorKind::NotFinite,
             "coordinates must be finite (no NaN or ∞)",
         ))
+    }
+}
+
+#[cfg(test)]
+mod handle_tests {
+    use super::*;
+
+    /// A curve icon's handle is on the curve: for the quadratic Bézier
+    /// through (0.2, 0.3), (0.5, 0.9), (0.8, 0.3) the mid-parameter point is
+    /// ¼·P0 + ½·P1 + ¼·P2 = (0.5, 0.6), not the middle control point.
+    #[test]
+    fn a_curve_handle_is_its_mid_parameter_point() {
+        let curve = UvCurveDoc {
+            degree: 2,
+            knots: vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            points: vec![[0.2, 0.3], [0.5, 0.9], [0.8, 0.3]],
+        };
+        let [u, v] = AnchorDoc::Curve { curve }.centre();
+        assert!(
+            (u - 0.5).abs() < 1e-15 && (v - 0.6).abs() < 1e-15,
+            "({u}, {v})"
+        );
+        let broken = UvCurveDoc {
+            degree: 2,
+            knots: vec![0.0, 1.0],
+            points: vec![[0.1, 0.2], [0.3, 0.4]],
+        };
+        assert_eq!(AnchorDoc::Curve { curve: broken }.centre(), [0.3, 0.4]);
     }
 }
