@@ -83,6 +83,7 @@ async fn watch_hand(addr: std::net::SocketAddr, token: &str) -> mpsc::UnboundedR
             };
             let clients = match msg {
                 ServerMessage::Presence { clients } => clients,
+                ServerMessage::PresenceChanged { client } => vec![client],
                 ServerMessage::Snapshot { presence, .. } => presence,
                 _ => continue,
             };
