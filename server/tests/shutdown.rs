@@ -209,3 +209,75 @@ async fn sigterm_ends_the_process_even_with_a_stuck_actor_flushing_the_others() 
     assert_eq!(after["design"], working["design"]);
     assert!(server.terminate().success());
 }
+
+/// A second SIGTERM ends a shutdown that is stuck (design 1's actor never
+/// finishes its stop, test-only `VSCULPT_FAULT_HANG_ON_STOP`) at once: the
+/// log says "second signal", not the deadline's "not finished in time",
+/// and the exit code is the forced one (1). Told apart by what the server
+/// says, not by timing.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_second_sigterm_exits_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vsculpt-server"))
+        .args(["--listen", "127.0.0.1:0", "--data"])
+        .arg(&data)
+        .arg("--web-dir")
+        .arg(data.join("no-web-client"))
+        .env("VSCULPT_FAULT_HANG_ON_STOP", "1")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut banner = String::new();
+    for _ in 0..5 {
+        assert!(out.read_line(&mut banner).unwrap() > 0);
+    }
+    // Every log line, as it comes.
+    let (tx, rx) = std::sync::mpsc::channel::<String>();
+    let err = std::io::BufReader::new(child.stderr.take().unwrap());
+    std::thread::spawn(move || {
+        for line in err.lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                return;
+            }
+        }
+    });
+    let (addr, designs) = common::parse_banner(&banner);
+    let d = designs[0].clone();
+    let _ann = Client::connect(addr, d.id, &d.editor, "ann").await;
+    let kill = |pid: u32| {
+        assert!(
+            Command::new("kill")
+                .args(["-15", &pid.to_string()])
+                .status()
+                .unwrap()
+                .success()
+        );
+    };
+    kill(child.id());
+    let mut log = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !log.iter().any(|l: &String| l.contains("shutting down")) {
+        let line = rx
+            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
+            .expect("the server did not say it is shutting down");
+        log.push(line);
+    }
+    kill(child.id());
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < deadline, "the server did not exit");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    while let Ok(line) = rx.recv_timeout(Duration::from_secs(2)) {
+        log.push(line);
+    }
+    let log = log.join("\n");
+    assert_eq!(status.code(), Some(1), "{status:?}\n{log}");
+    assert!(log.contains("second signal: exiting now"), "{log}");
+    assert!(!log.contains("not finished in time"), "{log}");
+}
