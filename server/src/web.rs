@@ -16,12 +16,18 @@
 //!   at install time by `web-client/tools/precompress.mjs`) to a browser
 //!   that accepts them, with `Vary: Accept-Encoding`;
 //! - the client's own files (small, and edited while the server runs) are
-//!   gzipped per request and revalidated by `ETag` (`Cache-Control:
-//!   no-cache`); so is index.html, which names every module of the page in
-//!   `modulepreload` hints so the browser fetches them in parallel.
+//!   gzipped per request; index.html names each by the hash of its current
+//!   content (`/src/app.js?v=…`, in the entry script, the stylesheet, the
+//!   `modulepreload` hints that let the browser fetch every module in
+//!   parallel, and import-map entries that send the modules' relative
+//!   imports to the hashed URLs), and a hashed URL whose hash is current is
+//!   immutable; index.html itself, and any other URL, is `no-cache`,
+//!   revalidated by `ETag`. A warm visit asks for index.html and nothing
+//!   else of the page.
 
 use axum::Router;
 use axum::body::Body;
+use axum::extract::Request;
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
@@ -106,6 +112,99 @@ pub fn versioned_index(html: &str, versions: &[(String, String)]) -> String {
     out
 }
 
+/// A short hash of a file's content (FNV-1a, 64 bits, hex): the `?v=` of
+/// the client's own files, so a changed file gets a new URL.
+pub fn content_hash(bytes: &[u8]) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in bytes {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// The client's own files index.html can name (`/src/NAME.js`, `.css`),
+/// each with its content hash; read at every page load, so an edited file
+/// is named by its new hash at once.
+fn own_files(web_dir: &Path) -> Vec<(String, String)> {
+    let Ok(dir) = std::fs::read_dir(web_dir.join("src")) else {
+        return Vec::new();
+    };
+    let mut out: Vec<(String, String)> = dir
+        .filter_map(Result::ok)
+        .filter_map(|e| {
+            let name = e.file_name().into_string().ok()?;
+            (name.ends_with(".js") || name.ends_with(".css")).then_some(())?;
+            let bytes = std::fs::read(e.path()).ok()?;
+            Some((format!("/src/{name}"), content_hash(&bytes)))
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+/// index.html with every quoted `"/src/NAME"` of `own` given its `?v=HASH`
+/// (the entry script, the stylesheet, the modulepreload hints), and the
+/// import map given an entry per own module, so that the relative imports
+/// between the client's modules load the hashed URLs too.
+pub fn hashed_index(html: &str, own: &[(String, String)]) -> String {
+    let mut out = html.to_string();
+    for (path, hash) in own {
+        out = out.replace(&format!("\"{path}\""), &format!("\"{path}?v={hash}\""));
+    }
+    const OPEN: &str = "<script type=\"importmap\">";
+    let Some(start) = out.find(OPEN).map(|i| i + OPEN.len()) else {
+        return out;
+    };
+    let Some(len) = out[start..].find("</script>") else {
+        return out;
+    };
+    let Ok(mut map) = serde_json::from_str::<serde_json::Value>(&out[start..start + len]) else {
+        return out;
+    };
+    if let Some(imports) = map.get_mut("imports").and_then(|i| i.as_object_mut()) {
+        for (path, hash) in own.iter().filter(|(p, _)| p.ends_with(".js")) {
+            imports.insert(path.clone(), format!("{path}?v={hash}").into());
+        }
+    }
+    out.replace_range(start..start + len, &format!("\n    {map}\n  "));
+    out
+}
+
+/// One of the client's own files: `Cache-Control: immutable` when the URL
+/// carries the hash of the file's current content (`?v=`, from index.html),
+/// else `no-cache` (revalidated by ETag).
+async fn own_file(web_dir: Arc<PathBuf>, request: Request) -> Response {
+    use tower::ServiceExt;
+    let path = request.uri().path().trim_start_matches('/').to_string();
+    let asked = request
+        .uri()
+        .query()
+        .and_then(|q| q.strip_prefix("v="))
+        .map(str::to_string);
+    let safe = Path::new(&path)
+        .components()
+        .all(|c| matches!(c, std::path::Component::Normal(_)));
+    let current = match (&asked, safe) {
+        (Some(v), true) => tokio::fs::read(web_dir.join(&path))
+            .await
+            .is_ok_and(|b| content_hash(&b) == *v),
+        _ => false,
+    };
+    let mut res = match ServeDir::new(web_dir.as_ref()).oneshot(request).await {
+        Ok(r) => r.map(Body::new),
+        Err(never) => match never {},
+    };
+    let cache = if current && res.status() == StatusCode::OK {
+        IMMUTABLE
+    } else {
+        REVALIDATE
+    };
+    res.headers_mut()
+        .insert(header::CACHE_CONTROL, HeaderValue::from_static(cache));
+    res
+}
+
 async fn index(
     web_dir: Arc<PathBuf>,
     versions: Arc<Vec<(String, String)>>,
@@ -115,7 +214,7 @@ async fn index(
         return (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response();
     }
     let html = match tokio::fs::read_to_string(web_dir.join("index.html")).await {
-        Ok(html) => versioned_index(&html, &versions),
+        Ok(html) => hashed_index(&versioned_index(&html, &versions), &own_files(&web_dir)),
         Err(e) => {
             tracing::warn!("cannot read index.html: {e}");
             return (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response();
@@ -192,9 +291,14 @@ pub fn router<S: Clone + Send + Sync + 'static>(web_dir: &Path) -> Router<S> {
         ))
         .layer(CompressionLayer::new())
         .service(ServeDir::new(web_dir).append_index_html_on_directories(false));
+    let src = {
+        let dir = dir.clone();
+        get(move |request: Request| own_file(dir.clone(), request)).layer(CompressionLayer::new())
+    };
     router
         .route("/", get(page.clone()))
         .route("/index.html", get(page))
+        .route("/src/{*file}", src)
         .fallback_service(own)
 }
 

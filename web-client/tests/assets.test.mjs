@@ -95,12 +95,31 @@ test('index.html points at the versioned vendor URLs and is revalidated by ETag'
   assert.equal(page.headers['cache-control'], 'no-cache');
   const html = page.body.toString();
   assert.ok(!html.includes('/vendor/three/'), 'no unversioned vendor URL left');
-  assert.ok(html.includes(`"three": "/vendor/three@${threeVersion}/build/three.module.js"`), 'import map versioned');
+  const imports = JSON.parse(html.match(/<script type="importmap">([\s\S]*?)<\/script>/)[1]).imports;
+  assert.equal(imports.three, `/vendor/three@${threeVersion}/build/three.module.js`, 'import map versioned');
+  assert.equal(imports['three/addons/'], `/vendor/three@${threeVersion}/examples/jsm/`);
   const again = await get('/', { 'if-none-match': page.headers.etag });
   assert.equal(again.status, 304);
   assert.equal(again.body.length, 0);
   const app = await get('/src/app.js');
   assert.equal((await get('/src/app.js', { 'if-none-match': app.headers.etag })).status, 304);
+  // The client's own files are named by their content hash, and the import map sends the modules'
+  // relative imports to the hashed URLs: those are immutable, an unknown hash is revalidated.
+  const hash = (file) => {
+    let h = 0xcbf29ce484222325n;
+    for (const b of readFileSync(join(webDir, file))) h = BigInt.asUintN(64, (h ^ BigInt(b)) * 0x100000001b3n);
+    return h.toString(16).padStart(16, '0');
+  };
+  for (const file of ['src/app.js', 'src/style.css', 'src/bspline.js']) {
+    assert.ok(html.includes(`"/${file}?v=${hash(file)}"`), `${file} named by its hash`);
+  }
+  assert.equal(imports['/src/bspline.js'], `/src/bspline.js?v=${hash('src/bspline.js')}`);
+  const hashed = await get(`/src/bspline.js?v=${hash('src/bspline.js')}`, { 'accept-encoding': 'gzip' });
+  assert.equal(hashed.status, 200);
+  assert.equal(hashed.headers['cache-control'], 'public, max-age=31536000, immutable');
+  assert.equal(hashed.headers['content-encoding'], 'gzip');
+  assert.ok(decode(hashed).equals(readFileSync(join(webDir, 'src/bspline.js'))));
+  assert.equal((await get('/src/bspline.js?v=0000000000000000')).headers['cache-control'], 'no-cache', 'a stale hash is revalidated');
   const unversioned = await get('/vendor/three/build/three.module.js');
   assert.equal(unversioned.status, 200);
   assert.equal(unversioned.headers['cache-control'], 'no-cache', 'unversioned URLs stay revalidated');
@@ -121,8 +140,8 @@ test('through a 2 Mbit/s link: a cold visit is bounded in bytes, a warm one asks
     link.reset();
     await page.reload({ waitUntil: 'commit' });
     await firstPicture();
-    const vendorAsked = link.requests.filter((r) => r.includes('/vendor/'));
-    assert.deepEqual(vendorAsked, [], 'a warm visit takes the versioned files from the cache');
+    const cachedAsked = link.requests.filter((r) => r.includes('/vendor/') || r.includes('?v='));
+    assert.deepEqual(cachedAsked, [], 'a warm visit takes the versioned and hashed files from the cache');
     assert.ok(link.bytes.down < 64 * 1024, `warm visit: ${(link.bytes.down / 1024).toFixed(0)} KiB`);
     const shown = await page.evaluate(() => Array.from(window.vsculpt.state.surface.points));
     const token = new URL(server.viewer).searchParams.get('token');
