@@ -135,6 +135,37 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
     assert!(server.terminate().success());
 }
 
+/// The server binary over `data` with design `hang`'s actor stuck at stop
+/// (test-only `VSCULPT_FAULT_HANG_ON_STOP`), stderr as given: the child and
+/// its stdout, read up to the end of its banner (the first five lines), and
+/// the banner.
+fn spawn_hanging(
+    data: &std::path::Path,
+    hang: u64,
+    stderr: std::process::Stdio,
+) -> (
+    std::process::Child,
+    std::io::BufReader<std::process::ChildStdout>,
+    String,
+) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_vsculpt-server"))
+        .args(["--listen", "127.0.0.1:0", "--data"])
+        .arg(data)
+        .arg("--web-dir")
+        .arg(data.join("no-web-client"))
+        .env("VSCULPT_FAULT_HANG_ON_STOP", hang.to_string())
+        .stdout(std::process::Stdio::piped())
+        .stderr(stderr)
+        .spawn()
+        .unwrap();
+    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
+    let mut banner = String::new();
+    for _ in 0..5 {
+        assert!(out.read_line(&mut banner).unwrap() > 0);
+    }
+    (child, out, banner)
+}
+
 /// With the test-only `VSCULPT_FAULT_HANG_ON_STOP` (a `fault-injection`
 /// build), design 2's actor never finishes its stop, as if stuck in a solve.
 /// SIGTERM still ends the process — exit 1, saying some designs could not be
@@ -143,21 +174,7 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
 async fn sigterm_ends_the_process_even_with_a_stuck_actor_flushing_the_others() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vsculpt-server"))
-        .args(["--listen", "127.0.0.1:0", "--data"])
-        .arg(&data)
-        .arg("--web-dir")
-        .arg(data.join("no-web-client"))
-        .env("VSCULPT_FAULT_HANG_ON_STOP", "2")
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
-    let mut banner = String::new();
-    for _ in 0..5 {
-        assert!(out.read_line(&mut banner).unwrap() > 0);
-    }
+    let (mut child, _out, banner) = spawn_hanging(&data, 2, std::process::Stdio::null());
     let (addr, designs) = common::parse_banner(&banner);
     let d = designs[0].clone();
     let admin = std::fs::read_to_string(data.join("admin-token")).unwrap();
@@ -219,21 +236,7 @@ async fn sigterm_ends_the_process_even_with_a_stuck_actor_flushing_the_others() 
 async fn a_second_sigterm_exits_at_once() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_vsculpt-server"))
-        .args(["--listen", "127.0.0.1:0", "--data"])
-        .arg(&data)
-        .arg("--web-dir")
-        .arg(data.join("no-web-client"))
-        .env("VSCULPT_FAULT_HANG_ON_STOP", "1")
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = std::io::BufReader::new(child.stdout.take().unwrap());
-    let mut banner = String::new();
-    for _ in 0..5 {
-        assert!(out.read_line(&mut banner).unwrap() > 0);
-    }
+    let (mut child, _out, banner) = spawn_hanging(&data, 1, std::process::Stdio::piped());
     // Every log line, as it comes.
     let (tx, rx) = std::sync::mpsc::channel::<String>();
     let err = std::io::BufReader::new(child.stderr.take().unwrap());
