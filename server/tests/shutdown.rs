@@ -108,22 +108,8 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
     ann.ok(json!({"type": "drag_end", "icon": icon})).await;
     let working = get(addr, "/api/designs/1", Some(&d.editor)).await.json();
 
-    let ok = Command::new("kill")
-        .args(["-15", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(ok.success());
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("the server did not exit on SIGTERM");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    sigterm(child.id());
+    let status = wait_exit(&mut child, "the server did not exit on SIGTERM");
     assert_eq!(status.code(), Some(0), "{status:?}");
     drop((reader, silent, ann));
 
@@ -133,6 +119,30 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
         .json();
     assert_eq!(after["design"], working["design"]);
     assert!(server.terminate().success());
+}
+
+/// Sends SIGTERM to `pid`.
+fn sigterm(pid: u32) {
+    let ok = Command::new("kill")
+        .args(["-15", &pid.to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+}
+
+/// Waits up to 30 s for `child` to exit; kills it and panics with `why` if it does not.
+fn wait_exit(child: &mut std::process::Child, why: &str) -> std::process::ExitStatus {
+    let start = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return s;
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            panic!("{why}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
 }
 
 /// The server binary over `data` with design `hang`'s actor stuck at stop
@@ -200,22 +210,11 @@ async fn sigterm_ends_the_process_even_with_a_stuck_actor_flushing_the_others() 
     ann.ok(json!({"type": "drag_end", "icon": icon})).await;
     let working = get(addr, "/api/designs/1", Some(&d.editor)).await.json();
 
-    let ok = Command::new("kill")
-        .args(["-15", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(ok.success());
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            panic!("a stuck actor kept the server from exiting on SIGTERM");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    sigterm(child.id());
+    let status = wait_exit(
+        &mut child,
+        "a stuck actor kept the server from exiting on SIGTERM",
+    );
     assert_eq!(status.code(), Some(1), "{status:?}");
     drop(ann);
 
@@ -250,16 +249,7 @@ async fn a_second_sigterm_exits_at_once() {
     let (addr, designs) = common::parse_banner(&banner);
     let d = designs[0].clone();
     let _ann = Client::connect(addr, d.id, &d.editor, "ann").await;
-    let kill = |pid: u32| {
-        assert!(
-            Command::new("kill")
-                .args(["-15", &pid.to_string()])
-                .status()
-                .unwrap()
-                .success()
-        );
-    };
-    kill(child.id());
+    sigterm(child.id());
     let mut log = Vec::new();
     let deadline = Instant::now() + Duration::from_secs(20);
     while !log.iter().any(|l: &String| l.contains("shutting down")) {
@@ -268,14 +258,8 @@ async fn a_second_sigterm_exits_at_once() {
             .expect("the server did not say it is shutting down");
         log.push(line);
     }
-    kill(child.id());
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        assert!(Instant::now() < deadline, "the server did not exit");
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    sigterm(child.id());
+    let status = wait_exit(&mut child, "the server did not exit on a second SIGTERM");
     while let Ok(line) = rx.recv_timeout(Duration::from_secs(2)) {
         log.push(line);
     }
