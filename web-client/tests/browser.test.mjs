@@ -371,14 +371,17 @@ test('?worker=0: geometry frames are tessellated on the main thread and shown', 
   await page.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.6, v: 0.4 }, { kind: 'load' }));
   await page.waitForFunction((n) => window.vsculpt.state.icons.size > n, before, { timeout: 10000 });
   const icon = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
-  // The mean height of the drawn mesh (its vertex z), which a load pulled up raises wherever it is.
-  const meanZ = () => {
-    const a = window.vsculpt.view.geometry.attributes.position.array;
-    let z = 0;
-    for (let k = 2; k < a.length; k += 3) z += a[k];
-    return z / (a.length / 3);
-  };
-  const z0 = await page.evaluate(meanZ);
+  // The mean height of the drawn mesh (its vertex z), which a load pulled up raises wherever it is;
+  // installed in the page once, so the wait below can call it.
+  await page.evaluate(() => {
+    window.__meanZ = () => {
+      const a = window.vsculpt.view.geometry.attributes.position.array;
+      let z = 0;
+      for (let k = 2; k < a.length; k += 3) z += a[k];
+      return z / (a.length / 3);
+    };
+  });
+  const z0 = await page.evaluate(() => window.__meanZ());
   await page.evaluate((id) => {
     const { send, state } = window.vsculpt;
     const xyz = state.icons.get(id).xyz;
@@ -386,11 +389,7 @@ test('?worker=0: geometry frames are tessellated on the main thread and shown', 
     for (let k = 1; k <= 5; k++) send({ type: 'drag', icon: id, xyz: [xyz[0], xyz[1], xyz[2] + 0.2 * k] });
     send({ type: 'drag_end', icon: id });
   }, icon);
-  await page.waitForFunction(
-    ([z, f]) => window.vsculpt.perf.shown > 0 && new Function(`return (${f})()`)() > z + 1e-6,
-    [z0, meanZ.toString()],
-    { timeout: 10000 },
-  );
+  await page.waitForFunction((z) => window.vsculpt.perf.shown > 0 && window.__meanZ() > z + 1e-6, z0, { timeout: 10000 });
   const perf = await page.evaluate(() => window.vsculpt.perf);
   assert.equal(perf.workerFailed, null);
   assert.ok(perf.shown <= perf.submitted, JSON.stringify(perf));
