@@ -13,7 +13,8 @@ fn bin() -> Command {
 }
 
 fn temp(name: &str) -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("vsculpt-cli-{}-{name}", std::process::id()))
+    std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("vsculpt-cli-{}-{name}", std::process::id()))
 }
 
 #[test]

@@ -19,7 +19,8 @@ use vsculpt_bridge::sim::spacenavd::FakeSpacenavd;
 use vsculpt_bridge::sim::vrpn::FakeVrpnServer;
 
 fn temp_path(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("vsculpt-bridge-test-{}", std::process::id()));
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("vsculpt-bridge-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }

@@ -5,7 +5,8 @@
 use vsculpt_server::store::{Role, Store};
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("vsculpt-store-{name}-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("vsculpt-store-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
 }

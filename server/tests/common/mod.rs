@@ -74,9 +74,13 @@ pub fn parse_banner(text: &str) -> (SocketAddr, Vec<DesignLinks>) {
     (addr.expect("no listening line"), designs)
 }
 
-/// A fresh, empty data directory.
+/// A fresh, empty data directory, under cargo's scratch folder for
+/// integration tests (`CARGO_TARGET_TMPDIR`, inside the target directory),
+/// never the system's temp folder: a test that stops early leaves nothing
+/// behind outside the build.
 pub fn data_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("vsculpt-test-{name}-{}", std::process::id()));
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("vsculpt-test-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
