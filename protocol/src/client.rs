@@ -8,8 +8,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{ErrorCode, ProtocolError};
 use crate::limits::MAX_MESSAGE_BYTES;
+use crate::parts::{PartMaterial, PartSpec, RelationSpec};
 use crate::types::{
-    Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Material, Role, Vec3,
+    Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Role, Vec3,
 };
 
 /// A client message with its optional request number.
@@ -67,11 +68,15 @@ pub enum ClientMessage {
     },
     /// Create an icon (answered with `icon_created`).
     CreateIcon {
+        /// The part it acts on.
+        part: u64,
         /// What it should be.
         spec: IconSpec,
     },
     /// Re-anchor an icon (move it in (u,v), or reshape its curve/region).
     EditIcon {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// Its new anchor.
@@ -80,6 +85,8 @@ pub enum ClientMessage {
     /// Set an icon's target (a constraint's position/vector/normal; a
     /// load's pulled-to point) and solve.
     MoveIcon {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// The new target.
@@ -87,11 +94,15 @@ pub enum ClientMessage {
     },
     /// Delete an icon.
     DeleteIcon {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
     },
     /// Switch an icon's role (constraint ↔ load; position ↔ tangent ↔ normal).
     SetRole {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// The new role.
@@ -99,6 +110,8 @@ pub enum ClientMessage {
     },
     /// Switch an icon's state.
     SetState {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// The new state.
@@ -106,6 +119,8 @@ pub enum ClientMessage {
     },
     /// Bind a device sensor to an icon.
     BindSensor {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// The sensor, e.g. "right-hand".
@@ -113,6 +128,8 @@ pub enum ClientMessage {
     },
     /// Unbind a device sensor from an icon.
     UnbindSensor {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// The sensor.
@@ -120,11 +137,15 @@ pub enum ClientMessage {
     },
     /// Grab an icon: it becomes driving and held by this client.
     DragStart {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
     },
     /// Drag a held icon to `xyz` (coalesced: only the newest counts).
     Drag {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
         /// Where the pointer or hand is.
@@ -132,6 +153,8 @@ pub enum ClientMessage {
     },
     /// Release a held icon: it becomes passive and the shape is kept.
     DragEnd {
+        /// The part it acts on.
+        part: u64,
         /// The icon.
         icon: u64,
     },
@@ -165,8 +188,10 @@ pub enum ClientMessage {
     },
     /// Set the material (α, β).
     SetMaterial {
-        /// The new material.
-        material: Material,
+        /// The part it acts on.
+        part: u64,
+        /// The new material (a curve part takes `alpha` and `beta`).
+        material: PartMaterial,
     },
     /// Commit the current shape as a new version.
     Commit {
@@ -194,6 +219,46 @@ pub enum ClientMessage {
     },
     /// Liveness check (answered with `pong`, carrying `req`).
     Ping,
+    /// Add a part to the design; answered `ack {part}` and `part_created`
+    /// to everyone.
+    CreatePart {
+        /// What it should be.
+        spec: PartSpec,
+    },
+    /// Delete a part with its icons and relations.
+    DeletePart {
+        /// The part.
+        part: u64,
+    },
+    /// Rename, show or hide, lock or unlock, or recolour a part (fields
+    /// left out stay as they are); answered `part_changed`.
+    SetPart {
+        /// The part.
+        part: u64,
+        /// A new name.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Drawn or hidden.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        visible: Option<bool>,
+        /// Locked parts refuse edits and drags.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        locked: Option<bool>,
+        /// `#rrggbb`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        colour: Option<String>,
+    },
+    /// Tie parts together (a join or a binding); answered `ack {relation}`
+    /// and `relation_created`.
+    Relate {
+        /// What to tie.
+        relation: RelationSpec,
+    },
+    /// Remove a relation; the parts keep their shapes.
+    Unrelate {
+        /// The relation.
+        relation: u64,
+    },
 }
 
 /// The `type` tags of every client message, for telling an unknown type
@@ -225,6 +290,11 @@ pub const CLIENT_TYPES: &[&str] = &[
     "restore_version",
     "presence",
     "ping",
+    "create_part",
+    "delete_part",
+    "set_part",
+    "relate",
+    "unrelate",
 ];
 
 /// Parses and validates one text message from a client: `too_large`,

@@ -30,6 +30,15 @@ pub enum ErrorCode {
     UnknownIcon,
     /// No version with that number.
     UnknownVersion,
+    /// No part with that id in the design (or the icon is not on that part).
+    UnknownPart,
+    /// No relation with that id in the design.
+    UnknownRelation,
+    /// The part is locked: unlock it first.
+    Locked,
+    /// The parts cannot be related that way (edges of different size,
+    /// degree or knots; a binding to something that is not a curve icon).
+    Incompatible,
     /// A (u,v) parameter lies outside the surface's domain.
     OutOfDomain,
     /// The client's role may not do this (a viewer editing).

@@ -1,6 +1,6 @@
-//! The binary geometry frame: the solved control net of a design, its knots
-//! and the positions of its icons, sent as one binary WebSocket message per
-//! solved frame. Clients tessellate it themselves, so a frame costs
+//! The binary geometry frame: the solved control net of one part of a
+//! design, its knots and the positions of its icons, sent as one binary
+//! WebSocket message per solved frame of that part (latest-wins per part). Clients tessellate it themselves, so a frame costs
 //! kilobytes where a mesh would cost megabytes (protocol/README.md gives
 //! the layout byte by byte and the measured sizes).
 //!
@@ -15,15 +15,17 @@ use crate::version::PROTOCOL_VERSION;
 
 /// The first four bytes of every frame: "VSGF".
 pub const MAGIC: [u8; 4] = *b"VSGF";
-/// Frame kind: a tensor-product B-spline surface.
+/// Frame kind: a tensor-product B-spline surface part.
 pub const KIND_SURFACE: u8 = 1;
+/// Frame kind: a B-spline curve part (`nv` = 1, `degree_v` = 0, no v knots).
+pub const KIND_CURVE: u8 = 2;
 /// Flag: this frame comes from a drag (more will follow soon).
 pub const FLAG_DRAG: u16 = 1;
 /// Flag: this frame is the shape of a joining client's `snapshot`, sent
 /// before it (the compact join: a hello with `geometry_first`).
 pub const FLAG_SNAPSHOT: u16 = 2;
 /// Size of the fixed header in bytes.
-pub const HEADER_BYTES: usize = 40;
+pub const HEADER_BYTES: usize = 48;
 /// Size of one icon record in bytes.
 pub const ICON_BYTES: usize = 24;
 /// Highest degree a frame may carry.
@@ -50,11 +52,15 @@ pub struct FrameIcon {
     pub xyz: [f32; 3],
 }
 
-/// One solved frame of a design.
+/// One solved frame of one part of a design.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GeometryFrame {
+    /// [`KIND_SURFACE`] or [`KIND_CURVE`].
+    pub kind: u8,
     /// The design.
     pub design: u64,
+    /// The part.
+    pub part: u64,
     /// The shape revision (increases with every change).
     pub revision: u64,
     /// Bit flags ([`FLAG_DRAG`], [`FLAG_SNAPSHOT`]).
@@ -69,7 +75,7 @@ pub struct GeometryFrame {
     pub nv: u32,
     /// nu + degree_u + 1 knots.
     pub knots_u: Vec<f64>,
-    /// nv + degree_v + 1 knots.
+    /// nv + degree_v + 1 knots (none for a curve).
     pub knots_v: Vec<f64>,
     /// nu · nv control points, row-major (i * nv + j, i along u).
     pub points: Vec<[f32; 3]>,
@@ -101,11 +107,23 @@ pub struct Layout {
 }
 
 impl Layout {
-    /// The layout, or `None` if the sizes overflow.
-    pub fn new(nu: usize, nv: usize, du: usize, dv: usize, icons: usize) -> Option<Self> {
+    /// The layout of a frame of `kind`, or `None` if the sizes overflow.
+    pub fn new(
+        kind: u8,
+        nu: usize,
+        nv: usize,
+        du: usize,
+        dv: usize,
+        icons: usize,
+    ) -> Option<Self> {
         let knots_u = HEADER_BYTES;
         let knots_v = knots_u.checked_add(nu.checked_add(du + 1)?.checked_mul(8)?)?;
-        let points = knots_v.checked_add(nv.checked_add(dv + 1)?.checked_mul(8)?)?;
+        let v_knots = if kind == KIND_CURVE {
+            0
+        } else {
+            nv.checked_add(dv + 1)?
+        };
+        let points = knots_v.checked_add(v_knots.checked_mul(8)?)?;
         let point_bytes = nu.checked_mul(nv)?.checked_mul(12)?;
         let icons_at = pad8(points.checked_add(point_bytes)?);
         let total = icons_at.checked_add(icons.checked_mul(ICON_BYTES)?)?;
@@ -122,6 +140,7 @@ impl Layout {
 impl GeometryFrame {
     fn layout(&self) -> Result<Layout, ProtocolError> {
         Layout::new(
+            self.kind,
             self.nu as usize,
             self.nv as usize,
             self.degree_u as usize,
@@ -140,13 +159,30 @@ impl GeometryFrame {
                 "frame exceeds the size limits",
             ));
         }
-        for (d, n) in [(self.degree_u, nu), (self.degree_v, nv)] {
+        let curve = match self.kind {
+            KIND_SURFACE => false,
+            KIND_CURVE => true,
+            k => return Err(bad(format!("unknown frame kind {k}"))),
+        };
+        if curve && (nv != 1 || self.degree_v != 0) {
+            return Err(bad("a curve frame has nv = 1 and degree_v = 0"));
+        }
+        let dirs: &[(u8, usize)] = if curve {
+            &[(self.degree_u, nu)]
+        } else {
+            &[(self.degree_u, nu), (self.degree_v, nv)]
+        };
+        for &(d, n) in dirs {
             if d == 0 || d > MAX_DEGREE || n < d as usize + 1 {
                 return Err(bad(format!("degree {d} with {n} control points")));
             }
         }
-        if self.knots_u.len() != nu + self.degree_u as usize + 1
-            || self.knots_v.len() != nv + self.degree_v as usize + 1
+        let v_knots = if curve {
+            0
+        } else {
+            nv + self.degree_v as usize + 1
+        };
+        if self.knots_u.len() != nu + self.degree_u as usize + 1 || self.knots_v.len() != v_knots
         {
             return Err(bad("knot count does not match degree and control points"));
         }
@@ -174,10 +210,11 @@ impl GeometryFrame {
         let layout = self.layout()?;
         let mut out = Vec::with_capacity(layout.total);
         out.extend_from_slice(&MAGIC);
-        out.push(KIND_SURFACE);
+        out.push(self.kind);
         out.push(PROTOCOL_VERSION as u8);
         out.extend_from_slice(&self.flags.to_le_bytes());
         out.extend_from_slice(&self.design.to_le_bytes());
+        out.extend_from_slice(&self.part.to_le_bytes());
         out.extend_from_slice(&self.revision.to_le_bytes());
         out.extend_from_slice(&self.nu.to_le_bytes());
         out.extend_from_slice(&self.nv.to_le_bytes());
@@ -217,7 +254,8 @@ impl GeometryFrame {
         if bytes[0..4] != MAGIC {
             return Err(bad("not a geometry frame (bad magic)"));
         }
-        if bytes[4] != KIND_SURFACE {
+        let kind = bytes[4];
+        if kind != KIND_SURFACE && kind != KIND_CURVE {
             return Err(bad(format!("unknown frame kind {}", bytes[4])));
         }
         if bytes[5] as u32 != PROTOCOL_VERSION {
@@ -231,9 +269,9 @@ impl GeometryFrame {
         let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let (nu, nv) = (u32_at(24), u32_at(28));
-        let (degree_u, degree_v) = (bytes[32], bytes[33]);
-        let n_icons = u32_at(36) as usize;
+        let (nu, nv) = (u32_at(32), u32_at(36));
+        let (degree_u, degree_v) = (bytes[40], bytes[41]);
+        let n_icons = u32_at(44) as usize;
         if nu as usize > MAX_GRID || nv as usize > MAX_GRID || n_icons > MAX_FRAME_ICONS {
             return Err(ProtocolError::new(
                 ErrorCode::TooLarge,
@@ -241,6 +279,7 @@ impl GeometryFrame {
             ));
         }
         let layout = Layout::new(
+            kind,
             nu as usize,
             nv as usize,
             degree_u as usize,
@@ -256,10 +295,16 @@ impl GeometryFrame {
             )));
         }
         let nku = nu as usize + degree_u as usize + 1;
-        let nkv = nv as usize + degree_v as usize + 1;
+        let nkv = if kind == KIND_CURVE {
+            0
+        } else {
+            nv as usize + degree_v as usize + 1
+        };
         let frame = Self {
+            kind,
             design: u64_at(8),
-            revision: u64_at(16),
+            part: u64_at(16),
+            revision: u64_at(24),
             flags: u16_at(6),
             degree_u,
             degree_v,

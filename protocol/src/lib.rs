@@ -9,6 +9,8 @@
 //! * [`limits`] — sizes beyond which a message is refused.
 //! * [`types`] — value types shared by messages: surfaces, icons, materials,
 //!   versions, presence.
+//! * [`parts`] — the parts of a product (one per shape kind) and the
+//!   relations between them (joins, bindings).
 //! * [`client`] — client → server messages ([`ClientMessage`]) and
 //!   [`parse_client`], the one entry point for untrusted text.
 //! * [`server`] — server → client events ([`ServerMessage`]).
@@ -22,6 +24,7 @@ pub mod client;
 pub mod error;
 pub mod frame;
 pub mod limits;
+pub mod parts;
 pub mod server;
 pub mod types;
 pub mod validate;
@@ -31,5 +34,6 @@ pub use client::{ClientEnvelope, ClientMessage, parse_client};
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};
 pub use server::ServerMessage;
+pub use parts::*;
 pub use types::*;
 pub use version::PROTOCOL_VERSION;

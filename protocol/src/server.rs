@@ -4,8 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::ErrorCode;
+use crate::parts::{Part, PartMaterial, Relation};
 use crate::types::{
-    Access, DesignInfo, DesignTokens, Icon, Material, PresenceEntry, SurfaceData, Vec3, VersionInfo,
+    Access, DesignInfo, DesignTokens, Icon, PresenceEntry, Vec3, VersionInfo,
 };
 
 /// Everything the server tells a client.
@@ -34,6 +35,12 @@ pub enum ServerMessage {
         /// loaded.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         version: Option<u64>,
+        /// The part a `create_part` created.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        part: Option<u64>,
+        /// The relation a `relate` created.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        relation: Option<u64>,
     },
     /// A request failed and changed nothing.
     Error {
@@ -51,12 +58,10 @@ pub enum ServerMessage {
         design: DesignInfo,
         /// Increases with every change of shape.
         revision: u64,
-        /// The surface.
-        surface: SurfaceData,
-        /// The material.
-        material: Material,
-        /// Every icon.
-        icons: Vec<Icon>,
+        /// Every part, with its shape, material and icons.
+        parts: Vec<Part>,
+        /// Every relation between parts.
+        relations: Vec<Relation>,
         /// The committed versions, oldest first.
         versions: Vec<VersionInfo>,
         /// Who is here.
@@ -68,23 +73,31 @@ pub enum ServerMessage {
     },
     /// An icon was created.
     IconCreated {
+        /// The part it belongs to.
+        part: u64,
         /// The new icon.
         icon: Icon,
     },
     /// An icon changed (role, state, target, sensors, holder).
     IconUpdated {
+        /// The part it belongs to.
+        part: u64,
         /// The icon as it is now.
         icon: Icon,
     },
     /// An icon was deleted.
     IconDeleted {
+        /// The part it belongs to.
+        part: u64,
         /// Its id.
         icon: u64,
     },
     /// The material changed.
     MaterialChanged {
+        /// The part it belongs to.
+        part: u64,
         /// The new material.
-        material: Material,
+        material: PartMaterial,
     },
     /// A version was committed.
     Committed {
@@ -128,6 +141,8 @@ pub enum ServerMessage {
     /// After a solve during a drag: where the dragged icon actually went,
     /// which the bridge's spring model needs (Δy in paper 003).
     IconFeedback {
+        /// The part it belongs to.
+        part: u64,
         /// The icon.
         icon: u64,
         /// Where the pointer asked it to be.
@@ -160,5 +175,38 @@ pub enum ServerMessage {
         /// The request's `req`, if it had one.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         req: Option<u64>,
+    },
+    /// A part was added.
+    PartCreated {
+        /// The new part.
+        part: Part,
+    },
+    /// A part was deleted, with its icons and relations.
+    PartDeleted {
+        /// Its id.
+        part: u64,
+    },
+    /// A part was renamed, shown or hidden, locked or unlocked, recoloured.
+    PartChanged {
+        /// Its id.
+        part: u64,
+        /// Its name.
+        name: String,
+        /// Drawn or hidden.
+        visible: bool,
+        /// Locked or not.
+        locked: bool,
+        /// `#rrggbb`.
+        colour: String,
+    },
+    /// Parts were tied together.
+    RelationCreated {
+        /// The new relation.
+        relation: Relation,
+    },
+    /// A relation was removed.
+    RelationDeleted {
+        /// Its id.
+        relation: u64,
     },
 }

@@ -62,7 +62,8 @@ pub struct Material {
     pub beta22: f64,
 }
 
-/// Where an icon sits on the surface.
+/// Where an icon sits on its part: `point`, `curve` and `region` on a
+/// surface, `param` and `span` on a curve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Anchor {
@@ -90,6 +91,18 @@ pub enum Anchor {
         v1: f64,
         /// Deformation asked inside the region (true) or outside it (false).
         inside: bool,
+    },
+    /// A point of a curve part at parameter t.
+    Param {
+        /// The curve parameter.
+        t: f64,
+    },
+    /// A stretch of a curve part, from t0 to t1.
+    Span {
+        /// Start parameter.
+        t0: f64,
+        /// End parameter.
+        t1: f64,
     },
 }
 

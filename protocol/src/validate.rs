@@ -5,7 +5,8 @@
 use crate::client::ClientMessage;
 use crate::error::{ErrorCode, ProtocolError};
 use crate::limits::*;
-use crate::types::{Anchor, IconSpec, Material, UvCurve};
+use crate::parts::{CurveData, PartMaterial, PartShape, PartSpec, is_colour};
+use crate::types::{Anchor, IconSpec, Knots, Material, SurfaceData, UvCurve};
 
 fn number(name: &str, x: f64) -> Result<(), ProtocolError> {
     if !x.is_finite() {
@@ -81,6 +82,8 @@ fn anchor(a: &Anchor) -> Result<(), ProtocolError> {
         Anchor::Point { u, v } => numbers("(u,v)", &[*u, *v]),
         Anchor::Curve { curve } => uv_curve(curve),
         Anchor::Region { u0, v0, u1, v1, .. } => numbers("region corner", &[*u0, *v0, *u1, *v1]),
+        Anchor::Param { t } => number("t", *t),
+        Anchor::Span { t0, t1 } => numbers("span", &[*t0, *t1]),
     }
 }
 
@@ -109,6 +112,104 @@ fn material(m: &Material) -> Result<(), ProtocolError> {
     Ok(())
 }
 
+fn part_material(m: &PartMaterial) -> Result<(), ProtocolError> {
+    match m {
+        PartMaterial::Surface(m) => material(m),
+        PartMaterial::Curve(c) => {
+            numbers("material", &[c.alpha, c.beta])?;
+            if c.alpha < 0.0 || c.beta < 0.0 {
+                return Err(ProtocolError::new(
+                    ErrorCode::OutOfRange,
+                    "α and β must be ≥ 0",
+                ));
+            }
+            Ok(())
+        }
+    }
+}
+
+fn knots(k: &Knots, points: usize) -> Result<(), ProtocolError> {
+    if k.knots.len() > MAX_KNOTS {
+        return Err(ProtocolError::new(ErrorCode::TooLarge, "too many knots"));
+    }
+    if k.degree < 1 || k.degree > 7 {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            "degree must be 1..=7",
+        ));
+    }
+    numbers("knot", &k.knots)?;
+    if k.knots.len() != points + k.degree as usize + 1 {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            "knot count must be control points + degree + 1",
+        ));
+    }
+    if k.knots.windows(2).any(|w| w[1] < w[0]) {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            "knots must not decrease",
+        ));
+    }
+    Ok(())
+}
+
+fn surface(s: &SurfaceData) -> Result<(), ProtocolError> {
+    if s.nu as usize > MAX_GRID || s.nv as usize > MAX_GRID {
+        return Err(ProtocolError::new(ErrorCode::TooLarge, "control grid too large"));
+    }
+    if s.points.len() != s.nu as usize * s.nv as usize {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            "control point count must be nu · nv",
+        ));
+    }
+    knots(&s.u, s.nu as usize)?;
+    knots(&s.v, s.nv as usize)?;
+    s.points.iter().try_for_each(|p| numbers("control point", p))
+}
+
+fn curve(c: &CurveData) -> Result<(), ProtocolError> {
+    if c.points.len() > MAX_KNOTS {
+        return Err(ProtocolError::new(ErrorCode::TooLarge, "too many control points"));
+    }
+    knots(&c.knots, c.points.len())?;
+    c.points.iter().try_for_each(|p| numbers("control point", p))
+}
+
+fn colour(c: &str) -> Result<(), ProtocolError> {
+    if !is_colour(c) {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            "colour must be #rrggbb",
+        ));
+    }
+    Ok(())
+}
+
+fn part_spec(p: &PartSpec) -> Result<(), ProtocolError> {
+    name_text("name", &p.name)?;
+    match &p.shape {
+        PartShape::Surface { surface: s } => surface(s)?,
+        PartShape::Curve { curve: c } => curve(c)?,
+    }
+    if let Some(m) = &p.material {
+        part_material(m)?;
+        let fits = matches!(
+            (&p.shape, m),
+            (PartShape::Surface { .. }, PartMaterial::Surface(_))
+                | (PartShape::Curve { .. }, PartMaterial::Curve(_))
+        );
+        if !fits {
+            return Err(ProtocolError::new(
+                ErrorCode::OutOfRange,
+                "the material does not fit the part's kind",
+            ));
+        }
+    }
+    p.colour.as_deref().map_or(Ok(()), colour)
+}
+
 impl ClientMessage {
     /// Checks everything that can be checked without the design.
     pub fn validate(&self) -> Result<(), ProtocolError> {
@@ -121,7 +222,7 @@ impl ClientMessage {
                 string("client_name", client_name)
             }
             CreateDesign { name } => name_text("name", name),
-            CreateIcon { spec: s } => spec(s),
+            CreateIcon { spec: s, .. } => spec(s),
             EditIcon { anchor: a, .. } => anchor(a),
             MoveIcon { xyz, .. } | Drag { xyz, .. } => numbers("xyz", xyz),
             BindSensor { sensor, .. } | UnbindSensor { sensor, .. } => nonempty("sensor", sensor),
@@ -159,7 +260,14 @@ impl ClientMessage {
                 nonempty("device", device)?;
                 string("message", message)
             }
-            SetMaterial { material: m } => material(m),
+            SetMaterial { material: m, .. } => part_material(m),
+            CreatePart { spec } => part_spec(spec),
+            SetPart { name, colour: c, .. } => {
+                if let Some(n) = name {
+                    name_text("name", n)?;
+                }
+                c.as_deref().map_or(Ok(()), colour)
+            }
             Commit { message } => string("message", message),
             Presence { pointer: Some(p) } => numbers("pointer", p),
             _ => Ok(()),

@@ -7,4 +7,4 @@
 //! optional field does not.
 
 /// The version this crate speaks.
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;

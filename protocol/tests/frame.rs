@@ -1,7 +1,7 @@
 //! The binary geometry frame: exact round trip, the documented layout, and
 //! an error (never a panic) for every other byte string.
 
-use vsculpt_protocol::frame::{HEADER_BYTES, Layout};
+use vsculpt_protocol::frame::{HEADER_BYTES, KIND_CURVE, KIND_SURFACE, Layout};
 use vsculpt_protocol::{FrameIcon, GeometryFrame};
 
 fn uniform(n: usize, p: usize) -> Vec<f64> {
@@ -14,7 +14,9 @@ fn uniform(n: usize, p: usize) -> Vec<f64> {
 
 fn frame(nu: usize, nv: usize, icons: usize) -> GeometryFrame {
     GeometryFrame {
+        kind: KIND_SURFACE,
         design: 7,
+        part: 42,
         revision: 123_456_789_012,
         flags: 1,
         degree_u: 3,
@@ -40,9 +42,19 @@ fn round_trip_is_exact_and_layout_is_as_documented() {
     let f = frame(20, 15, 3);
     let bytes = f.encode().unwrap();
     assert_eq!(&bytes[0..4], b"VSGF");
+    assert_eq!(bytes[4], 1);
+    assert_eq!(bytes[5], 2);
     assert_eq!(u64::from_le_bytes(bytes[8..16].try_into().unwrap()), 7);
-    assert_eq!(u32::from_le_bytes(bytes[24..28].try_into().unwrap()), 20);
-    let l = Layout::new(20, 15, 3, 3, 3).unwrap();
+    assert_eq!(u64::from_le_bytes(bytes[16..24].try_into().unwrap()), 42);
+    assert_eq!(
+        u64::from_le_bytes(bytes[24..32].try_into().unwrap()),
+        123_456_789_012
+    );
+    assert_eq!(u32::from_le_bytes(bytes[32..36].try_into().unwrap()), 20);
+    assert_eq!(u32::from_le_bytes(bytes[36..40].try_into().unwrap()), 15);
+    assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 3);
+    assert_eq!(HEADER_BYTES, 48);
+    let l = Layout::new(KIND_SURFACE, 20, 15, 3, 3, 3).unwrap();
     assert_eq!(l.knots_u, HEADER_BYTES);
     assert_eq!(l.points % 4, 0);
     assert_eq!(l.icons % 8, 0);
@@ -83,7 +95,7 @@ fn every_truncation_and_corruption_is_an_error_not_a_panic() {
     assert!(GeometryFrame::decode(&longer).is_err());
     // Non-finite control point.
     let mut nan = bytes.clone();
-    let l = Layout::new(6, 5, 3, 3, 2).unwrap();
+    let l = Layout::new(KIND_SURFACE, 6, 5, 3, 3, 2).unwrap();
     nan[l.points..l.points + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     assert!(GeometryFrame::decode(&nan).is_err());
     // Decreasing knots.
@@ -92,7 +104,7 @@ fn every_truncation_and_corruption_is_an_error_not_a_panic() {
     assert!(GeometryFrame::decode(&knots).is_err());
     // Huge sizes in the header must not allocate or panic.
     let mut huge = bytes.clone();
-    huge[24..28].copy_from_slice(&u32::MAX.to_le_bytes());
+    huge[32..36].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(GeometryFrame::decode(&huge).is_err());
     // Pseudo-random byte strings and single-byte mutations.
     let mut x: u64 = 12345;
@@ -154,4 +166,78 @@ fn with_flags_sets_bits_in_place_and_leaves_everything_else() {
     ] {
         assert_eq!(with_flags(junk, FLAG_SNAPSHOT), junk);
     }
+}
+
+/// A curve frame written byte by byte from the table in protocol/README.md
+/// (not with our encoder): a quadratic with 4 control points, knots
+/// 0 0 0 .5 1 1 1, one icon.
+fn curve_bytes_from_the_readme() -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend_from_slice(b"VSGF");
+    b.push(2); // kind: curve
+    b.push(2); // version
+    b.extend_from_slice(&[1, 0]); // flags: drag
+    b.extend_from_slice(&9u64.to_le_bytes()); // design
+    b.extend_from_slice(&3u64.to_le_bytes()); // part
+    b.extend_from_slice(&77u64.to_le_bytes()); // revision
+    b.extend_from_slice(&4u32.to_le_bytes()); // nu
+    b.extend_from_slice(&1u32.to_le_bytes()); // nv
+    b.extend_from_slice(&[2, 0, 0, 0]); // pu, pv, zero
+    b.extend_from_slice(&1u32.to_le_bytes()); // icons
+    assert_eq!(b.len(), 48);
+    for k in [0.0f64, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0] {
+        b.extend_from_slice(&k.to_le_bytes());
+    }
+    // No v knots for a curve; control points at 48 + 56 = 104.
+    for p in [[0.0f32, 0.0, 1.0], [1.0, 0.25, 1.0], [2.0, 0.0, 1.5], [3.0, 0.0, 1.0]] {
+        for c in p {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    // 104 + 48 = 152, already a multiple of 8.
+    b.extend_from_slice(&7u64.to_le_bytes());
+    for c in [1.5f32, 0.1, 1.2] {
+        b.extend_from_slice(&c.to_le_bytes());
+    }
+    b.extend_from_slice(&[0; 4]);
+    b
+}
+
+#[test]
+fn a_curve_frame_from_the_documented_layout_decodes() {
+    let bytes = curve_bytes_from_the_readme();
+    let f = GeometryFrame::decode(&bytes).unwrap();
+    assert_eq!(f.kind, KIND_CURVE);
+    assert_eq!((f.design, f.part, f.revision, f.flags), (9, 3, 77, 1));
+    assert_eq!((f.nu, f.nv, f.degree_u, f.degree_v), (4, 1, 2, 0));
+    assert!(f.knots_v.is_empty());
+    assert_eq!(f.points[2], [2.0, 0.0, 1.5]);
+    assert_eq!(f.icons[0].id, 7);
+    assert_eq!(f.icons[0].xyz, [1.5, 0.1, 1.2]);
+    // Our encoder writes the same bytes.
+    assert_eq!(f.encode().unwrap(), bytes);
+    let l = Layout::new(KIND_CURVE, 4, 1, 2, 0, 1).unwrap();
+    assert_eq!((l.points, l.icons, l.total), (104, 152, 176));
+}
+
+#[test]
+fn a_curve_frame_with_v_knots_or_a_surface_shape_is_refused() {
+    let bytes = curve_bytes_from_the_readme();
+    // nv = 2 on a curve.
+    let mut m = bytes.clone();
+    m[36..40].copy_from_slice(&2u32.to_le_bytes());
+    assert!(GeometryFrame::decode(&m).is_err());
+    // A degree along v on a curve.
+    let mut m = bytes.clone();
+    m[41] = 1;
+    assert!(GeometryFrame::decode(&m).is_err());
+    // Unknown kind.
+    let mut m = bytes.clone();
+    m[4] = 3;
+    assert!(GeometryFrame::decode(&m).is_err());
+    // A version-1 frame.
+    let mut m = bytes;
+    m[5] = 1;
+    let e = GeometryFrame::decode(&m).unwrap_err();
+    assert_eq!(e.code, vsculpt_protocol::ErrorCode::BadVersion);
 }

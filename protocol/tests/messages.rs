@@ -27,7 +27,7 @@ fn malformed_and_unknown_are_told_apart() {
         ErrorCode::Malformed
     );
     assert_eq!(
-        code(r#"{"type": "set_state", "icon": 3, "state": "asleep"}"#),
+        code(r#"{"type": "set_state", "part": 1, "icon": 3, "state": "asleep"}"#),
         ErrorCode::Malformed
     );
     assert_eq!(
@@ -40,31 +40,33 @@ fn malformed_and_unknown_are_told_apart() {
 fn non_finite_and_out_of_range_numbers_are_refused() {
     // JSON has no NaN; overflowing literals are refused by the parser.
     assert_eq!(
-        code(r#"{"type": "drag", "icon": 1, "xyz": [1e999, 0, 0]}"#),
+        code(r#"{"type": "drag", "part": 1, "icon": 1, "xyz": [1e999, 0, 0]}"#),
         ErrorCode::Malformed
     );
     assert_eq!(
-        code(r#"{"type": "drag", "icon": 1, "xyz": [NaN, 0, 0]}"#),
+        code(r#"{"type": "drag", "part": 1, "icon": 1, "xyz": [NaN, 0, 0]}"#),
         ErrorCode::Malformed
     );
     assert_eq!(
-        code(r#"{"type": "drag", "icon": 1, "xyz": [1e12, 0, 0]}"#),
+        code(r#"{"type": "drag", "part": 1, "icon": 1, "xyz": [1e12, 0, 0]}"#),
         ErrorCode::OutOfRange
     );
     // Values built in memory are checked by validate().
     let m = ClientMessage::Drag {
+        part: 1,
         icon: 1,
         xyz: [f64::NAN, 0.0, 0.0],
     };
     assert_eq!(m.validate().unwrap_err().code, ErrorCode::NotFinite);
     let m = ClientMessage::MoveIcon {
+        part: 1,
         icon: 1,
         xyz: [0.0, f64::INFINITY, 0.0],
     };
     assert_eq!(m.validate().unwrap_err().code, ErrorCode::NotFinite);
     let bad_quat = r#"{"type": "device_sample", "sensor": "h", "position": [0,0,0], "orientation": [2,0,0,0], "time_us": 1}"#;
     assert_eq!(code(bad_quat), ErrorCode::OutOfRange);
-    let neg = r#"{"type": "set_material", "material": {"alpha11": -1, "alpha12": 0, "alpha22": 0, "beta11": 1, "beta12": 1, "beta22": 1}}"#;
+    let neg = r#"{"type": "set_material", "part": 1, "material": {"alpha11": -1, "alpha12": 0, "alpha22": 0, "beta11": 1, "beta12": 1, "beta22": 1}}"#;
     assert_eq!(code(neg), ErrorCode::OutOfRange);
 }
 
@@ -77,7 +79,7 @@ fn oversized_messages_and_strings_are_refused() {
     assert_eq!(code(&big), ErrorCode::TooLarge);
     let long = format!(r#"{{"type": "commit", "message": "{}"}}"#, "x".repeat(2000));
     assert_eq!(code(&long), ErrorCode::TooLarge);
-    let empty = r#"{"type": "bind_sensor", "icon": 1, "sensor": "  "}"#;
+    let empty = r#"{"type": "bind_sensor", "part": 1, "icon": 1, "sensor": "  "}"#;
     assert_eq!(code(empty), ErrorCode::OutOfRange);
 }
 
@@ -100,7 +102,7 @@ fn arbitrary_text_never_panics() {
         x ^= x << 17;
         x
     };
-    let valid = r#"{"type": "create_icon", "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}}"#;
+    let valid = r#"{"type": "create_icon", "req": 1, "part": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}}"#;
     for _ in 0..5000 {
         let mut bytes = valid.as_bytes().to_vec();
         for _ in 0..(next() % 4 + 1) {

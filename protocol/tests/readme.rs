@@ -77,6 +77,11 @@ fn every_server_example_parses_and_round_trips() {
         "icon_feedback",
         "history",
         "pong",
+        "part_created",
+        "part_deleted",
+        "part_changed",
+        "relation_created",
+        "relation_deleted",
     ] {
         assert!(seen.contains(t), "README has no example of {t}");
     }

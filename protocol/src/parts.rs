@@ -1,0 +1,202 @@
+//! Parts of a product and the relations between them.
+//!
+//! A design is a product made of named parts, each of one kind (today a
+//! B-spline `surface` or a deformable `curve`, paper 003), each with its own
+//! material, icons, visibility, colour and lock. Relations tie parts
+//! together: a `join` holds two surface edges together with position (G0)
+//! or tangent-plane (G1) continuity; a `binding` makes a surface's curve
+//! icon follow a curve part. A new kind of part is one new variant of
+//! [`PartShape`] (and of [`PartMaterial`] where it needs its own material);
+//! a new relation one new variant of [`RelationSpec`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::types::{Icon, Knots, Material, SurfaceData, Vec3};
+
+/// A clamped B-spline curve in model space.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveData {
+    /// Degree and knots (control points + degree + 1 of them).
+    pub knots: Knots,
+    /// The control points.
+    pub points: Vec<Vec3>,
+}
+
+/// A part's geometry, tagged by its kind.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum PartShape {
+    /// A tensor-product B-spline surface sculpted under the thin-plate
+    /// energy (paper 003, eq. 2).
+    Surface {
+        /// The surface.
+        surface: SurfaceData,
+    },
+    /// A deformable B-spline curve (paper 003, eq. 1).
+    Curve {
+        /// The curve.
+        curve: CurveData,
+    },
+}
+
+impl PartShape {
+    /// The kind's name as it appears on the wire (`"surface"`, `"curve"`).
+    pub fn kind(&self) -> PartKind {
+        match self {
+            PartShape::Surface { .. } => PartKind::Surface,
+            PartShape::Curve { .. } => PartKind::Curve,
+        }
+    }
+}
+
+/// The kinds of part.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PartKind {
+    /// A B-spline surface.
+    Surface,
+    /// A deformable curve.
+    Curve,
+}
+
+/// The material of a curve part (paper 003, eq. 1): stretch α and bend β.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CurveMaterial {
+    /// Stretch (weight of |c'|²).
+    pub alpha: f64,
+    /// Bend (weight of |c''|²).
+    pub beta: f64,
+}
+
+/// A part's material: six coefficients for a surface, two for a curve. The
+/// JSON carries no tag; the fields say which.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum PartMaterial {
+    /// A surface's thin-plate material.
+    Surface(Material),
+    /// A curve's material.
+    Curve(CurveMaterial),
+}
+
+/// One part as clients see it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Part {
+    /// Stable id within the design.
+    pub id: u64,
+    /// Its name (unique within the design).
+    pub name: String,
+    /// Drawn or hidden.
+    pub visible: bool,
+    /// A locked part refuses edits and drags (code `locked`).
+    pub locked: bool,
+    /// Display colour, `#rrggbb`.
+    pub colour: String,
+    /// Its material.
+    pub material: PartMaterial,
+    /// Its icons (icon ids are unique across the design).
+    pub icons: Vec<Icon>,
+    /// Its geometry. In a `snapshot` to a client that joined with
+    /// `geometry_first`, the control points are empty (`[]`): geometry
+    /// frames carry them.
+    pub shape: PartShape,
+}
+
+/// What a new part should be.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartSpec {
+    /// Its name (unique within the design).
+    pub name: String,
+    /// Its geometry.
+    pub shape: PartShape,
+    /// Its material; the kind's default when omitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<PartMaterial>,
+    /// Its colour, `#rrggbb`; one chosen by the server when omitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colour: Option<String>,
+}
+
+/// A boundary edge of a surface part, named by the parameter held fixed
+/// along it (`u_min`: u = u0, running along v).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Edge {
+    /// u = u0.
+    UMin,
+    /// u = u1.
+    UMax,
+    /// v = v0.
+    VMin,
+    /// v = v1.
+    VMax,
+}
+
+/// An edge of a part.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeRef {
+    /// The part.
+    pub part: u64,
+    /// Which edge.
+    pub edge: Edge,
+}
+
+/// How two joined edges meet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Continuity {
+    /// Position: the edges coincide.
+    G0,
+    /// Position and tangent plane: the normals agree along the seam.
+    G1,
+}
+
+/// What a relation ties together.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum RelationSpec {
+    /// Two surface edges held together by the solver; pulling either part
+    /// (or the seam) moves both.
+    Join {
+        /// The first edge.
+        a: EdgeRef,
+        /// The second edge.
+        b: EdgeRef,
+        /// G0 or G1.
+        continuity: Continuity,
+        /// Whether `b` runs against `a` (its parameter reversed).
+        #[serde(default)]
+        reversed: bool,
+    },
+    /// A surface's curve icon follows a curve part: editing the curve edits
+    /// the surface along it (paper 003: "curve icon edited by editing the
+    /// curve").
+    Binding {
+        /// The curve part.
+        curve: u64,
+        /// The surface part.
+        surface: u64,
+        /// The surface's curve-anchored icon that follows the curve.
+        icon: u64,
+    },
+}
+
+/// A relation as clients see it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Relation {
+    /// Stable id within the design.
+    pub id: u64,
+    /// What it ties together.
+    #[serde(flatten)]
+    pub spec: RelationSpec,
+}
+
+/// Whether `s` is a display colour `#rrggbb`.
+pub fn is_colour(s: &str) -> bool {
+    s.len() == 7 && s.starts_with('#') && s[1..].bytes().all(|b| b.is_ascii_hexdigit())
+}
