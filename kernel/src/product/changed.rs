@@ -6,16 +6,24 @@ use std::sync::Arc;
 
 use super::PartId;
 
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 enum Repr {
     One(PartId),
     Many(Arc<[PartId]>),
 }
 
 /// The parts whose shape (control points) or icons changed, ascending,
-/// without repeats.
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// without repeats. Equal when they name the same parts.
+#[derive(Clone, Debug)]
 pub struct ChangedParts(Repr);
+
+impl PartialEq for ChangedParts {
+    fn eq(&self, other: &Self) -> bool {
+        self.as_slice() == other.as_slice()
+    }
+}
+
+impl Eq for ChangedParts {}
 
 impl ChangedParts {
     /// No part.
