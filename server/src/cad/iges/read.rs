@@ -1,0 +1,278 @@
+//! Reading surfaces, curves and whole parts (with their names) out of an
+//! IGES file, applying each entity's transformation matrix (entity 124).
+
+use super::curve::parse_curve;
+use super::format::iges_text;
+use super::parse::{DirEntry, Fields, IgesFile};
+use super::surface::parse_surface;
+use super::{IgesEntity, IgesError, IgesPart, IgesSurface};
+use glam::{DMat3, DVec3};
+use std::collections::HashMap;
+
+/// Longest part name kept (longer names are cut): the protocol's limit for
+/// any string, so an imported name can be sent and stored as it is.
+const MAX_NAME: usize = vsculpt_protocol::limits::MAX_STRING_BYTES;
+
+/// Reads every B-spline surface (entity 128) of an IGES file, whatever its
+/// role in the file, in file order.
+pub fn read_iges(text: &str) -> Result<Vec<IgesSurface>, IgesError> {
+    let file = IgesFile::parse(text)?;
+    let mut surfaces = Vec::new();
+    for (&de, e) in &file.entries {
+        if e.entity != 128 {
+            continue;
+        }
+        let f = file.params(de)?;
+        let (mut s, _) = parse_surface(&Fields { de, f: &f })?;
+        let m = transform(&file, de, e.transform)?;
+        for p in &mut s.points {
+            *p = m(*p);
+        }
+        s.check_magnitudes(de)?;
+        surfaces.push(s);
+    }
+    if surfaces.is_empty() {
+        return Err(IgesError::NoSurface);
+    }
+    Ok(surfaces)
+}
+
+/// The entity a physically dependent surface belongs to: a trimmed (144)
+/// or bounded (143) surface, or a B-rep face (510).
+struct Owner {
+    /// The owner's directory entry.
+    de: usize,
+    /// The number of the owner's own parameter fields.
+    own: usize,
+}
+
+/// Membership of a 402 group: the group's entry, the member's 1-based
+/// position and the member count.
+struct Membership {
+    group: usize,
+    own: usize,
+    position: usize,
+    count: usize,
+}
+
+/// Reads every part of an IGES file: each B-spline surface (entity 128) and
+/// B-spline curve (entity 126) that stands for itself, in file order.
+///
+/// Which entities are parts is decided by the Directory Entry's subordinate
+/// entity switch (status digits 3–4), the standard's own marker:
+/// - an independent (00) or only logically dependent (02, e.g. a member of
+///   a group) 126 or 128 is a part, except a 126 whose use flag (status
+///   digits 5–6) is 05, "2D parametric": a curve in a surface's parameter
+///   space, not in model space;
+/// - a physically dependent (01, 03) 126 is a piece of something else — a
+///   trimmed surface's boundary (142/144), a composite curve (102), a B-rep
+///   edge — and is skipped;
+/// - a physically dependent 128 is a part when it is the base surface of an
+///   independent trimmed (144) or bounded (143) surface, or the surface of a
+///   B-rep face (510): that is how most CAD systems write their surfaces.
+///   The trimming itself is not kept (the kernel's surfaces are untrimmed);
+///   the owner's transformation matrix is applied after the surface's own.
+///   Any other physically dependent 128 (say, inside a subfigure
+///   definition, 308) is skipped.
+///
+/// A part's name is, as in OpenCASCADE's reader, its Name property (entity
+/// 406 form 15, referenced from the property pointers after the entity's
+/// parameters) or else its label (DE field 18) with its subscript (field
+/// 19) as `label(subscript)`. A surface with neither takes the name of its
+/// trimmed surface or face; failing that, a part that is a member of a
+/// named group (associativity 402, forms 1, 7, 14, 15) is named after the
+/// group, with its 1-based position when the group has several members.
+/// Names are printable ASCII, trimmed, and at most 1024 characters.
+///
+/// Errors: anything [`read_iges`] refuses, for any entity that is read (a
+/// part, its owner, its name property or group); an unreadable pointer or a
+/// pointer to a missing entry; a rational part with non-uniform weights
+/// ([`IgesError::RationalWeights`], [`IgesError::RationalCurve`]); no part
+/// at all ([`IgesError::NoParts`]).
+pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
+    let file = IgesFile::parse(text)?;
+    let mut owners: HashMap<usize, Owner> = HashMap::new();
+    let mut groups: HashMap<usize, Membership> = HashMap::new();
+    for (&de, e) in &file.entries {
+        let (surface_field, independent) = match e.entity {
+            144 => (1, true),
+            143 => (2, true),
+            510 => (1, false),
+            402 if [1, 7, 14, 15].contains(&e.form) => {
+                let p = file.params(de)?;
+                let f = Fields { de, f: &p };
+                let n = count(&f, 1)?;
+                for k in 0..n {
+                    if let Some(m) = f.pointer(&file, 2 + k)? {
+                        groups.entry(m).or_insert(Membership {
+                            group: de,
+                            own: 2 + n,
+                            position: k + 1,
+                            count: n,
+                        });
+                    }
+                }
+                continue;
+            }
+            _ => continue,
+        };
+        if independent && !matches!(e.subordinate(), 0 | 2) {
+            continue;
+        }
+        let p = file.params(de)?;
+        let f = Fields { de, f: &p };
+        let own = match e.entity {
+            144 => 5 + count(&f, 3)?,
+            _ => 4 + count(&f, 3 - usize::from(e.entity == 510))?,
+        };
+        if let Some(s) = f.pointer(&file, surface_field)? {
+            if file.entries[&s].entity == 128 {
+                owners.entry(s).or_insert(Owner { de, own });
+            }
+        }
+    }
+
+    let mut parts = Vec::new();
+    for (&de, e) in &file.entries {
+        let independent = matches!(e.subordinate(), 0 | 2);
+        let owner = owners.get(&de);
+        let take = match e.entity {
+            126 => independent && e.use_flag() != 5,
+            128 => independent || owner.is_some(),
+            _ => false,
+        };
+        if !take {
+            continue;
+        }
+        let p = file.params(de)?;
+        let f = Fields { de, f: &p };
+        let m = transform(&file, de, e.transform)?;
+        let outer = match owner {
+            Some(o) => Some(transform(&file, o.de, file.entries[&o.de].transform)?),
+            None => None,
+        };
+        let map = |p: DVec3| outer.as_ref().map_or(m(p), |o| o(m(p)));
+        let (entity, own) = if e.entity == 128 {
+            let (mut s, own) = parse_surface(&f)?;
+            for p in &mut s.points {
+                *p = map(*p);
+            }
+            s.check_magnitudes(de)?;
+            (IgesEntity::Surface(s), own)
+        } else {
+            let (mut c, own) = parse_curve(&f)?;
+            for p in &mut c.points {
+                *p = map(DVec3::from_array(*p)).to_array();
+            }
+            c.check_magnitudes(de)?;
+            (IgesEntity::Curve(c), own)
+        };
+        let mut name = own_name(&file, e, &f, own)?;
+        if name.is_none()
+            && let Some(o) = owner
+        {
+            let op = file.params(o.de)?;
+            let of = Fields { de: o.de, f: &op };
+            name = own_name(&file, &file.entries[&o.de], &of, o.own)?;
+        }
+        if name.is_none()
+            && let Some(g) = groups.get(&de)
+        {
+            let gp = file.params(g.group)?;
+            let gf = Fields {
+                de: g.group,
+                f: &gp,
+            };
+            name = own_name(&file, &file.entries[&g.group], &gf, g.own)?.map(|n| {
+                if g.count > 1 {
+                    format!("{n} {}", g.position)
+                } else {
+                    n
+                }
+            });
+        }
+        parts.push(IgesPart { name, entity });
+    }
+    if parts.is_empty() {
+        return Err(IgesError::NoParts);
+    }
+    Ok(parts)
+}
+
+/// A count in field `k` that fits in the fields after it.
+fn count(f: &Fields<'_>, k: usize) -> Result<usize, IgesError> {
+    let n = f.int(k)?;
+    usize::try_from(n)
+        .ok()
+        .filter(|&n| n < f.f.len())
+        .ok_or_else(|| {
+            f.bad(format!(
+                "count {n} in field {k} does not fit the parameters"
+            ))
+        })
+}
+
+/// An entity's own name: its Name property (406 form 15), else its label
+/// and subscript.
+fn own_name(
+    file: &IgesFile,
+    e: &DirEntry,
+    f: &Fields<'_>,
+    own: usize,
+) -> Result<Option<String>, IgesError> {
+    for p in f.properties(file, own)? {
+        let pe = &file.entries[&p];
+        if pe.entity != 406 || pe.form != 15 {
+            continue;
+        }
+        let params = file.params(p)?;
+        let pf = Fields { de: p, f: &params };
+        if let Some(name) = clean_name(pf.text(2)?) {
+            return Ok(Some(name));
+        }
+    }
+    Ok(e.label_name().and_then(|n| clean_name(&n)))
+}
+
+/// A name made printable ASCII, trimmed and cut to [`MAX_NAME`]; `None` if
+/// nothing is left.
+fn clean_name(raw: &str) -> Option<String> {
+    let mut s = iges_text(raw.trim()).trim().to_string();
+    s.truncate(MAX_NAME);
+    (!s.is_empty()).then_some(s)
+}
+
+/// The transformation (entity 124, possibly chained) at `t` as a point map;
+/// the identity when `t` is 0. `de` is the entity that points to it.
+fn transform(
+    file: &IgesFile,
+    de: usize,
+    t: usize,
+) -> Result<impl Fn(DVec3) -> DVec3 + use<>, IgesError> {
+    let mut chain: Vec<(DMat3, DVec3)> = Vec::new();
+    let mut cur = t;
+    while cur != 0 {
+        let e = file.entry(de, cur)?;
+        if e.entity != 124 || chain.len() > 16 {
+            return Err(IgesError::BadParameter {
+                de: cur,
+                reason: "transformation pointer is not an entity 124 chain".into(),
+            });
+        }
+        let p = file.params(cur)?;
+        let f = Fields { de: cur, f: &p };
+        if p.len() < 13 {
+            return Err(f.bad("entity 124 needs 12 parameters".into()));
+        }
+        let r = |k: usize| f.real(k);
+        let m = DMat3::from_cols(
+            DVec3::new(r(1)?, r(5)?, r(9)?),
+            DVec3::new(r(2)?, r(6)?, r(10)?),
+            DVec3::new(r(3)?, r(7)?, r(11)?),
+        );
+        let t = DVec3::new(r(4)?, r(8)?, r(12)?);
+        chain.push((m, t));
+        cur = e.transform;
+    }
+    Ok(move |p: DVec3| chain.iter().fold(p, |p, (m, t)| *m * p + *t))
+}
