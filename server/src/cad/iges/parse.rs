@@ -73,6 +73,8 @@ pub(super) struct IgesFile {
     pd: char,
     /// Record delimiter.
     rd: char,
+    /// Millimetres per model unit (Global fields 14–15).
+    pub unit_mm: f64,
 }
 
 impl IgesFile {
@@ -141,6 +143,7 @@ impl IgesFile {
             return Err(IgesError::NotIges("no Start or Global section".into()));
         }
         let (pd, rd) = delimiters(&global);
+        let unit_mm = unit_mm(&global, pd, rd);
         if !dlines.len().is_multiple_of(2) {
             return Err(IgesError::Malformed {
                 section: 'D',
@@ -196,6 +199,7 @@ impl IgesFile {
             plines,
             pd,
             rd,
+            unit_mm,
         })
     }
 
@@ -322,7 +326,7 @@ impl Fields<'_> {
             let n = self.int(k)?;
             let n = usize::try_from(n)
                 .ok()
-                .filter(|&n| n <= self.f.len() - k - 1)
+                .filter(|&n| n < self.f.len() - k)
                 .ok_or_else(|| self.bad(format!("pointer count {n} at field {k}")))?;
             let ptrs = (k + 1..k + 1 + n)
                 .map(|i| self.pointer(file, i))
@@ -400,6 +404,37 @@ pub(super) fn parse_int(s: &str) -> Result<i64, String> {
         Ok(r as i64)
     } else {
         Err(format!("'{s}' is not an integer"))
+    }
+}
+
+/// Millimetres per model unit from the Global section: the units flag
+/// (field 14) and units name (field 15), converted only when they agree
+/// (or the flag is 3, "name given", with a known name). Otherwise — fields
+/// missing, blank, unknown or contradicting each other, as when a Hollerith
+/// count earlier in the section is wrong — the numbers are taken as
+/// millimetres, what vsculpt and most tools write.
+fn unit_mm(global: &str, pd: char, rd: char) -> f64 {
+    let Ok(fields) = split_params(global, pd, rd) else {
+        return 1.0;
+    };
+    let flag = fields.get(13).and_then(|s| parse_int(s).ok());
+    let name = fields.get(14).map(|s| s.trim().to_ascii_uppercase());
+    let by_name = match name.as_deref() {
+        Some("IN" | "INCH") => Some((1, 25.4)),
+        Some("MM") => Some((2, 1.0)),
+        Some("FT") => Some((4, 304.8)),
+        Some("MI") => Some((5, 1_609_344.0)),
+        Some("M") => Some((6, 1000.0)),
+        Some("KM") => Some((7, 1e6)),
+        Some("MIL") => Some((8, 0.0254)),
+        Some("UM") => Some((9, 1e-3)),
+        Some("CM") => Some((10, 10.0)),
+        Some("UIN") => Some((11, 2.54e-5)),
+        _ => None,
+    };
+    match (flag, by_name) {
+        (Some(f), Some((g, mm))) if f == g || f == 3 => mm,
+        _ => 1.0,
     }
 }
 

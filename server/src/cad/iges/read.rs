@@ -14,7 +14,9 @@ use std::collections::HashMap;
 const MAX_NAME: usize = vsculpt_protocol::limits::MAX_STRING_BYTES;
 
 /// Reads every B-spline surface (entity 128) of an IGES file, whatever its
-/// role in the file, in file order.
+/// role in the file, in file order. Control points are in millimetres: the
+/// entity's transformation (entity 124) is applied, then the file's units
+/// (Global fields 14–15) are converted.
 pub fn read_iges(text: &str) -> Result<Vec<IgesSurface>, IgesError> {
     let file = IgesFile::parse(text)?;
     let mut surfaces = Vec::new();
@@ -26,7 +28,7 @@ pub fn read_iges(text: &str) -> Result<Vec<IgesSurface>, IgesError> {
         let (mut s, _) = parse_surface(&Fields { de, f: &f })?;
         let m = transform(&file, de, e.transform)?;
         for p in &mut s.points {
-            *p = m(*p);
+            *p = m(*p) * file.unit_mm;
         }
         s.check_magnitudes(de)?;
         surfaces.push(s);
@@ -74,6 +76,9 @@ struct Membership {
 ///   the owner's transformation matrix is applied after the surface's own.
 ///   Any other physically dependent 128 (say, inside a subfigure
 ///   definition, 308) is skipped.
+///
+/// Control points are in millimetres, after the transformations, as in
+/// [`read_iges`]; knots are as written.
 ///
 /// A part's name is, as in OpenCASCADE's reader, its Name property (entity
 /// 406 form 15, referenced from the property pointers after the entity's
@@ -125,10 +130,10 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
             144 => 5 + count(&f, 3)?,
             _ => 4 + count(&f, 3 - usize::from(e.entity == 510))?,
         };
-        if let Some(s) = f.pointer(&file, surface_field)? {
-            if file.entries[&s].entity == 128 {
-                owners.entry(s).or_insert(Owner { de, own });
-            }
+        if let Some(s) = f.pointer(&file, surface_field)?
+            && file.entries[&s].entity == 128
+        {
+            owners.entry(s).or_insert(Owner { de, own });
         }
     }
 
@@ -151,7 +156,7 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
             Some(o) => Some(transform(&file, o.de, file.entries[&o.de].transform)?),
             None => None,
         };
-        let map = |p: DVec3| outer.as_ref().map_or(m(p), |o| o(m(p)));
+        let map = |p: DVec3| outer.as_ref().map_or(m(p), |o| o(m(p))) * file.unit_mm;
         let (entity, own) = if e.entity == 128 {
             let (mut s, own) = parse_surface(&f)?;
             for p in &mut s.points {

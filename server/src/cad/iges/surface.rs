@@ -58,7 +58,7 @@ impl IgesSurface {
         }
         knots_ok(&self.u_knots, self.u_degree, self.nu)
             .and_then(|()| knots_ok(&self.v_knots, self.v_degree, self.nv))
-            .or_else(|e| bad(format!("{e}")))
+            .or_else(bad)
     }
 
     /// The parameter fields of this surface as entity 128 (weights all 1,
