@@ -537,10 +537,13 @@ fn file_with_dependents() -> String {
         ..ent(ty, status, params)
     };
     compose(&[
-        // D1: translation by (0, 0, 10).
-        ent(124, "00000000", "124,1,0,0,0,0,1,0,0,0,0,1,10"),
-        // D3: the base surface of the trimmed surface at D7.
-        ent(128, "00010000", BILINEAR),
+        // D1: translation by (5, 0, 0).
+        ent(124, "00000000", "124,1,0,0,5,0,1,0,0,0,0,1,0"),
+        // D3: the base surface of the trimmed surface at D7, turned by D39.
+        Ent {
+            xform: 39,
+            ..ent(128, "00010000", BILINEAR)
+        },
         // D5: a boundary curve of it (physically dependent, parametric).
         ent(126, "00010500", LINE),
         // D7: trimmed surface on D3, moved by D1, named by D9.
@@ -578,6 +581,14 @@ fn file_with_dependents() -> String {
             form: 15,
             ..ent(406, "00000000", "406,1,15HLong curve name")
         },
+        // D31: the surface of the B-rep face D33, named by the face's label.
+        ent(128, "00010000", BILINEAR),
+        named(510, "00010000", "510,31,0,1", "FACE", "3"),
+        // D35: the surface of the bounded surface D37.
+        ent(128, "00010000", BILINEAR),
+        named(143, "00000000", "143,0,35,0", "BND", ""),
+        // D39: a quarter turn about z.
+        ent(124, "00000000", "124,0,-1,0,0,1,0,0,0,0,0,1,0"),
     ])
 }
 
@@ -594,6 +605,8 @@ fn parts_are_the_independent_entities_and_the_bases_of_trimmed_surfaces() {
             Some("Side panels 1"),
             Some("Side panels 2"),
             Some("Long curve name"),
+            Some("FACE(3)"),
+            Some("BND"),
         ]
     );
     let kinds: Vec<&str> = parts
@@ -603,12 +616,19 @@ fn parts_are_the_independent_entities_and_the_bases_of_trimmed_surfaces() {
             IgesEntity::Curve(_) => "curve",
         })
         .collect();
-    assert_eq!(kinds, ["surface", "curve", "surface", "surface", "curve"]);
-    // The trimmed surface's transformation moves its base surface.
+    assert_eq!(
+        kinds,
+        [
+            "surface", "curve", "surface", "surface", "curve", "surface", "surface"
+        ]
+    );
+    // The base surface is turned by its own transformation, then moved by
+    // its trimmed surface's: (0, 1, 0) → (−1, 0, 0) → (4, 0, 0).
     let IgesEntity::Surface(top) = &parts[0].entity else {
         unreachable!()
     };
-    assert_eq!(top.points[3], DVec3::new(1.0, 1.0, 10.0));
+    assert_eq!(top.points[1], DVec3::new(4.0, 0.0, 0.0));
+    assert_eq!(top.points[3], DVec3::new(4.0, 1.0, 0.0));
     let IgesEntity::Surface(side) = &parts[2].entity else {
         unreachable!()
     };
