@@ -641,6 +641,38 @@ fn parts_are_the_independent_entities_and_the_bases_of_trimmed_surfaces() {
 }
 
 #[test]
+fn curves_used_by_other_entities_are_pieces_whatever_their_status() {
+    // Blank status fields everywhere, as some writers leave them.
+    let text = compose(&[
+        ent(128, "", BILINEAR),
+        // D3: in the composite curve D11; D5, D7: the parameter-space and
+        // model-space curves of the curve on surface D13; D9: an edge of
+        // the edge list D15.
+        ent(126, "", LINE),
+        ent(126, "", LINE),
+        ent(126, "", LINE),
+        ent(126, "", LINE),
+        ent(102, "", "102,1,3"),
+        ent(142, "", "142,1,1,5,7,1"),
+        Ent {
+            form: 1,
+            ..ent(504, "", "504,1,9,0,1,0,2")
+        },
+        // D17: a curve nothing uses.
+        Ent {
+            label: "FREE",
+            ..ent(126, "", LINE)
+        },
+    ]);
+    let parts = read_iges_parts(&text).unwrap();
+    let got: Vec<(bool, Option<&str>)> = parts
+        .iter()
+        .map(|p| (matches!(p.entity, IgesEntity::Curve(_)), p.name.as_deref()))
+        .collect();
+    assert_eq!(got, vec![(false, None), (true, Some("FREE"))]);
+}
+
+#[test]
 fn rational_curves_with_equal_weights_are_accepted_others_refused() {
     let equal = "126,1,1,0,0,0,0,0,0,1,1,2.5,2.5,0,0,0,1,2,3,0,1,0,0,0";
     let parts = read_iges_parts(&compose(&[ent(126, "00000000", equal)])).unwrap();

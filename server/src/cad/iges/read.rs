@@ -7,7 +7,7 @@ use super::parse::{DirEntry, Fields, IgesFile};
 use super::surface::parse_surface;
 use super::{IgesEntity, IgesError, IgesPart, IgesSurface};
 use glam::{DMat3, DVec3};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Longest part name kept (longer names are cut): the protocol's limit for
 /// any string, so an imported name can be sent and stored as it is.
@@ -68,7 +68,11 @@ struct Membership {
 ///   space, not in model space;
 /// - a physically dependent (01, 03) 126 is a piece of something else — a
 ///   trimmed surface's boundary (142/144), a composite curve (102), a B-rep
-///   edge — and is skipped;
+///   edge — and is skipped. So is a 126 that such an entity uses whatever
+///   its own status says (some writers leave the field blank): one pointed
+///   to by a composite curve (102), a curve on a surface (142, its
+///   parameter-space and model-space curves), a boundary (141), an edge
+///   list (504) or a loop (508, its parameter-space curves);
 /// - a physically dependent 128 is a part when it is the base surface of an
 ///   independent trimmed (144) or bounded (143) surface, or the surface of a
 ///   B-rep face (510): that is how most CAD systems write their surfaces.
@@ -137,12 +141,13 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
         }
     }
 
+    let pieces = pieces(&file);
     let mut parts = Vec::new();
     for (&de, e) in &file.entries {
         let independent = matches!(e.subordinate(), 0 | 2);
         let owner = owners.get(&de);
         let take = match e.entity {
-            126 => independent && e.use_flag() != 5,
+            126 => independent && e.use_flag() != 5 && !pieces.contains(&de),
             128 => independent || owner.is_some(),
             _ => false,
         };
@@ -202,6 +207,61 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
         return Err(IgesError::NoParts);
     }
     Ok(parts)
+}
+
+/// The entries that composite curves (102), boundaries (141), curves on
+/// surfaces (142), edge lists (504) and loops (508) use as their curves.
+/// These carriers are not parts themselves, so one that cannot be read is
+/// passed over rather than refusing the file.
+fn pieces(file: &IgesFile) -> HashSet<usize> {
+    let mut set = HashSet::new();
+    for (&de, e) in &file.entries {
+        if ![102, 141, 142, 504, 508].contains(&e.entity) {
+            continue;
+        }
+        let Ok(p) = file.params(de) else { continue };
+        let f = Fields { de, f: &p };
+        let int = |k: usize| {
+            f.int(k)
+                .ok()
+                .and_then(|v| usize::try_from(v).ok())
+                .filter(|&v| v < p.len())
+        };
+        let mut fields = Vec::new();
+        match e.entity {
+            102 => fields.extend((0..int(1).unwrap_or(0)).map(|k| 2 + k)),
+            142 => fields.extend([3, 4]),
+            // 141: TYPE, PREF, SPTR, N, then per curve CRVPT, SENSE, K and
+            // K parameter-space curves.
+            141 => {
+                let mut at = 5;
+                for _ in 0..int(4).unwrap_or(0) {
+                    let Some(k) = int(at + 2) else { break };
+                    fields.push(at);
+                    fields.extend(at + 3..at + 3 + k);
+                    at += 3 + k;
+                }
+            }
+            // 504: N, then per edge CURV, SVP, SV, TVP, TV.
+            504 => fields.extend((0..int(1).unwrap_or(0)).map(|k| 2 + 5 * k)),
+            // 508: N, then per edge TYPE, EDGE, NDX, OF, K and K pairs
+            // (ISOP, CURV) of parameter-space curves.
+            _ => {
+                let mut at = 2;
+                for _ in 0..int(1).unwrap_or(0) {
+                    let Some(k) = int(at + 4) else { break };
+                    fields.extend((0..k).map(|j| at + 6 + 2 * j));
+                    at += 5 + 2 * k;
+                }
+            }
+        }
+        set.extend(
+            fields
+                .into_iter()
+                .filter_map(|k| f.pointer(file, k).ok().flatten()),
+        );
+    }
+    set
 }
 
 /// A count in field `k` that fits in the fields after it.
