@@ -103,7 +103,9 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
     let mut owners: HashMap<usize, Owner> = HashMap::new();
     let mut groups: HashMap<usize, Membership> = HashMap::new();
     for (&de, e) in &file.entries {
-        let (surface_field, independent) = match e.entity {
+        // The field pointing to the surface, and whether the owner must be
+        // independent itself (a B-rep face never is).
+        let (surface_field, must_be_independent) = match e.entity {
             144 => (1, true),
             143 => (2, true),
             510 => (1, false),
@@ -125,7 +127,7 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
             }
             _ => continue,
         };
-        if independent && !matches!(e.subordinate(), 0 | 2) {
+        if must_be_independent && !matches!(e.subordinate(), 0 | 2) {
             continue;
         }
         let p = file.params(de)?;
@@ -177,30 +179,7 @@ pub fn read_iges_parts(text: &str) -> Result<Vec<IgesPart>, IgesError> {
             c.check_magnitudes(de)?;
             (IgesEntity::Curve(c), own)
         };
-        let mut name = own_name(&file, e, &f, own)?;
-        if name.is_none()
-            && let Some(o) = owner
-        {
-            let op = file.params(o.de)?;
-            let of = Fields { de: o.de, f: &op };
-            name = own_name(&file, &file.entries[&o.de], &of, o.own)?;
-        }
-        if name.is_none()
-            && let Some(g) = groups.get(&de)
-        {
-            let gp = file.params(g.group)?;
-            let gf = Fields {
-                de: g.group,
-                f: &gp,
-            };
-            name = own_name(&file, &file.entries[&g.group], &gf, g.own)?.map(|n| {
-                if g.count > 1 {
-                    format!("{n} {}", g.position)
-                } else {
-                    n
-                }
-            });
-        }
+        let name = part_name(&file, e, &f, own, owner, groups.get(&de))?;
         parts.push(IgesPart { name, entity });
     }
     if parts.is_empty() {
@@ -262,6 +241,39 @@ fn pieces(file: &IgesFile) -> HashSet<usize> {
         );
     }
     set
+}
+
+/// A part's name: its own (see [`own_name`]), else its owner's, else its
+/// group's with its position when the group has several members.
+fn part_name(
+    file: &IgesFile,
+    e: &DirEntry,
+    f: &Fields<'_>,
+    own: usize,
+    owner: Option<&Owner>,
+    group: Option<&Membership>,
+) -> Result<Option<String>, IgesError> {
+    if let Some(name) = own_name(file, e, f, own)? {
+        return Ok(Some(name));
+    }
+    if let Some(o) = owner {
+        let p = file.params(o.de)?;
+        let of = Fields { de: o.de, f: &p };
+        if let Some(name) = own_name(file, &file.entries[&o.de], &of, o.own)? {
+            return Ok(Some(name));
+        }
+    }
+    let Some(g) = group else { return Ok(None) };
+    let p = file.params(g.group)?;
+    let gf = Fields { de: g.group, f: &p };
+    let name = own_name(file, &file.entries[&g.group], &gf, g.own)?;
+    Ok(name.map(|n| {
+        if g.count > 1 {
+            format!("{n} {}", g.position)
+        } else {
+            n
+        }
+    }))
 }
 
 /// A count in field `k` that fits in the fields after it.
