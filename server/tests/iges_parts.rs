@@ -725,6 +725,18 @@ fn writer_refuses_what_it_cannot_write() {
     c.points.truncate(3);
     c.knots.truncate(7);
     bad(c);
+    // Degree 31 is beyond what the reader accepts, so it is not written.
+    bad(curve(40, 31, 0.0));
+    let c = curve(40, 30, 0.0);
+    let parts = [IgesPart {
+        name: None,
+        entity: IgesEntity::Curve(c.clone()),
+    }];
+    let text = write_iges_parts(&parts, &meta()).unwrap();
+    assert_eq!(
+        read_iges_parts(&text).unwrap()[0].entity,
+        IgesEntity::Curve(c)
+    );
     let mut s = patch(4, 4, 3, 3, 1.0);
     s.v_knots[1] = f64::INFINITY;
     let parts = [IgesPart {

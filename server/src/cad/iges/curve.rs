@@ -7,10 +7,10 @@
 //! count − 1, M the degree, PROP1 = 1 for planar (the normal then matters)
 //! and PROP3 = 1 for polynomial.
 
-use super::IgesError;
 use super::format::{knots_ok, real};
 use super::parse::Fields;
 use super::surface::{check_magnitudes, uniform_weights};
+use super::{IgesError, MAX_IGES_DEGREE, MAX_IGES_POINTS};
 
 /// A polynomial B-spline curve as IGES carries it: degree, full knot vector
 /// (`points.len() + degree + 1` values) and control points.
@@ -30,7 +30,13 @@ impl IgesCurve {
         if self.degree == 0 {
             return bad("degree must be at least 1".into());
         }
+        if self.degree > MAX_IGES_DEGREE {
+            return bad(format!("degree above {MAX_IGES_DEGREE}"));
+        }
         let n = self.points.len();
+        if n > MAX_IGES_POINTS {
+            return bad(format!("more than {MAX_IGES_POINTS} control points"));
+        }
         if n <= self.degree {
             return bad(format!(
                 "{n} control points are too few for degree {}",
@@ -94,7 +100,7 @@ pub(super) fn parse_curve(f: &Fields<'_>) -> Result<(IgesCurve, usize), IgesErro
         return Err(f.bad("parameter data does not start with 126".into()));
     }
     let (k, m) = (f.int(1)?, f.int(2)?);
-    if !(1..=1_000_000).contains(&k) || !(1..=30).contains(&m) {
+    if !(1..MAX_IGES_POINTS as i64).contains(&k) || !(1..=MAX_IGES_DEGREE as i64).contains(&m) {
         return Err(f.bad(format!("unsupported sizes K={k} M={m}")));
     }
     let (n, degree) = (k as usize + 1, m as usize);

@@ -118,6 +118,13 @@ pub enum IgesError {
 /// an imported surface can be solved, sent in f32 frames and exported.
 pub const MAX_IGES_MAGNITUDE: f64 = vsculpt_protocol::limits::MAX_MAGNITUDE;
 
+/// Highest degree read or written (the reader refuses more, so the writer
+/// does too: what vsculpt writes it can read back).
+pub const MAX_IGES_DEGREE: usize = 30;
+
+/// Most control points of a surface or curve read or written.
+pub const MAX_IGES_POINTS: usize = 1_000_000;
+
 /// The geometry of one part: a surface (entity 128) or a curve (entity 126).
 #[derive(Clone, Debug, PartialEq)]
 pub enum IgesEntity {

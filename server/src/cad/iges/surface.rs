@@ -7,7 +7,7 @@
 
 use super::format::{knots_ok, real};
 use super::parse::Fields;
-use super::{IgesError, MAX_IGES_MAGNITUDE};
+use super::{IgesError, MAX_IGES_DEGREE, MAX_IGES_MAGNITUDE, MAX_IGES_POINTS};
 use glam::DVec3;
 
 /// A polynomial B-spline surface as IGES carries it: degrees, full knot
@@ -36,6 +36,12 @@ impl IgesSurface {
         let bad = |s: String| Err(IgesError::InvalidSurface(s));
         if self.u_degree == 0 || self.v_degree == 0 {
             return bad("degree must be at least 1".into());
+        }
+        if self.u_degree > MAX_IGES_DEGREE || self.v_degree > MAX_IGES_DEGREE {
+            return bad(format!("degree above {MAX_IGES_DEGREE}"));
+        }
+        if self.nu.saturating_mul(self.nv) > MAX_IGES_POINTS {
+            return bad(format!("more than {MAX_IGES_POINTS} control points"));
         }
         if self.nu <= self.u_degree || self.nv <= self.v_degree {
             return bad("too few control points for the degree".into());
@@ -149,11 +155,12 @@ pub(super) fn parse_surface(f: &Fields<'_>) -> Result<(IgesSurface, usize), Iges
         return Err(f.bad("parameter data does not start with 128".into()));
     }
     let (k1, k2, m1, m2) = (f.int(1)?, f.int(2)?, f.int(3)?, f.int(4)?);
-    if k1 < 1 || k2 < 1 || m1 < 1 || m2 < 1 || k1 > 100_000 || k2 > 100_000 || m1 > 30 || m2 > 30 {
+    let (kmax, mmax) = (MAX_IGES_POINTS as i64, MAX_IGES_DEGREE as i64);
+    if k1 < 1 || k2 < 1 || m1 < 1 || m2 < 1 || k1 >= kmax || k2 >= kmax || m1 > mmax || m2 > mmax {
         return Err(f.bad(format!("unsupported sizes K1={k1} K2={k2} M1={m1} M2={m2}")));
     }
     let (nu, nv, du, dv) = (k1 as usize + 1, k2 as usize + 1, m1 as usize, m2 as usize);
-    if nu * nv > 1_000_000 {
+    if nu * nv > MAX_IGES_POINTS {
         return Err(f.bad("control net too large".into()));
     }
     let polynomial = f.int(7)? == 1;
