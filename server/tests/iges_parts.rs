@@ -474,10 +474,16 @@ fn ent(ty: u32, status: &'static str, params: &str) -> Ent {
 
 /// A fixed-format file of `ents` (entity k at D2k+1), built here by hand.
 fn compose(ents: &[Ent]) -> String {
+    compose_in("2,2HMM", ents)
+}
+
+/// [`compose`] with Global fields 14–15 (units flag and name) `units`.
+fn compose_in(units: &str, ents: &[Ent]) -> String {
     let mut out = format!("{:<72}S{:>7}\n", "composed by the iges_parts test", 1);
     out += &format!(
         "{:<72}G{:>7}\n",
-        "1H,,1H;,4Htest,8Htest.igs,,,32,38,6,308,15,,1.,2,2HMM;", 1
+        format!("1H,,1H;,4Htest,8Htest.igs,,,32,38,6,308,15,,1.,{units};"),
+        1
     );
     let mut p = String::new();
     let mut pseq = 0;
@@ -670,6 +676,27 @@ fn curves_used_by_other_entities_are_pieces_whatever_their_status() {
         .map(|p| (matches!(p.entity, IgesEntity::Curve(_)), p.name.as_deref()))
         .collect();
     assert_eq!(got, vec![(false, None), (true, Some("FREE"))]);
+}
+
+#[test]
+fn coordinates_are_converted_to_millimetres_when_units_agree() {
+    let end = |units: &str| -> [f64; 3] {
+        let parts = read_iges_parts(&compose_in(units, &[ent(126, "00000000", LINE)])).unwrap();
+        let IgesEntity::Curve(c) = &parts[0].entity else {
+            panic!()
+        };
+        assert_eq!(c.knots, vec![0.0, 0.0, 1.0, 1.0], "knots are not lengths");
+        c.points[1]
+    };
+    assert_eq!(end("2,2HMM"), [1.0, 2.0, 3.0]);
+    assert_eq!(end("6,1HM"), [1000.0, 2000.0, 3000.0]);
+    assert_eq!(end("1,4HINCH"), [25.4, 2.0 * 25.4, 3.0 * 25.4]);
+    assert_eq!(end("10,2Hcm"), [10.0, 20.0, 30.0]);
+    assert_eq!(end("3,2HFT"), [304.8, 2.0 * 304.8, 3.0 * 304.8]);
+    // Flag and name contradicting each other, or missing: as written.
+    assert_eq!(end("1,2HMM"), [1.0, 2.0, 3.0]);
+    assert_eq!(end("6,"), [1.0, 2.0, 3.0]);
+    assert_eq!(end(","), [1.0, 2.0, 3.0]);
 }
 
 #[test]
