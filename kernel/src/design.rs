@@ -766,6 +766,12 @@ impl Design {
         }
     }
 
+    /// The running drag's icon key and input t (unscaled: what a problem
+    /// built now, with the spring's current stiffness, needs).
+    pub(crate) fn drag_input(&self) -> Option<(u64, DVec3)> {
+        self.drag.map(|d| (d.id.0, d.t))
+    }
+
     /// The next solve rebuilds the problem (the design joined or left a
     /// group solved elsewhere, so its own solver's problem may be stale).
     pub(crate) fn mark_problem_dirty(&mut self) {

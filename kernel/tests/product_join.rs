@@ -285,3 +285,28 @@ fn unjoining_keeps_the_shapes_and_the_parts_move_alone_again() {
     assert_eq!(p.control_points(b).unwrap(), &before[&b][..]);
     assert!(moved(&before[&a], p.control_points(a).unwrap()) > 0.1);
 }
+
+#[test]
+fn an_edit_of_one_part_keeps_the_partners_running_drag() {
+    let (mut p, a, b) = pair();
+    p.join(spec(a, b, Continuity::G1)).unwrap();
+    let icon = p
+        .edit_surface(a, |d| d.add_icon(point(0.9, 0.5, Role::Position)))
+        .unwrap()
+        .value;
+    let to = p.surface(a).unwrap().icon(icon).unwrap().xyz + DVec3::new(0.0, 0.0, 0.2);
+    p.drag(a, icon, to).unwrap();
+    assert!((p.surface(a).unwrap().icon(icon).unwrap().xyz - to).length() < 1e-9);
+    // B is edited mid-drag: the pair is re-solved with A's drag still at `to`.
+    let c = p
+        .edit_surface(b, |d| d.add_icon(point(0.5, 0.5, Role::Position)))
+        .unwrap();
+    assert_eq!(c.changed, ChangedParts::from_ids([a, b]));
+    let at = p.surface(a).unwrap().icon(icon).unwrap().xyz;
+    assert!((at - to).length() < 1e-9, "{at} vs {to}");
+    assert_eq!(p.surface(a).unwrap().dragging(), Some(icon));
+    // The drag goes on from there, seam held.
+    p.drag(a, icon, to + DVec3::Y * 0.05).unwrap();
+    let (gap, ang) = seam(&p, a, b);
+    assert!(gap < 1e-9 && ang < 1e-9, "{gap} {ang}");
+}

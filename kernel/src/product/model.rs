@@ -222,7 +222,7 @@ impl Product {
                 let d = self.surface_mut(id)?;
                 d.restore(&before)?;
                 if let Some(&g) = self.group_of.get(&id) {
-                    self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                    self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 }
                 Err(e)
             }
@@ -244,7 +244,7 @@ impl Product {
             Err(e) => {
                 self.curve_mut(id)?.restore(&before)?;
                 for g in self.groups_bound_to(id) {
-                    self.groups[g].refresh_bindings(&self.parts, &self.bindings)?;
+                    self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 }
                 Err(e)
             }
@@ -275,7 +275,7 @@ impl Product {
             }
         }
         for g in 0..self.groups.len() {
-            self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             self.groups[g].solve(&mut self.parts)?;
         }
         Ok(())
@@ -343,7 +343,7 @@ impl Product {
             }
         }
         if others {
-            self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
         }
         let d = self
             .parts
@@ -378,7 +378,7 @@ impl Product {
                     return Ok(ChangedParts::one(part));
                 };
                 self.keep_group_shape(part);
-                self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 self.groups[g].solve(&mut self.parts)?;
                 Ok(ChangedParts::shared(self.groups[g].ids.clone()))
             }
@@ -592,7 +592,7 @@ impl Product {
                 .group_of
                 .get(&part)
                 .ok_or(ProductError::UnknownPart(part))?;
-            self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             // Solve into the group's buffer only; members are written once
             // the solve succeeded.
             self.groups[g].solve(&mut self.parts)?;
@@ -602,7 +602,7 @@ impl Product {
             Ok(g) => {
                 let changed = ChangedParts::shared(self.groups[g].ids.clone());
                 self.keep_group_shape(part);
-                self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 Ok(changed)
             }
             Err(e) => {
@@ -635,7 +635,7 @@ impl Product {
                 Ok(ChangedParts::one(id))
             }
             Some(&g) => {
-                self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 self.groups[g].solve(&mut self.parts)?;
                 Ok(ChangedParts::shared(self.groups[g].ids.clone()))
             }
@@ -668,7 +668,7 @@ impl Product {
         }
         let mut ids = vec![curve];
         for g in gs {
-            self.groups[g].refresh_bindings(&self.parts, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             self.groups[g].solve(&mut self.parts)?;
             ids.extend(self.groups[g].ids.iter().copied());
         }
@@ -738,7 +738,7 @@ impl Product {
                 Some(g) => g,
                 None => {
                     let mut g = SolveGroup::new(&self.parts, members.clone(), joins, bindings)?;
-                    g.refresh(&self.parts, &self.joins, &self.bindings)?;
+                    g.refresh(&mut self.parts, &self.joins, &self.bindings)?;
                     g
                 }
             };

@@ -1,0 +1,127 @@
+//! A product of 10 parts (the paper's five grids, 20×15 … 81×159, two of
+//! each), each with the paper's icons (4 point position constraints, a
+//! curve constraint, a point load). Measures, in one run:
+//!
+//! * `alone/drag_frame` — a drag frame of the load on a design alone;
+//! * `product/drag_frame` — the same frame on the same design as an
+//!   unjoined part of the 10-part product (target: within ±10 % of alone);
+//! * `joined/drag_frame` — the same frame on a part joined G1 to a second
+//!   part of the same grid (the pair's joint drag fast path, plus writing
+//!   the partner's control points and re-placing its icons).
+//!
+//! Run: `cargo bench -p vsculpt-kernel --bench product`. Figures in
+//! BENCHMARKS.md.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use glam::DVec3;
+use std::hint::black_box;
+use std::time::Duration;
+use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
+use vsculpt_kernel::design::Design;
+use vsculpt_kernel::energy::SurfaceMaterial;
+use vsculpt_kernel::icon::{Anchor, IconId, IconSpec, IconState, Role};
+use vsculpt_kernel::product::{Continuity, Edge, JoinSpec, Part, PartId, Product};
+
+/// Paper 003's Table 2 grids.
+const GRIDS: [(usize, usize); 5] = [(20, 15), (38, 32), (42, 40), (91, 54), (81, 159)];
+
+/// The paper's scene on a `nu × nv` bicubic panel starting at x = `x0`;
+/// returns the design (solved) and its load.
+fn scene(nu: usize, nv: usize, x0: f64) -> (Design, IconId) {
+    let mut s = BSplineSurface::plane(nu as f64 / 10.0, nv as f64 / 10.0, nu, nv, 3).unwrap();
+    let (w, h) = (nu as f64 / 10.0, nv as f64 / 10.0);
+    for p in s.points_mut() {
+        p.z = 0.2
+            * w.min(h)
+            * (std::f64::consts::PI * p.x / w).sin()
+            * (std::f64::consts::PI * p.y / h).sin();
+        p.x += x0;
+    }
+    let mut d = Design::new(s, SurfaceMaterial::default()).unwrap();
+    d.set_adaptive_spring(false);
+    let point = |u: f64, v: f64, role| IconSpec {
+        anchor: Anchor::Point { u, v },
+        role,
+        state: IconState::Passive,
+        target: None,
+    };
+    for (u, v) in [(0.1, 0.1), (0.9, 0.1), (0.1, 0.9), (0.9, 0.9)] {
+        d.add_icon(point(u, v, Role::Position)).unwrap();
+    }
+    let line = BSplineCurve::new(
+        KnotVector::clamped_uniform(1, 2).unwrap(),
+        vec![DVec3::new(0.2, 0.25, 0.0), DVec3::new(0.8, 0.25, 0.0)],
+    )
+    .unwrap();
+    d.add_icon(IconSpec {
+        anchor: Anchor::Curve(line),
+        role: Role::Position,
+        state: IconState::Passive,
+        target: None,
+    })
+    .unwrap();
+    let load = d.add_icon(point(0.5, 0.6, Role::Load)).unwrap();
+    d.solve().unwrap();
+    (d, load)
+}
+
+fn benches(c: &mut Criterion) {
+    let mut group = c.benchmark_group("product");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    // The 10-part product: two parts of each grid; the first is dragged.
+    let mut product = Product::new();
+    let mut dragged: Vec<(PartId, IconId)> = Vec::new();
+    for (nu, nv) in GRIDS {
+        let (d, load) = scene(nu, nv, 0.0);
+        dragged.push((product.add_part(Part::Surface(d)), load));
+        let (d, _) = scene(nu, nv, 0.0);
+        product.add_part(Part::Surface(d));
+    }
+    for (k, (nu, nv)) in GRIDS.into_iter().enumerate() {
+        let id = format!("{nu}x{nv}");
+        let (mut alone, load) = scene(nu, nv, 0.0);
+        let (part, pload) = dragged[k];
+        let start = alone.icon(load).unwrap().xyz;
+        let mut n = 0u64;
+        let mut lift = move || {
+            n += 1;
+            DVec3::Z * (0.01 + 0.001 * (n % 7) as f64)
+        };
+        alone.drag(load, start + lift()).unwrap();
+        product.drag(part, pload, start + lift()).unwrap();
+        group.bench_function(BenchmarkId::new("alone/drag_frame", &id), |b| {
+            b.iter(|| black_box(alone.drag(load, start + lift()).unwrap()))
+        });
+        group.bench_function(BenchmarkId::new("product/drag_frame", &id), |b| {
+            b.iter(|| black_box(product.drag(part, pload, start + lift()).unwrap()))
+        });
+        // A joined pair of this grid: B continues A along x, G1.
+        let mut pair = Product::new();
+        let (da, la) = scene(nu, nv, 0.0);
+        let a = pair.add_part(Part::Surface(da));
+        let (db, _) = scene(nu, nv, nu as f64 / 10.0);
+        let b = pair.add_part(Part::Surface(db));
+        pair.join(JoinSpec {
+            a,
+            edge_a: Edge::UMax,
+            b,
+            edge_b: Edge::UMin,
+            reversed: false,
+            continuity: Continuity::G1,
+            ratio: None,
+        })
+        .unwrap();
+        let at = pair.surface(a).unwrap().icon(la).unwrap().xyz;
+        pair.drag(a, la, at + lift()).unwrap();
+        group.bench_function(BenchmarkId::new("joined/drag_frame", &id), |b| {
+            b.iter(|| black_box(pair.drag(a, la, at + lift()).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(product_benches, benches);
+criterion_main!(product_benches);
