@@ -310,3 +310,40 @@ fn an_edit_of_one_part_keeps_the_partners_running_drag() {
     let (gap, ang) = seam(&p, a, b);
     assert!(gap < 1e-9 && ang < 1e-9, "{gap} {ang}");
 }
+
+#[test]
+fn a_part_joined_to_itself_closes_into_a_tube() {
+    // A panel's v = min and v = max edges (both along u, 8 points) joined
+    // G1: the panel rolls into a closed tube with a smooth seam.
+    let mut p = Product::new();
+    let a = p.add_part(surface_part(panel(0.0, 8, v_knots(1.0), 0.0, 0.1)));
+    let (_, changed) = p
+        .join(JoinSpec {
+            a,
+            edge_a: Edge::VMax,
+            b: a,
+            edge_b: Edge::VMin,
+            reversed: false,
+            continuity: Continuity::G1,
+            ratio: None,
+        })
+        .unwrap();
+    assert_eq!(changed, ChangedParts::one(a));
+    let s = p.surface(a).unwrap().surface();
+    let (gap, ang) = seam_gaps(s, Edge::VMax, s, Edge::VMin, false, 50);
+    assert!(gap < 1e-9 * model_size(&p) && ang < 1e-9, "{gap} {ang}");
+    let icon = p
+        .edit_surface(a, |d| d.add_icon(point(0.5, 0.0, Role::Position)))
+        .unwrap()
+        .value;
+    let at = p.surface(a).unwrap().icon(icon).unwrap().xyz;
+    for k in 1..=4 {
+        p.drag(a, icon, at + DVec3::Z * 0.05 * k as f64).unwrap();
+        let s = p.surface(a).unwrap().surface();
+        let (gap, ang) = seam_gaps(s, Edge::VMax, s, Edge::VMin, false, 50);
+        assert!(
+            gap < 1e-9 * model_size(&p) && ang < 1e-9,
+            "frame {k}: {gap} {ang}"
+        );
+    }
+}
