@@ -4,7 +4,11 @@
 //!
 //! * `alone/drag_frame` — a drag frame of the load on a design alone;
 //! * `product/drag_frame` — the same frame on the same design as an
-//!   unjoined part of the 10-part product (target: within ±10 % of alone);
+//!   unjoined part of the 10-part product (target: within ±10 % of alone).
+//!   The two benches run the same interleaved frames (one alone, one in the
+//!   product) and each times one of them; before them the bench prints the
+//!   medians of 4000 paired frames and their ratio (`paired medians`),
+//!   and likewise for the joined pair against the part alone;
 //! * `joined/drag_frame` — the same frame on a part joined G1 to a second
 //!   part of the same grid (the pair's joint drag fast path, plus writing
 //!   the partner's control points and re-placing its icons).
@@ -15,7 +19,7 @@
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 use vsculpt_kernel::design::Design;
 use vsculpt_kernel::energy::SurfaceMaterial;
@@ -65,6 +69,31 @@ fn scene(nu: usize, nv: usize, x0: f64) -> (Design, IconId) {
     (d, load)
 }
 
+/// Frames of `a` and `b`, interleaved one by one; prints the median of
+/// each and their ratio. Medians of paired frames are robust to the
+/// preemption spikes of a shared machine, which dominate criterion's means
+/// there.
+fn paired_medians(label: &str, mut a: impl FnMut(DVec3), mut b: impl FnMut(DVec3), start: DVec3) {
+    const FRAMES: usize = 4000;
+    let (mut ta, mut tb) = (Vec::with_capacity(FRAMES), Vec::with_capacity(FRAMES));
+    for k in 0..FRAMES {
+        let x = start + DVec3::Z * (0.01 + 0.001 * (k % 7) as f64);
+        let t = Instant::now();
+        a(x);
+        ta.push(t.elapsed());
+        let t = Instant::now();
+        b(x);
+        tb.push(t.elapsed());
+    }
+    ta.sort_unstable();
+    tb.sort_unstable();
+    let (ma, mb) = (ta[FRAMES / 2], tb[FRAMES / 2]);
+    eprintln!(
+        "paired medians {label}: {ma:?} against {mb:?}, ratio {:.3}",
+        mb.as_secs_f64() / ma.as_secs_f64()
+    );
+}
+
 fn benches(c: &mut Criterion) {
     let mut group = c.benchmark_group("product");
     group
@@ -92,12 +121,38 @@ fn benches(c: &mut Criterion) {
         };
         alone.drag(load, start + lift()).unwrap();
         product.drag(part, pload, start + lift()).unwrap();
-        group.bench_function(BenchmarkId::new("alone/drag_frame", &id), |b| {
-            b.iter(|| black_box(alone.drag(load, start + lift()).unwrap()))
-        });
-        group.bench_function(BenchmarkId::new("product/drag_frame", &id), |b| {
-            b.iter(|| black_box(product.drag(part, pload, start + lift()).unwrap()))
-        });
+        paired_medians(
+            &format!("{id} alone / in the product"),
+            |x| {
+                black_box(alone.drag(load, x).unwrap());
+            },
+            |x| {
+                black_box(product.drag(part, pload, x).unwrap());
+            },
+            start,
+        );
+        // Both benches run the same interleaved work (one frame alone, one
+        // in the product) and time one of the two, so caches and the
+        // machine's load treat them alike.
+        for timed_alone in [true, false] {
+            let name = if timed_alone { "alone" } else { "product" };
+            group.bench_function(BenchmarkId::new(format!("{name}/drag_frame"), &id), |b| {
+                b.iter_custom(|iters| {
+                    let mut spent = Duration::ZERO;
+                    for _ in 0..iters {
+                        let (xa, xp) = (start + lift(), start + lift());
+                        let t = Instant::now();
+                        black_box(alone.drag(load, xa).unwrap());
+                        let ta = t.elapsed();
+                        let t = Instant::now();
+                        black_box(product.drag(part, pload, xp).unwrap());
+                        let tp = t.elapsed();
+                        spent += if timed_alone { ta } else { tp };
+                    }
+                    spent
+                })
+            });
+        }
         // A joined pair of this grid: B continues A along x, G1.
         let mut pair = Product::new();
         let (da, la) = scene(nu, nv, 0.0);
@@ -116,6 +171,16 @@ fn benches(c: &mut Criterion) {
         .unwrap();
         let at = pair.surface(a).unwrap().icon(la).unwrap().xyz;
         pair.drag(a, la, at + lift()).unwrap();
+        paired_medians(
+            &format!("{id} alone / joined pair"),
+            |x| {
+                black_box(alone.drag(load, x).unwrap());
+            },
+            |x| {
+                black_box(pair.drag(a, la, at - start + x).unwrap());
+            },
+            start,
+        );
         group.bench_function(BenchmarkId::new("joined/drag_frame", &id), |b| {
             b.iter(|| black_box(pair.drag(a, la, at + lift()).unwrap()))
         });
