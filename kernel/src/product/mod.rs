@@ -32,4 +32,4 @@ pub use edge::Edge;
 pub use error::ProductError;
 pub use join::{Continuity, Join, JoinId, JoinSpec};
 pub use model::{Edited, PartDrag, Product, RemovedPart};
-pub use part::{Part, PartId, PartKind};
+pub use part::{Part, PartId, PartKind, PartSnapshot};

@@ -26,7 +26,7 @@ use glam::DVec3;
 use super::group::SolveGroup;
 use super::{
     Binding, BindingId, BindingSpec, ChangedParts, Join, JoinId, JoinSpec, Part, PartId, PartKind,
-    ProductError,
+    PartSnapshot, ProductError,
 };
 use crate::curve_design::CurveDesign;
 use crate::design::{Design, DesignError};
@@ -200,6 +200,69 @@ impl Product {
             Some(&g) => ChangedParts::shared(self.groups[g].ids.clone()),
             None => ChangedParts::one(id),
         }
+    }
+
+    /// Replaces a part's value by `snapshot` (undo, redo, restore of a
+    /// version), as stored: nothing is solved — call [`Self::solve_all`]
+    /// (or [`Self::solve`]) once every part of a version is back. The part
+    /// keeps its relations, which must still fit the restored shape's knots
+    /// (else [`ProductError::Incompatible`]); on error nothing changes.
+    pub fn restore_part(
+        &mut self,
+        id: PartId,
+        snapshot: &PartSnapshot,
+    ) -> Result<(), ProductError> {
+        let part = self
+            .parts
+            .get_mut(&id)
+            .ok_or(ProductError::UnknownPart(id))?;
+        if part.kind() != snapshot.kind() {
+            return Err(ProductError::WrongKind {
+                part: id,
+                expected: snapshot.kind(),
+            });
+        }
+        let before = part.snapshot();
+        part.restore(snapshot)?;
+        let fits = self.check_relations_of(id).and_then(|()| {
+            if let Some(&g) = self.group_of.get(&id) {
+                if self.groups[g].member(id).is_some_and(|m| {
+                    self.groups[g].members[m].len != self.parts[&id].control_points().len()
+                }) {
+                    return Err(ProductError::Incompatible(format!(
+                        "part {} would change its control-point count while joined",
+                        id.0
+                    )));
+                }
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
+            }
+            Ok(())
+        });
+        if let Err(e) = fits {
+            if let Some(part) = self.parts.get_mut(&id) {
+                part.restore(&before)?;
+            }
+            if let Some(&g) = self.group_of.get(&id) {
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
+            }
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Every join and binding of `id` still fits the parts' knots.
+    fn check_relations_of(&self, id: PartId) -> Result<(), ProductError> {
+        for j in self.joins.values() {
+            if j.spec.a == id || j.spec.b == id {
+                self.check_join(j.spec)?;
+            }
+        }
+        for b in self.bindings.values() {
+            if b.spec.curve == id || b.spec.surface == id {
+                self.check_binding(b.spec)?;
+            }
+        }
+        Ok(())
     }
 
     // ---- edits -----------------------------------------------------------
