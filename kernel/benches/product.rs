@@ -11,7 +11,10 @@
 //!   and likewise for the joined pair against the part alone;
 //! * `joined/drag_frame` — the same frame on a part joined G1 to a second
 //!   part of the same grid (the pair's joint drag fast path, plus writing
-//!   the partner's control points and re-placing its icons).
+//!   the partner's control points and re-placing its icons);
+//! * `bound_curve/drag_frame` — a drag frame of a curve part bound along
+//!   u = 0.5 of a part of this grid: the curve's own frame, then a full
+//!   solve of the surface with the curve's new control points as targets.
 //!
 //! Run: `cargo bench -p vsculpt-kernel --bench product`. Figures in
 //! BENCHMARKS.md.
@@ -21,10 +24,13 @@ use glam::DVec3;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
+use vsculpt_kernel::curve_design::{CurveDesign, CurveRole};
 use vsculpt_kernel::design::Design;
-use vsculpt_kernel::energy::SurfaceMaterial;
+use vsculpt_kernel::energy::{CurveMaterial, SurfaceMaterial};
 use vsculpt_kernel::icon::{Anchor, IconId, IconSpec, IconState, Role};
-use vsculpt_kernel::product::{Continuity, Edge, JoinSpec, Part, PartId, Product};
+use vsculpt_kernel::product::{
+    BindingSpec, Continuity, Edge, IsoLine, JoinSpec, Part, PartId, Product, iso_curve,
+};
 
 /// Paper 003's Table 2 grids.
 const GRIDS: [(usize, usize); 5] = [(20, 15), (38, 32), (42, 40), (91, 54), (81, 159)];
@@ -183,6 +189,35 @@ fn benches(c: &mut Criterion) {
         );
         group.bench_function(BenchmarkId::new("joined/drag_frame", &id), |b| {
             b.iter(|| black_box(pair.drag(a, la, at + lift()).unwrap()))
+        });
+        // A curve bound along u = 0.5 of a part of this grid, dragged.
+        let mut bound = Product::new();
+        let (ds, _) = scene(nu, nv, 0.0);
+        let line = IsoLine::U(0.5);
+        let on = iso_curve(ds.surface(), line).unwrap();
+        let surface = bound.add_part(Part::Surface(ds));
+        let curve = bound.add_part(Part::Curve(
+            CurveDesign::new(on, CurveMaterial::default()).unwrap(),
+        ));
+        bound
+            .bind(BindingSpec {
+                curve,
+                surface,
+                line,
+                reversed: false,
+            })
+            .unwrap();
+        let ci = bound
+            .edit_curve(curve, |c| {
+                let (t0, t1) = c.curve().domain();
+                c.add_icon(0.5 * (t0 + t1), CurveRole::Position)
+            })
+            .unwrap()
+            .value;
+        let cat = bound.curve(curve).unwrap().icon(ci).unwrap().xyz;
+        bound.drag(curve, ci, cat + lift()).unwrap();
+        group.bench_function(BenchmarkId::new("bound_curve/drag_frame", &id), |b| {
+            b.iter(|| black_box(bound.drag(curve, ci, cat + lift()).unwrap()))
         });
     }
     group.finish();

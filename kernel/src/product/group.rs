@@ -244,7 +244,7 @@ impl SolveGroup {
                 .chain(&self.extra)
                 .cloned()
                 .collect();
-            solver.set_problem(Problem { groups })?;
+            solver.retarget(Problem { groups })?;
             self.problem_dirty = false;
         }
         Ok(match drag {
