@@ -347,3 +347,45 @@ fn a_part_joined_to_itself_closes_into_a_tube() {
         );
     }
 }
+
+#[test]
+fn a_load_released_by_its_last_sensor_keeps_both_joined_shapes() {
+    use vsculpt_kernel::icon::SensorId;
+    let (mut p, a, b) = pair();
+    p.join(spec(a, b, Continuity::G1)).unwrap();
+    let load = p
+        .edit_surface(a, |d| d.add_icon(point(0.8, 0.5, Role::Load)))
+        .unwrap()
+        .value;
+    let sensor = SensorId("glove".into());
+    p.edit_surface(a, |d| d.bind_sensor(load, sensor.clone()))
+        .unwrap();
+    let at = p.surface(a).unwrap().icon(load).unwrap().xyz;
+    for k in 1..=4 {
+        p.drag(a, load, at + DVec3::Z * 0.05 * k as f64).unwrap();
+    }
+    let dragged = all_points(&p);
+    // The last sensor leaves: the load is released (its pull kept as shape).
+    let c = p
+        .edit_surface(a, |d| d.unbind_sensor(load, &sensor))
+        .unwrap();
+    assert_eq!(c.changed, ChangedParts::from_ids([a, b]));
+    for id in [a, b] {
+        let m = moved(&dragged[&id], p.control_points(id).unwrap());
+        assert!(m < 1e-9, "{id:?} sprang back by {m:e}");
+    }
+    let (gap, ang) = seam(&p, a, b);
+    assert!(gap < 1e-9 && ang < 1e-9);
+    // A closure failing half-way leaves nothing behind.
+    let icons = p.surface(a).unwrap().icons().count();
+    let shape = p.control_points(a).unwrap().to_vec();
+    assert!(
+        p.edit_surface(a, |d| {
+            d.add_icon(point(0.5, 0.5, Role::Position))?;
+            d.add_icon(point(2.0, 0.5, Role::Position))
+        })
+        .is_err()
+    );
+    assert_eq!(p.surface(a).unwrap().icons().count(), icons);
+    assert_eq!(p.control_points(a).unwrap(), &shape[..]);
+}

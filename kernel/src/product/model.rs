@@ -269,8 +269,13 @@ impl Product {
 
     /// Edits a surface part (add, remove or change icons, material, …)
     /// and solves it with its group. On error (the edit's or the solve's)
-    /// the product is as before. Use [`Self::drag`], [`Self::release`] and
-    /// [`Self::move_icon`] for pointer actions: they know the part's group.
+    /// the product is as before (the part is restored from a snapshot taken
+    /// first, so a closure that fails half-way leaves nothing behind). An
+    /// edit that keeps the part's shape as its reference (a load released
+    /// by unbinding its last sensor) keeps every group member's shape too,
+    /// as [`Self::release`] does. Use [`Self::drag`], [`Self::release`] and
+    /// [`Self::move_icon`] for pointer actions ([`Design::move_icon`] would
+    /// solve the part without its group).
     pub fn edit_surface<R>(
         &mut self,
         id: PartId,
@@ -278,18 +283,38 @@ impl Product {
     ) -> Result<Edited<R>, ProductError> {
         let d = self.surface_mut(id)?;
         let before = d.snapshot();
-        let value = f(d)?;
-        match self.solve_surface(id) {
-            Ok(changed) => Ok(Edited { value, changed }),
-            Err(e) => {
-                let d = self.surface_mut(id)?;
-                d.restore(&before)?;
-                if let Some(&g) = self.group_of.get(&id) {
-                    self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
+        let result = f(d);
+        // A bake inside the edit: the partners keep their shapes as well.
+        let mut partners = Vec::new();
+        if result.is_ok()
+            && let Some(&g) = self.group_of.get(&id)
+            && self.surface_ref(id)?.reference() != &before.reference[..]
+        {
+            for &m in self.groups[g].ids.iter() {
+                if m != id
+                    && let Some(d) = self.parts.get(&m).and_then(Part::as_surface)
+                {
+                    partners.push((m, d.snapshot()));
                 }
-                Err(e)
+            }
+            self.keep_group_shape(id);
+        }
+        let solved = match result {
+            Ok(value) => self
+                .solve_surface(id)
+                .map(|changed| Edited { value, changed }),
+            Err(e) => Err(e.into()),
+        };
+        if solved.is_err() {
+            self.surface_mut(id)?.restore(&before)?;
+            for (m, snapshot) in &partners {
+                self.surface_mut(*m)?.restore(snapshot)?;
+            }
+            if let Some(&g) = self.group_of.get(&id) {
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             }
         }
+        solved
     }
 
     /// Edits a curve part and solves it, then the surfaces bound to it. On
