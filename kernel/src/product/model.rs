@@ -318,7 +318,7 @@ impl Product {
     }
 
     /// Edits a curve part and solves it, then the surfaces bound to it. On
-    /// error the product is as before.
+    /// error (the edit's or a solve's) the product is as before.
     pub fn edit_curve<R>(
         &mut self,
         id: PartId,
@@ -326,17 +326,18 @@ impl Product {
     ) -> Result<Edited<R>, ProductError> {
         let c = self.curve_mut(id)?;
         let before = c.snapshot();
-        let value = f(c)?;
-        match self.solve_curve(id) {
-            Ok(changed) => Ok(Edited { value, changed }),
-            Err(e) => {
-                self.curve_mut(id)?.restore(&before)?;
-                for g in self.groups_bound_to(id) {
-                    self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
-                }
-                Err(e)
-            }
+        let solved = match f(c) {
+            Ok(value) => self
+                .solve_curve(id)
+                .map(|changed| Edited { value, changed }),
+            Err(e) => Err(e.into()),
+        };
+        if solved.is_err() {
+            // Back to the curve as it was, and the bound surfaces with it.
+            self.curve_mut(id)?.restore(&before)?;
+            self.follow_curve(id)?;
         }
+        solved
     }
 
     /// Solves one part (with its group; a curve with the surfaces bound to
