@@ -199,7 +199,7 @@ impl SolveGroup {
     }
 
     /// Re-reads the bindings' targets (the curves' control points).
-    pub fn refresh_bindings(
+    fn refresh_bindings(
         &mut self,
         parts: &BTreeMap<PartId, Part>,
         bindings: &BTreeMap<BindingId, Binding>,
