@@ -17,6 +17,8 @@
 //! To rebuild a stored product: [`Product::insert_part`] each part (ids
 //! kept), [`Product::insert_join`] and [`Product::insert_binding`] each
 //! relation as stored (nothing is solved or baked), then
+//! [`Product::solve_all`]. To undo across parts: [`Product::restore_part`]
+//! each part of the version (a [`super::PartSnapshot`]), then
 //! [`Product::solve_all`].
 
 use std::collections::BTreeMap;
