@@ -87,10 +87,60 @@ fn seam_mismatch(a: &BSplineSurface, b: &BSplineSurface) -> (f64, f64) {
         let s = k as f64 / 49.0;
         let (va, vb) = (av0 + s * (av1 - av0), bv0 + s * (bv1 - bv0));
         let (na, nb) = (a.normal(a1, va), b.normal(b0, vb));
-        angle = angle.max(na.angle_between(nb));
+        // atan2(|a × b|, a · b): exact near 0, where acos loses half the
+        // digits (1.5e-8 rad for parallel unit vectors).
+        angle = angle.max(na.cross(nb).length().atan2(na.dot(nb)));
         gap = gap.max((a.point(a1, va) - b.point(b0, vb)).length());
     }
     (angle, gap)
+}
+
+/// The frames of revision `rev` (older ones skipped). A writer sends the
+/// frames of one published set back to back, so once the first of `rev` is
+/// in, a ping sent then is answered after the last of them.
+async fn frames_of(viewer: &mut Client, rev: u64) -> Vec<vsculpt_protocol::GeometryFrame> {
+    let mut out = Vec::new();
+    loop {
+        match viewer.next().await {
+            Got::Frame(f) if f.revision == rev => {
+                out.push(f);
+                break;
+            }
+            Got::Frame(f) if f.revision > rev => {
+                panic!("revision {} came before {rev}", f.revision)
+            }
+            Got::Closed => panic!("closed"),
+            _ => {}
+        }
+    }
+    viewer.send(json!({"type": "ping"})).await;
+    loop {
+        match viewer.next().await {
+            Got::Frame(f) if f.revision == rev => out.push(f),
+            Got::Frame(f) => panic!("a frame of revision {} among those of {rev}", f.revision),
+            Got::Text(v) if v["type"] == "pong" => return out,
+            Got::Closed => panic!("closed"),
+            _ => {}
+        }
+    }
+}
+
+/// Sends `msg` (with its `req`) and returns the `snapshot` it causes, with
+/// its ack seen too (they may come in either order).
+async fn acked_snapshot(ed: &mut Client, msg: Value) -> Value {
+    let req = msg["req"].clone();
+    ed.send(msg).await;
+    let (mut acked, mut snap) = (false, None);
+    while !(acked && snap.is_some()) {
+        match ed.next().await {
+            Got::Text(v) if v["type"] == "ack" && v["req"] == req => acked = true,
+            Got::Text(v) if v["type"] == "error" && v["req"] == req => panic!("{v}"),
+            Got::Text(v) if v["type"] == "snapshot" => snap = Some(v),
+            Got::Closed => panic!("closed"),
+            _ => {}
+        }
+    }
+    snap.unwrap()
 }
 
 fn part<'a>(snapshot: &'a Value, id: u64) -> &'a Value {
@@ -134,9 +184,9 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
     let mut ed = Client::connect(addr, 1, &server.demo().editor, "ann").await;
     // A fresh design of one plate (part 1), then two more surfaces and two
     // curves.
-    let made = ed
-        .request(json!({"type": "create_design", "name": "panels"}))
+    ed.send(json!({"type": "create_design", "req": 100, "name": "panels"}))
         .await;
+    let made = ed.wait_for("design_created").await;
     assert_eq!(made["type"], "design_created", "{made}");
     let design = made["design"]["id"].as_u64().unwrap();
     let token = made["tokens"]["editor"].as_str().unwrap().to_string();
@@ -242,18 +292,15 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
     // Drag the curve's icon: only the curve's frame comes.
     ed.ok(json!({"type": "drag_start", "part": curves[0], "icon": icons[3]}))
         .await;
-    let before = loop {
-        match viewer.next().await {
-            Got::Frame(f) => break f.revision,
-            Got::Closed => panic!("closed"),
-            _ => {}
-        }
-    };
     ed.send(json!({"type": "drag", "part": curves[0], "icon": icons[3], "xyz": [0.0, 10.0, 55.0]}))
         .await;
-    let f = viewer.frame_after(before).await;
-    assert_eq!(f.part, curves[0]);
-    assert_eq!(f.kind, vsculpt_protocol::frame::KIND_CURVE);
+    let rev = ed.wait_for("icon_feedback").await["revision"]
+        .as_u64()
+        .unwrap();
+    let frames = frames_of(&mut viewer, rev).await;
+    assert_eq!(frames.len(), 1, "one part moved");
+    assert_eq!(frames[0].part, curves[0]);
+    assert_eq!(frames[0].kind, vsculpt_protocol::frame::KIND_CURVE);
     ed.ok(json!({"type": "drag_end", "part": curves[0], "icon": icons[3]}))
         .await;
 
@@ -298,7 +345,6 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
         let ((_, u1), _) = s.domain();
         s.point(u1, 0.5).to_array()
     };
-    let mut rev = 0;
     let mut latest: std::collections::BTreeMap<u64, vsculpt_protocol::GeometryFrame> =
         Default::default();
     let shapes: std::collections::BTreeMap<u64, Value> = [
@@ -311,21 +357,15 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
         let to = [start[0], start[1], start[2] + 2.0 * k as f64];
         ed.send(json!({"type": "drag", "part": a, "icon": seam_icon, "xyz": to}))
             .await;
-        // Both frames of this solve (same revision), nothing of the others.
-        let f = viewer.frame_after(rev).await;
-        rev = f.revision;
-        let mut got = vec![f];
-        while got.len() < 2 {
-            let f = viewer.frame().await;
-            assert!(f.revision >= rev, "frames of one solve come together");
-            got.push(f);
-        }
+        let rev = ed.wait_for("icon_feedback").await["revision"]
+            .as_u64()
+            .unwrap();
+        // Both joined parts' frames of this solve, nothing of the others.
+        let got = frames_of(&mut viewer, rev).await;
+        let mut parts: Vec<u64> = got.iter().map(|f| f.part).collect();
+        parts.sort_unstable();
+        assert_eq!(parts, vec![a, b], "frame {k}");
         for f in got {
-            assert!(
-                f.part == a || f.part == b,
-                "frame of part {} on a drag of A",
-                f.part
-            );
             latest.insert(f.part, f);
         }
         let (fa, fb) = (&latest[&a], &latest[&b]);
@@ -408,23 +448,25 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
         .await;
     ed.ok(json!({"type": "set_part", "part": b, "name": "left wing"}))
         .await;
-    ed.ok(json!({"type": "undo"})).await;
-    let s = ed.wait_for("snapshot").await;
+    let s = acked_snapshot(&mut ed, json!({"type": "undo", "req": 901})).await;
     assert_eq!(part(&s, b)["name"], "wing");
     assert!(part(&s, curves[1])["icons"].as_array().unwrap().is_empty());
-    ed.ok(json!({"type": "undo"})).await;
-    let s = ed.wait_for("snapshot").await;
+    let s = acked_snapshot(&mut ed, json!({"type": "undo", "req": 902})).await;
     assert_eq!(part(&s, curves[1])["icons"][0]["id"], icons[4]);
 
     // Restore the first version (one plate) and back to the commit.
-    ed.ok(json!({"type": "restore_version", "version": 1}))
-        .await;
-    let s = ed.wait_for("snapshot").await;
+    let s = acked_snapshot(
+        &mut ed,
+        json!({"type": "restore_version", "req": 903, "version": 1}),
+    )
+    .await;
     assert_eq!(s["parts"].as_array().unwrap().len(), 1);
     assert!(s["relations"].as_array().unwrap().is_empty());
-    ed.ok(json!({"type": "restore_version", "version": committed}))
-        .await;
-    let s = ed.wait_for("snapshot").await;
+    let s = acked_snapshot(
+        &mut ed,
+        json!({"type": "restore_version", "req": 904, "version": committed}),
+    )
+    .await;
     assert_eq!(s["parts"].as_array().unwrap().len(), 5);
     let restored = stored(addr, design, &token).await;
     assert_eq!(restored["parts"], before_restart["parts"]);

@@ -227,6 +227,15 @@ pub fn apply<'q>(
     let mut created = Created::default();
     match edit {
         Edit::Part { part, edit } => {
+            if let Some(icon) = edit.icon()
+                && let Some((other, _)) = doc.icon(icon)
+                && other.id != *part
+            {
+                return Err(CommandError::new(
+                    ErrorKind::UnknownPart,
+                    format!("icon {icon} is on part {}, not part {part}", other.id),
+                ));
+            }
             let q = query(*part).ok_or_else(|| unknown_part(*part))?;
             let total_icons = doc.icons().count();
             let mut next_icon = doc.next_icon;
@@ -370,6 +379,22 @@ pub fn apply<'q>(
         }
     }
     Ok((doc, created))
+}
+
+impl PartEdit {
+    /// The existing icon the edit names, if any.
+    pub fn icon(&self) -> Option<u64> {
+        match self {
+            PartEdit::MoveIcon { id, .. }
+            | PartEdit::SetAnchor { id, .. }
+            | PartEdit::DeleteIcon { id }
+            | PartEdit::SetRole { id, .. }
+            | PartEdit::SetState { id, .. }
+            | PartEdit::BindSensor { id, .. }
+            | PartEdit::UnbindSensor { id, .. } => Some(*id),
+            PartEdit::AddIcon { .. } | PartEdit::SetMaterial(_) => None,
+        }
+    }
 }
 
 /// `body` with `edit` applied; returns the created icon's id.
