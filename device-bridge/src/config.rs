@@ -468,8 +468,9 @@ pub struct MenuConfig {
     pub buttons: BTreeMap<u16, MenuAction>,
     /// Scene units per second at full deflection when moving the selected icon.
     pub speed: f64,
-    /// Axis values below this magnitude are ignored.
-    pub deadzone: f64,
+    /// Radians per second at full twist when turning the selected normal or
+    /// tangent icon's direction (the dead zones are the device's, `deadzone`).
+    pub rotation_speed: f64,
 }
 
 impl Default for MenuConfig {
@@ -483,7 +484,7 @@ impl Default for MenuConfig {
                 (3, MenuAction::PreviousEntry),
             ]),
             speed: 0.2,
-            deadzone: 0.05,
+            rotation_speed: 1.0,
         }
     }
 }
@@ -615,8 +616,8 @@ impl Config {
         if !(self.menu.speed.is_finite() && self.menu.speed >= 0.0) {
             return Err("menu.speed must be non-negative".into());
         }
-        if !(0.0..1.0).contains(&self.menu.deadzone) {
-            return Err("menu.deadzone must be in [0, 1)".into());
+        if !(self.menu.rotation_speed.is_finite() && self.menu.rotation_speed >= 0.0) {
+            return Err("menu.rotation_speed must be non-negative".into());
         }
         Ok(())
     }

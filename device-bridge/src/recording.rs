@@ -507,7 +507,8 @@ mod tests {
             matches!(got[0].reading, crate::device::Reading::Pose { position, .. } if (position.x - 0.1).abs() < 1e-3)
         );
         assert!(
-            matches!(got[1].reading, crate::device::Reading::Motion { translation, .. } if translation.y == 0.5)
+            // half deflection through the default dead zone of 0.05: (0.5 − 0.05) / 0.95
+            matches!(got[1].reading, crate::device::Reading::Motion { translation, .. } if (translation.y - 0.45 / 0.95).abs() < 1e-12)
         );
         let _ = std::fs::remove_file(&path);
     }

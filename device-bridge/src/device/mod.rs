@@ -6,6 +6,7 @@ pub mod cyberglove;
 pub mod driver;
 pub mod fastrak;
 pub mod flock;
+pub mod mouse_axes;
 pub mod runner;
 pub mod sample;
 pub mod spacemouse_hid;
