@@ -13,6 +13,7 @@ pub mod spacemouse_hid;
 pub mod spacenavd;
 pub mod transport;
 pub mod vrpn;
+pub mod vrpn_link;
 
 pub use driver::{
     DecodeStats, Decoder, Device, DeviceError, Driver, RawFrame, Script, Step, TapEvent, Transport,
