@@ -26,10 +26,11 @@ effective settings. Sections and keys:
                  port, baud, address (VRPN: Tracker0@host[:port] or Tracker0@tcp://host:port),
                  settle_ms, poll_hz, and per kind flock = {…}, fastrak = {…},
                  cyberglove = {…}, spacemouse = {…}, spacenavd = {…}, vrpn = {…};
+                 3D mice full_scale, deadzone, axis_scale, axis_signs (x y z rx ry rz);
                  trackers also gate = {max_speed, max_acceleration, noise,
                  max_angular_speed, angular_noise, confirm, max_gap}
   [[hand]]       name, tracker, sensor, glove, reach, calibration = {open, closed}
-  [menu]         device, buttons, speed, deadzone
+  [menu]         device, buttons, speed, rotation_speed
   [rates]        drag_hz";
 
 /// vsculpt device bridge: 3D mice, 6-DOF trackers and data gloves driving icons.

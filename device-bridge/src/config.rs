@@ -42,6 +42,7 @@ use crate::device::transport::{
     HidSelector, HidTransport, SerialTransport, TcpTransport, UnixTransport,
 };
 use crate::device::vrpn::{self, VrpnDecoder, VrpnSettings};
+use crate::device::vrpn_link::VrpnUdpTransport;
 use crate::gate::GateSettings;
 use crate::hand::GloveCalibration;
 use crate::interaction::MenuAction;
@@ -303,6 +304,15 @@ impl DeviceConfig {
         .map_err(ctx)
     }
 
+    /// True when this VRPN entry asks for the server's UDP channel: `vrpn.udp`
+    /// and an address that is not TCP-only (`…@tcp://…` or `…@tcp:…`, as VRPN
+    /// reads them).
+    pub fn vrpn_udp(&self) -> bool {
+        let a = self.address.as_deref().unwrap_or_default().trim();
+        let rest = a.split_once('@').map_or(a, |(_, r)| r);
+        self.vrpn.udp && !rest.starts_with("tcp:")
+    }
+
     /// The VRPN address with the default port added when missing (`host:port`).
     pub fn vrpn_address(&self) -> Option<String> {
         self.vrpn_target().ok().map(|t| t.1)
@@ -311,7 +321,7 @@ impl DeviceConfig {
     /// The VRPN device name and `host:port` this entry reads, from `address` in any
     /// of the forms VRPN users write (`vrpn.cfg`, `vrpn_print_devices`):
     /// `host`, `host:port`, `Device@host`, `Device@host:port`, `Device@tcp://host:port`,
-    /// `Device@tcp:host[:port]` — a device named in the address wins over
+    /// `Device@tcp:host[:port]`, `Device@x-vrpn://host[:port]` — a device named in the address wins over
     /// `vrpn.device`; the port defaults to 3883.
     pub fn vrpn_target(&self) -> Result<(String, String), String> {
         let a = self
@@ -325,13 +335,14 @@ impl DeviceConfig {
             Some(_) => return Err(format!("VRPN address {a:?}: no device name before '@'")),
             None => (self.vrpn.device.clone(), a),
         };
-        let host_port = rest
-            .strip_prefix("tcp://")
-            .or_else(|| rest.strip_prefix("tcp:"))
+        let host_port = ["tcp://", "tcp:", "x-vrpn://", "x-vrpn:"]
+            .iter()
+            .find_map(|p| rest.strip_prefix(p))
             .unwrap_or(rest);
         if host_port.contains("://") {
             return Err(format!(
-                "VRPN address {a:?}: only tcp:// is supported (the bridge connects over TCP)"
+                "VRPN address {a:?}: the bridge speaks VRPN over TCP + UDP (`Device@host[:port]`, \
+                 `x-vrpn://`) or TCP only (`Device@tcp://host:port`); no other scheme"
             ));
         }
         let (host, port) = match host_port.strip_prefix('[') {
@@ -468,8 +479,9 @@ pub struct MenuConfig {
     pub buttons: BTreeMap<u16, MenuAction>,
     /// Scene units per second at full deflection when moving the selected icon.
     pub speed: f64,
-    /// Axis values below this magnitude are ignored.
-    pub deadzone: f64,
+    /// Radians per second at full twist when turning the selected normal or
+    /// tangent icon's direction (the dead zones are the device's, `deadzone`).
+    pub rotation_speed: f64,
 }
 
 impl Default for MenuConfig {
@@ -483,7 +495,7 @@ impl Default for MenuConfig {
                 (3, MenuAction::PreviousEntry),
             ]),
             speed: 0.2,
-            deadzone: 0.05,
+            rotation_speed: 1.0,
         }
     }
 }
@@ -615,8 +627,8 @@ impl Config {
         if !(self.menu.speed.is_finite() && self.menu.speed >= 0.0) {
             return Err("menu.speed must be non-negative".into());
         }
-        if !(0.0..1.0).contains(&self.menu.deadzone) {
-            return Err("menu.deadzone must be in [0, 1)".into());
+        if !(self.menu.rotation_speed.is_finite() && self.menu.rotation_speed >= 0.0) {
+            return Err("menu.rotation_speed must be non-negative".into());
         }
         Ok(())
     }
@@ -669,7 +681,10 @@ fn build_script(d: &DeviceConfig) -> Script {
         DeviceKind::Cyberglove => cyberglove::script(&d.cyberglove, settle),
         DeviceKind::SpacemouseHid => spacemouse_hid::script(),
         DeviceKind::Spacenavd => spacenavd::script(),
-        DeviceKind::Vrpn => vrpn::script(&d.vrpn_target().map(|t| t.0).unwrap_or_default()),
+        DeviceKind::Vrpn => vrpn::script(
+            &d.vrpn_target().map(|t| t.0).unwrap_or_default(),
+            d.vrpn_udp(),
+        ),
     };
     if script.poll_interval.is_zero() {
         script.poll_interval = Duration::from_secs_f64(1.0 / d.poll_hz);
@@ -689,6 +704,9 @@ fn build_transport(d: &DeviceConfig) -> Box<dyn Transport> {
             None => HidSelector::AnyOf(d.spacemouse.allow_list()),
         })),
         DeviceKind::Spacenavd => Box::new(UnixTransport::new(d.spacenavd.socket_path())),
+        DeviceKind::Vrpn if d.vrpn_udp() => {
+            Box::new(VrpnUdpTransport::new(d.vrpn_address().unwrap_or_default()))
+        }
         DeviceKind::Vrpn => Box::new(TcpTransport::new(d.vrpn_address().unwrap_or_default())),
     }
 }

@@ -11,6 +11,12 @@
 //!   displaced target `p0 + Δx` directly; a load icon gets the spring force
 //!   `f = k Δx` ([`DragSpring`]). Opening the hand releases it: unbound, passive.
 //! * Load springs adapt from the icon displacement Δy the server reports.
+//! * Rotation turns a direction: a normal or tangent constraint's direction (its
+//!   target, held from the icon's point on the surface) follows the grabbing
+//!   hand's change of orientation, or the 3D mouse's twist of the cap at
+//!   `menu.rotation_speed` rad/s at full deflection about the scene's axes. A
+//!   position constraint or a load has no orientation: a twist leaves it alone.
+//!   (The view is each client's own; the bridge does not turn it.)
 
 use crate::config::{Config, MenuConfig};
 use crate::device::{Reading, Sample, SourceId, Timestamp};
@@ -240,6 +246,13 @@ struct Hold {
     offset: DVec3,
     /// The spring of a load drag.
     spring: Option<DragSpring>,
+    /// A direction constraint's direction at the grab (a normal as a lever of
+    /// [`NORMAL_LEVER`] surface sizes), which [`Hold::turn`] rotates.
+    direction: Option<DVec3>,
+    /// The rotation applied to `direction` since the grab.
+    turn: DQuat,
+    /// The hand's orientation for which `turn` is the identity (hands only).
+    reference: DQuat,
     /// When a drag of this hold last left (sample time).
     sent_at: Option<Timestamp>,
     /// A newer drag than the last one sent is waiting for its slot.
@@ -271,9 +284,12 @@ impl Hold {
     }
 
     fn drag(&self) -> Command {
-        let target = match &self.spring {
-            Some(s) => s.pull_point(self.icon_origin, self.offset),
-            None => self.icon_origin + self.offset,
+        let target = match (&self.spring, self.direction) {
+            (Some(s), _) => s.pull_point(self.icon_origin, self.offset),
+            // The server reads a direction icon's drag as the point its direction
+            // points to from the icon (pointer − icon).
+            (None, Some(d)) => self.icon_origin + self.turn * d + self.offset,
+            (None, None) => self.icon_origin + self.offset,
         };
         Command::Drag {
             icon: self.icon,
@@ -290,6 +306,12 @@ impl Hold {
         });
     }
 }
+
+/// A normal is held as a lever this many surface sizes (√ area) long, so the
+/// icon's own slide on the surface while the normal turns (the server measures
+/// the direction from where the icon is now) tilts it by at most 1e-3 of the
+/// slide over the surface size.
+pub const NORMAL_LEVER: f64 = 1000.0;
 
 /// Hands are reported to other clients at presence rate (architecture: 10–30 Hz,
 /// latest wins), not at the tracker's rate; drags still go at the tracker's rate.
@@ -407,6 +429,26 @@ impl Interaction {
         }
     }
 
+    /// The sample time from which a tracker pose may make something go out: a
+    /// held icon's next drag slot or a hand's next report (0 when one is due at
+    /// once; `u64::MAX` when no pose can, e.g. no hands). The device threads wake
+    /// the interaction's task for earlier poses only at its drag-rate tick
+    /// ([`crate::inbox`]).
+    pub fn next_due(&self) -> Timestamp {
+        let period = self.drag_period_us;
+        let mut due = u64::MAX;
+        for h in &self.hands {
+            let report = h
+                .last_report
+                .map_or(0, |t| t.0.saturating_add(HAND_SAMPLE_PERIOD_US));
+            due = due.min(report);
+            if let Some(g) = &h.hold {
+                due = due.min(g.sent_at.map_or(0, |t| t.0.saturating_add(period)));
+            }
+        }
+        Timestamp(due)
+    }
+
     /// The minimum time between two drags of one icon.
     pub fn drag_period(&self) -> std::time::Duration {
         std::time::Duration::from_micros(self.drag_period_us)
@@ -497,8 +539,24 @@ impl Interaction {
         self.set_icons(rest);
     }
 
-    fn start_hold(&self, icon: &IconView, sensor: String, origin: DVec3) -> Hold {
+    fn start_hold(
+        &self,
+        icon: &IconView,
+        sensor: String,
+        origin: DVec3,
+        orientation: DQuat,
+    ) -> Hold {
         let load = icon.role == IconRole::Load;
+        let direction = match (icon.role, icon.kind) {
+            (IconRole::Constraint, IconKind::Normal) => icon
+                .target
+                .try_normalize()
+                .map(|n| n * NORMAL_LEVER * self.surface_area.sqrt()),
+            (IconRole::Constraint, IconKind::Tangent) => {
+                Some(icon.target).filter(|t| t.is_finite())
+            }
+            _ => None,
+        };
         Hold {
             icon: icon.id,
             sensor,
@@ -507,6 +565,9 @@ impl Interaction {
             icon_origin: icon.position,
             offset: DVec3::ZERO,
             spring: load.then(|| DragSpring::new(self.surface_area)),
+            direction,
+            turn: DQuat::IDENTITY,
+            reference: orientation,
             sent_at: None,
             pending: false,
         }
@@ -567,8 +628,12 @@ impl Interaction {
                         if verdict == Verdict::Reacquired {
                             // A new track: the drag continues from where it is.
                             g.origin = pose.position - g.offset;
+                            g.reference = g.turn.inverse() * pose.orientation;
                         } else {
                             g.offset = pose.position - g.origin;
+                            if g.direction.is_some() {
+                                g.turn = (pose.orientation * g.reference.inverse()).normalize();
+                            }
                             g.drag_at(sample.time, period, out);
                         }
                     }
@@ -593,9 +658,12 @@ impl Interaction {
                     self.menu_action(action, out);
                 }
             }
-            Reading::Motion { translation, .. } => {
+            Reading::Motion {
+                translation,
+                rotation,
+            } => {
                 if Some(sample.source) == self.menu_device {
-                    self.mouse_motion(translation, sample.time, out);
+                    self.mouse_motion(translation, rotation, sample.time, out);
                 }
             }
         }
@@ -640,7 +708,12 @@ impl Interaction {
                 let Some(icon) = self.nearest_free_icon(pose.position, self.hands[i].reach) else {
                     return;
                 };
-                let hold = self.start_hold(&icon, self.hands[i].name.clone(), pose.position);
+                let hold = self.start_hold(
+                    &icon,
+                    self.hands[i].name.clone(),
+                    pose.position,
+                    pose.orientation,
+                );
                 tracing::info!(icon = icon.id, hand = %hold.sensor, "grab");
                 out.push(Command::Grab {
                     icon: icon.id,
@@ -707,11 +780,11 @@ impl Interaction {
         }
     }
 
-    fn mouse_motion(&mut self, t: DVec3, time: Timestamp, out: &mut Vec<Command>) {
-        let dz = self.menu.deadzone;
-        let cut = |v: f64| if v.abs() < dz { 0.0 } else { v };
-        let t = DVec3::new(cut(t.x), cut(t.y), cut(t.z));
-        if t == DVec3::ZERO {
+    /// The 3D mouse's cap, calibrated by its device (dead zones applied there):
+    /// translation `t` moves the selected icon, rotation `r` turns a direction
+    /// icon's direction; both integrate over the time between events.
+    fn mouse_motion(&mut self, t: DVec3, r: DVec3, time: Timestamp, out: &mut Vec<Command>) {
+        if t == DVec3::ZERO && r == DVec3::ZERO {
             // The cap is back at rest: the mouse drag ends, the shape is kept, and the
             // integration clock stops, so the next push starts from zero motion.
             if let Some(g) = self.mouse_hold.take() {
@@ -736,21 +809,34 @@ impl Interaction {
         {
             return; // a hand holds it
         }
+        let turns = icon.role == IconRole::Constraint && icon.kind != IconKind::Position;
+        if t == DVec3::ZERO && !turns {
+            return; // a twist does not move a position or a load
+        }
         if self.mouse_hold.as_ref().is_none_or(|g| g.icon != icon.id) {
             if let Some(g) = self.mouse_hold.take() {
                 g.release(out);
             }
-            let hold = self.start_hold(&icon, self.menu_sensor.clone(), DVec3::ZERO);
+            let hold = self.start_hold(
+                &icon,
+                self.menu_sensor.clone(),
+                DVec3::ZERO,
+                DQuat::IDENTITY,
+            );
             out.push(Command::Grab {
                 icon: icon.id,
                 sensor: hold.sensor.clone(),
             });
             self.mouse_hold = Some(hold);
         }
-        let speed = self.menu.speed;
+        let (speed, turn_speed) = (self.menu.speed, self.menu.rotation_speed);
         let period = self.drag_period_us;
         if let Some(g) = &mut self.mouse_hold {
             g.offset += t * speed * dt;
+            if g.direction.is_some() {
+                let step = DQuat::from_scaled_axis(r * turn_speed * dt);
+                g.turn = (step * g.turn).normalize();
+            }
             g.drag_at(time, period, out);
         }
     }
@@ -859,6 +945,60 @@ mod tests {
             icon,
             sensor: "right".into(),
         }
+    }
+
+    /// A pose at `ms` (its own clock: the shared [`tick`] would let other tests'
+    /// samples widen the gaps past the gate's `max_gap`).
+    fn turned(p: DVec3, q: DQuat, ms: u64) -> Sample {
+        Sample {
+            source: SourceId(0),
+            time: Timestamp(ms * 1000),
+            reading: Reading::Pose {
+                sensor: 0,
+                position: p,
+                orientation: q,
+            },
+        }
+    }
+
+    #[test]
+    fn a_hand_turns_a_held_normal_by_its_change_of_orientation() {
+        let mut i = Interaction::new(&config());
+        i.set_surface_area(1.0);
+        let n0 = DVec3::new(0.0, 1.0, 0.0);
+        i.set_icons([IconView {
+            id: 3,
+            position: DVec3::ZERO,
+            target: n0,
+            role: IconRole::Constraint,
+            kind: IconKind::Normal,
+            state: IconState::Passive,
+        }]);
+        // the hand is held turned 0.3 rad about z when it grabs: that is the reference
+        let q0 = DQuat::from_rotation_z(0.3);
+        let out = run(&mut i, &[turned(DVec3::ZERO, q0, 10), hand(1.0, 1.0)]);
+        assert_eq!(out, vec![grab(3)]);
+        // turning it a further 0.5 rad about x (scene frame) turns the normal so
+        let q1 = DQuat::from_rotation_x(0.5) * q0;
+        let out = run(&mut i, &[turned(DVec3::ZERO, q1, 20)]);
+        let Some(Command::Drag { icon: 3, target }) = out.last() else {
+            panic!("{out:?}");
+        };
+        let want = DQuat::from_rotation_x(0.5) * n0;
+        assert!((target.normalize() - want).length() < 1e-12, "{target}");
+        assert!((target.length() - NORMAL_LEVER).abs() < 1e-9);
+        // a position icon keeps ignoring the hand's orientation
+        let mut i = Interaction::new(&config());
+        i.set_icons([icon(4, DVec3::ZERO, IconRole::Constraint)]);
+        run(&mut i, &[turned(DVec3::ZERO, q0, 10), hand(1.0, 1.0)]);
+        let out = run(&mut i, &[turned(DVec3::X * 0.01, q1, 20)]);
+        assert_eq!(
+            out,
+            vec![Command::Drag {
+                icon: 4,
+                target: DVec3::X * 0.01
+            }]
+        );
     }
 
     #[test]
@@ -1061,7 +1201,7 @@ mod tests {
             source: SourceId(2),
             time: Timestamp(t),
             reading: Reading::Motion {
-                translation: DVec3::new(x, 0.01, 0.0),
+                translation: DVec3::new(x, 0.0, 0.0),
                 rotation: DVec3::ZERO,
             },
         };

@@ -16,7 +16,8 @@
 //!   tag 0 (frame) — `u32` length and the bytes; tag 1 (opened) — `u8` 1 and
 //!   `u16` vendor, `u16` product when the device has a USB identity, else `u8` 0;
 //!   tag 2 (status) — `u8` 0 open / 1 unavailable / 2 lost, `u32` length and the
-//!   UTF-8 reason.
+//!   UTF-8 reason; tag 3 (datagram: one datagram of a lossy side channel, VRPN's
+//!   UDP) — `u32` length and the bytes.
 
 use crate::bridge::Input;
 use crate::config::{Config, DeviceConfig, build_decoder};
@@ -53,8 +54,12 @@ pub enum RecordingError {
 
 fn write_event<W: Write>(w: &mut W, e: &TapEvent) -> std::io::Result<()> {
     match e {
-        TapEvent::Frame(f) => {
-            w.write_all(&[0])?;
+        TapEvent::Frame(f) | TapEvent::Datagram(f) => {
+            w.write_all(&[if matches!(e, TapEvent::Frame(_)) {
+                0
+            } else {
+                3
+            }])?;
             w.write_all(&f.time.0.to_le_bytes())?;
             w.write_all(&f.source.0.to_le_bytes())?;
             w.write_all(&(f.bytes.len() as u32).to_le_bytes())?;
@@ -246,7 +251,7 @@ impl Recording {
             )));
         }
         match head[0] {
-            0 => {
+            tag @ (0 | 3) => {
                 let mut len = [0u8; 4];
                 if !read_exact_or_eof(r, &mut len)? {
                     return Err(RecordingError::Format("truncated frame".into()));
@@ -259,11 +264,16 @@ impl Recording {
                 if len > 0 && !read_exact_or_eof(r, &mut bytes)? {
                     return Err(RecordingError::Format("truncated frame".into()));
                 }
-                Ok(Some(TapEvent::Frame(RawFrame {
+                let frame = RawFrame {
                     source,
                     time,
                     bytes,
-                })))
+                };
+                Ok(Some(if tag == 0 {
+                    TapEvent::Frame(frame)
+                } else {
+                    TapEvent::Datagram(frame)
+                }))
             }
             1 => {
                 let mut flag = [0u8; 1];
@@ -372,7 +382,7 @@ impl Replayer {
         let mut produced = 0u64;
         while let Some(event) = self.recording.next_event()? {
             let (source, time) = match &event {
-                TapEvent::Frame(f) => (f.source, f.time),
+                TapEvent::Frame(f) | TapEvent::Datagram(f) => (f.source, f.time),
                 TapEvent::Opened { source, time, .. } | TapEvent::Status { source, time, .. } => {
                     (*source, *time)
                 }
@@ -389,31 +399,37 @@ impl Replayer {
                 }
             }
             let decoder = &mut self.decoders[usize::from(source.0)];
-            match event {
+            let (f, datagram) = match event {
                 TapEvent::Opened { identity, .. } => {
                     decoder.reset();
                     if let Some(ids) = identity {
                         decoder.set_identity(ids);
                     }
+                    continue;
                 }
                 TapEvent::Status { status, .. } => {
                     if !sink(Input::Status(source, status)) {
                         break;
                     }
+                    continue;
                 }
-                TapEvent::Frame(f) => {
-                    out.clear();
-                    decoder.feed(&f.bytes, f.time, &mut out);
-                    if decoder.fatal().is_some() {
-                        // As live: the link would be reopened; start the decoder afresh.
-                        decoder.reset();
-                    }
-                    if !out.is_empty() {
-                        produced += out.len() as u64;
-                        if !sink(Input::Samples(std::mem::take(&mut out))) {
-                            break;
-                        }
-                    }
+                TapEvent::Frame(f) => (f, false),
+                TapEvent::Datagram(f) => (f, true),
+            };
+            out.clear();
+            if datagram {
+                decoder.feed_datagram(&f.bytes, f.time, &mut out);
+            } else {
+                decoder.feed(&f.bytes, f.time, &mut out);
+            }
+            if decoder.fatal().is_some() {
+                // As live: the link would be reopened; start the decoder afresh.
+                decoder.reset();
+            }
+            if !out.is_empty() {
+                produced += out.len() as u64;
+                if !sink(Input::Samples(std::mem::take(&mut out))) {
+                    break;
                 }
             }
         }
@@ -430,6 +446,66 @@ mod tests {
 
     fn temp(name: &str) -> std::path::PathBuf {
         std::env::temp_dir().join(format!("vsculpt-rec-{}-{name}", std::process::id()))
+    }
+
+    /// VRPN's UDP datagrams are recorded as datagrams and replayed through the
+    /// decoder's datagram path: a duplicate is dropped in replay as it was live.
+    #[test]
+    fn datagrams_replay_as_datagrams() {
+        use crate::device::vrpn::{
+            POS_QUAT, SENDER_DESCRIPTION, TYPE_DESCRIPTION, cookie, encode_description,
+            encode_pos_quat,
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("udp.vsbrec");
+        let mut vrpn = DeviceConfig::new("studio", DeviceKind::Vrpn);
+        vrpn.address = Some("Tracker0@host".into());
+        let config = Config {
+            devices: vec![vrpn],
+            ..Default::default()
+        };
+        let rec = Recorder::create(&path, &config).unwrap();
+        let tap = rec.tap();
+        let mut tcp = cookie().to_vec();
+        tcp.extend(encode_description(SENDER_DESCRIPTION, 0, "Tracker0"));
+        tcp.extend(encode_description(TYPE_DESCRIPTION, 4, POS_QUAT));
+        let frame = |t: u64, bytes: Vec<u8>| RawFrame {
+            source: SourceId(0),
+            time: Timestamp(t),
+            bytes,
+        };
+        let udp = |seq: u32, x: f64| {
+            let mut m = crate::device::vrpn::encode_message(
+                1,
+                seq,
+                0,
+                4,
+                &encode_pos_quat(0, [x, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]),
+            );
+            m[20..24].copy_from_slice(&seq.to_be_bytes());
+            m
+        };
+        tap.send(TapEvent::Frame(frame(10, tcp))).unwrap();
+        for (t, seq, x) in [(20, 1, 0.1), (30, 1, 0.1), (40, 2, 0.2)] {
+            tap.send(TapEvent::Datagram(frame(t, udp(seq, x)))).unwrap();
+        }
+        drop(tap);
+        assert_eq!(rec.finish().unwrap(), 4);
+        let mut xs = Vec::new();
+        Replayer::open(&path)
+            .unwrap()
+            .play(f64::INFINITY, |i| {
+                if let Input::Samples(s) = i {
+                    for s in s {
+                        if let crate::device::Reading::Pose { position, .. } = s.reading {
+                            xs.push(position.x);
+                        }
+                    }
+                }
+                true
+            })
+            .unwrap();
+        assert_eq!(xs, vec![0.1, 0.2]);
     }
 
     #[test]
@@ -507,7 +583,8 @@ mod tests {
             matches!(got[0].reading, crate::device::Reading::Pose { position, .. } if (position.x - 0.1).abs() < 1e-3)
         );
         assert!(
-            matches!(got[1].reading, crate::device::Reading::Motion { translation, .. } if translation.y == 0.5)
+            // half deflection through the default dead zone of 0.05: (0.5 − 0.05) / 0.95
+            matches!(got[1].reading, crate::device::Reading::Motion { translation, .. } if (translation.y - 0.45 / 0.95).abs() < 1e-12)
         );
         let _ = std::fs::remove_file(&path);
     }

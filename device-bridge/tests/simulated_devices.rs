@@ -231,6 +231,8 @@ fn spacenavd_socket() {
     let daemon = FakeSpacenavd::start(&path).unwrap();
     let mut cfg = DeviceConfig::new("mouse", DeviceKind::Spacenavd);
     cfg.spacenavd.socket = Some(path.display().to_string());
+    // no dead zone: this test is about the wire format (the calibration has its own)
+    cfg.spacenavd.deadzone = [0.0; 6];
     let mut d = build_driver(SourceId(2), &cfg);
     d.open().unwrap();
     let end = Instant::now() + Duration::from_secs(5);
@@ -298,7 +300,9 @@ fn vrpn_tracker_over_tcp() {
 }
 
 fn replay_hid(session: &[&[u8]], id: (u16, u16)) -> Vec<Reading> {
-    let cfg = DeviceConfig::new("mouse", DeviceKind::SpacemouseHid);
+    let mut cfg = DeviceConfig::new("mouse", DeviceKind::SpacemouseHid);
+    // no dead zone: these tests are about the report format
+    cfg.spacemouse.deadzone = [0.0; 6];
     let t = ScriptedTransport::new(session.iter().map(|r| r.to_vec()), Some(id));
     let mut d = Driver::new(
         "mouse",

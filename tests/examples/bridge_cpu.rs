@@ -46,6 +46,33 @@ fn thread_cpu(prefixes: &[&str]) -> f64 {
     total
 }
 
+/// Voluntary context switches (each a wait that was woken: a wake-up) of this
+/// process's threads whose names start with one of `prefixes`.
+fn thread_wakeups(prefixes: &[&str]) -> u64 {
+    let mut total = 0;
+    for t in std::fs::read_dir("/proc/self/task")
+        .into_iter()
+        .flatten()
+        .flatten()
+    {
+        let (Ok(comm), Ok(status)) = (
+            std::fs::read_to_string(t.path().join("comm")),
+            std::fs::read_to_string(t.path().join("status")),
+        ) else {
+            continue;
+        };
+        if !prefixes.iter().any(|p| comm.starts_with(p)) {
+            continue;
+        }
+        total += status
+            .lines()
+            .find_map(|l| l.strip_prefix("voluntary_ctxt_switches:"))
+            .and_then(|v| v.trim().parse::<u64>().ok())
+            .unwrap_or(0);
+    }
+    total
+}
+
 /// The position of the demo design's first position icon, from a join snapshot.
 async fn first_position_icon(url: &str) -> [f64; 3] {
     use futures_util::{SinkExt, StreamExt};
@@ -199,6 +226,7 @@ fn main() {
         thread_cpu(&["server-rt"]),
         thread_cpu(&[]),
     );
+    let (d0, r0) = (thread_wakeups(&["device "]), thread_wakeups(&["bridge-rt"]));
     let wall = Instant::now();
     std::thread::sleep(Duration::from_secs(seconds));
     let secs = wall.elapsed().as_secs_f64();
@@ -207,7 +235,13 @@ fn main() {
         thread_cpu(&["server-rt"]),
         thread_cpu(&[]),
     );
+    let (d1, r1) = (thread_wakeups(&["device "]), thread_wakeups(&["bridge-rt"]));
     let pct = |cpu: f64| 100.0 * cpu / secs;
+    println!(
+        "wake-ups per second: device threads {:.0}, bridge runtime {:.0}",
+        (d1 - d0) as f64 / secs,
+        (r1 - r0) as f64 / secs
+    );
     println!("window {secs:.1} s");
     println!(
         "bridge (device runners + bridge runtime): {:.2} % of one core",

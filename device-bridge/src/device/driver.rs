@@ -62,6 +62,9 @@ pub struct DecodeStats {
     /// Well-formed messages of any kind (for framed protocols whose peers also
     /// send non-sample messages: proof the peer is alive).
     pub messages: u64,
+    /// Messages of a lossy side channel dropped as duplicates, out of order, or
+    /// ahead of their descriptions (not faults: UDP does that).
+    pub stale: u64,
 }
 
 impl DecodeStats {
@@ -92,6 +95,12 @@ pub trait Decoder: Send {
     /// Tells the decoder which USB model (vendor, product) the transport opened, for
     /// per-model quirks. The default ignores it.
     fn set_identity(&mut self, _ids: (u16, u16)) {}
+    /// Parses one datagram of a lossy side channel (VRPN's UDP): whole messages,
+    /// possibly lost, duplicated or out of order, never part of the byte stream.
+    /// The default treats it as stream bytes.
+    fn feed_datagram(&mut self, datagram: &[u8], at: Timestamp, out: &mut Vec<Sample>) {
+        self.feed(datagram, at, out);
+    }
 }
 
 /// A byte link to a device.
@@ -111,6 +120,11 @@ pub trait Transport: Send {
     /// The USB (vendor, product) of the opened device, when the link knows it.
     fn identity(&self) -> Option<(u16, u16)> {
         None
+    }
+    /// True when the bytes of the last `read` were one datagram of a lossy side
+    /// channel rather than stream bytes (see [`Decoder::feed_datagram`]).
+    fn last_read_was_datagram(&self) -> bool {
+        false
     }
 }
 
@@ -209,6 +223,8 @@ pub enum TapEvent {
     },
     /// Bytes read.
     Frame(RawFrame),
+    /// One datagram read from a lossy side channel (VRPN over UDP).
+    Datagram(RawFrame),
     /// The device's availability changed (reported by its runner).
     Status {
         /// Which configured device.
@@ -354,15 +370,25 @@ impl Driver {
                 continue;
             }
             let at = Timestamp::now();
+            let datagram = self.transport.last_read_was_datagram();
             if let Some(tap) = &self.tap {
-                // A closed recorder only stops the recording, never the device.
-                let _ = tap.send(TapEvent::Frame(RawFrame {
+                let frame = RawFrame {
                     source: self.source,
                     time: at,
                     bytes: self.buf[..n].to_vec(),
-                }));
+                };
+                // A closed recorder only stops the recording, never the device.
+                let _ = tap.send(if datagram {
+                    TapEvent::Datagram(frame)
+                } else {
+                    TapEvent::Frame(frame)
+                });
             }
-            self.decoder.feed(&self.buf[..n], at, out);
+            if datagram {
+                self.decoder.feed_datagram(&self.buf[..n], at, out);
+            } else {
+                self.decoder.feed(&self.buf[..n], at, out);
+            }
             let produced = out.len() > start_len;
             self.note_faults(produced);
             if let Some(reason) = self.decoder.fatal() {

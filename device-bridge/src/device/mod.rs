@@ -6,12 +6,14 @@ pub mod cyberglove;
 pub mod driver;
 pub mod fastrak;
 pub mod flock;
+pub mod mouse_axes;
 pub mod runner;
 pub mod sample;
 pub mod spacemouse_hid;
 pub mod spacenavd;
 pub mod transport;
 pub mod vrpn;
+pub mod vrpn_link;
 
 pub use driver::{
     DecodeStats, Decoder, Device, DeviceError, Driver, RawFrame, Script, Step, TapEvent, Transport,

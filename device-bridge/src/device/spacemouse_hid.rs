@@ -12,16 +12,17 @@
 //! * report 0x17: battery level — ignored;
 //! * output report `[0x04, on]` drives the LED (not used).
 //!
-//! Values are roughly ±350 at full deflection; they are divided by `full_scale` and
-//! clamped to [-1, 1]. spacenavd marks almost every USB model "swap y-z, invert y-z"
+//! Values are roughly ±350 at full deflection. spacenavd marks almost every USB model "swap y-z, invert y-z"
 //! (and adds both flags to unknown 3Dconnexion models); the table below carries the
 //! same per-model flags, which give spacenavd's axes (x right, y up, z away from the
 //! user); [`super::spacenavd::to_bridge_frame`] then makes them the bridge's
-//! right-handed frame (z towards the user), as libspnav does.
+//! right-handed frame (z towards the user), as libspnav does, and the device's
+//! calibration (full scale, dead zone, scale and sign per axis) follows
+//! ([`super::mouse_axes`]).
 
 use super::driver::{DecodeStats, Decoder, Script};
+use super::mouse_axes::{DEFAULT_DEADZONE, MouseAxes};
 use super::sample::{Reading, Sample, SourceId, Timestamp};
-use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 /// Logitech-era 3Dconnexion vendor id.
@@ -123,7 +124,7 @@ pub fn model(vendor: u16, product: u16) -> Option<&'static Model> {
         .find(|m| m.vendor == vendor && m.product == product)
 }
 
-/// How a HID 3D mouse is chosen and scaled.
+/// How a HID 3D mouse is chosen and scaled (the calibration of [`super::mouse_axes`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SpaceMouseSettings {
@@ -133,7 +134,11 @@ pub struct SpaceMouseSettings {
     pub extra_ids: Vec<[u16; 2]>,
     /// Raw axis value that maps to 1.0.
     pub full_scale: f64,
-    /// Sign applied to x, y, z, rx, ry, rz after the model mapping.
+    /// Dead zone per axis x, y, z, rx, ry, rz (bridge frame), a fraction of full scale.
+    pub deadzone: [f64; 6],
+    /// Gain per axis x, y, z, rx, ry, rz (bridge frame).
+    pub axis_scale: [f64; 6],
+    /// Sign (1 or −1) per axis x, y, z, rx, ry, rz (bridge frame, after the model mapping).
     pub axis_signs: [f64; 6],
 }
 
@@ -143,6 +148,8 @@ impl Default for SpaceMouseSettings {
             path: None,
             extra_ids: Vec::new(),
             full_scale: 350.0,
+            deadzone: [DEFAULT_DEADZONE; 6],
+            axis_scale: [1.0; 6],
             axis_signs: [1.0; 6],
         }
     }
@@ -158,15 +165,19 @@ impl SpaceMouseSettings {
             .collect()
     }
 
+    /// The axis calibration.
+    pub fn axes(&self) -> MouseAxes {
+        MouseAxes {
+            full_scale: self.full_scale,
+            deadzone: self.deadzone,
+            axis_scale: self.axis_scale,
+            axis_signs: self.axis_signs,
+        }
+    }
+
     /// Checks the settings.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.full_scale.is_finite() && self.full_scale > 0.0) {
-            return Err("full_scale must be positive".into());
-        }
-        if self.axis_signs.iter().any(|s| !s.is_finite()) {
-            return Err("axis_signs must be finite".into());
-        }
-        Ok(())
+        self.axes().validate()
     }
 }
 
@@ -180,7 +191,7 @@ const BUTTON_BYTES: usize = 4;
 
 /// The HID report decoder. Each `feed` chunk is one report.
 pub struct SpaceMouseDecoder {
-    settings: SpaceMouseSettings,
+    axes: MouseAxes,
     source: SourceId,
     swap_invert_yz: bool,
     raw: [i16; 6],
@@ -197,7 +208,7 @@ impl SpaceMouseDecoder {
     /// applies to every 3Dconnexion device it does not know.
     pub fn new(source: SourceId, settings: SpaceMouseSettings) -> Self {
         Self {
-            settings,
+            axes: settings.axes(),
             source,
             swap_invert_yz: true,
             raw: [0; 6],
@@ -207,29 +218,20 @@ impl SpaceMouseDecoder {
     }
 
     fn motion(&self) -> Reading {
-        let s = &self.settings;
-        let mut v = [0.0f64; 6];
-        for (i, r) in self.raw.iter().enumerate() {
-            v[i] = (f64::from(*r) / s.full_scale).clamp(-1.0, 1.0);
-        }
+        // Device axes in report order; spacenavd's model mapping (`read_device`:
+        // swap 1↔2 and 4↔5, then negate 1, 2, 4, 5) gives its axes and frame.
+        let mut v = self.raw.map(f64::from);
         if self.swap_invert_yz {
-            for base in [0, 3] {
-                let (y, z) = (v[base + 1], v[base + 2]);
-                v[base + 1] = -z;
-                v[base + 2] = -y;
+            for base in [1, 4] {
+                let (y, z) = (v[base], v[base + 1]);
+                v[base] = -z;
+                v[base + 1] = -y;
             }
         }
-        let (t, r) = super::spacenavd::to_bridge_frame(
-            DVec3::new(v[0], v[1], v[2]),
-            DVec3::new(v[3], v[4], v[5]),
-        );
-        let mut v = [t.x, t.y, t.z, r.x, r.y, r.z];
-        for (x, sign) in v.iter_mut().zip(s.axis_signs) {
-            *x *= sign;
-        }
+        let (translation, rotation) = self.axes.apply(v);
         Reading::Motion {
-            translation: DVec3::new(v[0], v[1], v[2]),
-            rotation: DVec3::new(v[3], v[4], v[5]),
+            translation,
+            rotation,
         }
     }
 
@@ -318,6 +320,15 @@ pub fn script() -> Script {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
+
+    /// No dead zone: these tests are about the report format.
+    fn plain() -> SpaceMouseSettings {
+        SpaceMouseSettings {
+            deadzone: [0.0; 6],
+            ..Default::default()
+        }
+    }
 
     fn run(d: &mut SpaceMouseDecoder, reports: &[&[u8]]) -> Vec<Reading> {
         let mut out = Vec::new();
@@ -330,7 +341,7 @@ mod tests {
     /// Frames captured from a SpaceMouse Compact (CloudCompare PR #2339).
     #[test]
     fn captured_compact_frames() {
-        let mut d = SpaceMouseDecoder::new(SourceId(0), SpaceMouseSettings::default());
+        let mut d = SpaceMouseDecoder::new(SourceId(0), plain());
         d.set_identity((VENDOR_3DCONNEXION, 0xc635));
         let r = run(
             &mut d,
@@ -360,7 +371,7 @@ mod tests {
 
     #[test]
     fn combined_13_byte_report_and_clamping() {
-        let mut d = SpaceMouseDecoder::new(SourceId(0), SpaceMouseSettings::default());
+        let mut d = SpaceMouseDecoder::new(SourceId(0), plain());
         d.set_identity((VENDOR_LOGITECH, 0xc603)); // no swap for the Plus XT
         let mut rep = vec![0x01];
         for v in [100i16, -200, 300, 1000, -1000, 0] {
@@ -378,7 +389,7 @@ mod tests {
 
     #[test]
     fn buttons_battery_unknown_and_short_reports() {
-        let mut d = SpaceMouseDecoder::new(SourceId(0), SpaceMouseSettings::default());
+        let mut d = SpaceMouseDecoder::new(SourceId(0), plain());
         let r = run(
             &mut d,
             &[

@@ -8,9 +8,12 @@
 //! * motion `[0, x, y, z, rx, ry, rz, period_ms]` — values already scaled by the
 //!   client's sensitivity and mapped to spacenavd's axes (about ±350 full scale):
 //!   x right, y up, z *away* from the user (pushing the cap forward is +z), a
-//!   left-handed frame; libspnav's own `spnav_posrot_moveobj` (`src/spnav.c`) turns
-//!   it into a right-handed object motion by negating z and rz, and so does
-//!   [`to_bridge_frame`];
+//!   left-handed frame; rx, ry, rz are the twists about those axes (spacenavd's
+//!   `process_input` in `src/event.c` fills `motion.data[0..6]` in that order from
+//!   the mapped device axes 0–5). libspnav's own `spnav_posrot_moveobj`
+//!   (`src/spnav.c`) turns it into a right-handed object motion by negating z and
+//!   rz, and so does [`to_bridge_frame`]; the per-device calibration (dead zone,
+//!   scale, sign per axis) follows ([`super::mouse_axes`]);
 //! * button `[1 (press) | 2 (release), button, press, 0…]`;
 //! * v1 only: 3 device, 4 config, 5 raw axis, 6 raw button (ignored here).
 //!
@@ -18,8 +21,8 @@
 //! out of step, so the link is reopened.
 
 use super::driver::{DecodeStats, Decoder, Script};
+use super::mouse_axes::{DEFAULT_DEADZONE, MouseAxes};
 use super::sample::{Reading, Sample, SourceId, Timestamp};
-use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 /// Default socket path.
@@ -30,7 +33,7 @@ pub const EVENT_LEN: usize = 32;
 /// values only come from a stream that is out of step.
 const MAX_AXIS: u32 = 1 << 16;
 
-/// How spacenavd events are scaled.
+/// How spacenavd events are scaled: the calibration of [`super::mouse_axes`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SpacenavdSettings {
@@ -38,7 +41,11 @@ pub struct SpacenavdSettings {
     pub socket: Option<String>,
     /// Axis value that maps to 1.0.
     pub full_scale: f64,
-    /// Sign applied to x, y, z, rx, ry, rz after scaling.
+    /// Dead zone per axis x, y, z, rx, ry, rz (bridge frame), a fraction of full scale.
+    pub deadzone: [f64; 6],
+    /// Gain per axis x, y, z, rx, ry, rz (bridge frame).
+    pub axis_scale: [f64; 6],
+    /// Sign (1 or −1) per axis x, y, z, rx, ry, rz (bridge frame).
     pub axis_signs: [f64; 6],
 }
 
@@ -47,6 +54,8 @@ impl Default for SpacenavdSettings {
         Self {
             socket: None,
             full_scale: 350.0,
+            deadzone: [DEFAULT_DEADZONE; 6],
+            axis_scale: [1.0; 6],
             axis_signs: [1.0; 6],
         }
     }
@@ -61,27 +70,23 @@ impl SpacenavdSettings {
             .unwrap_or_else(|| DEFAULT_SOCKET.to_owned())
     }
 
+    /// The axis calibration.
+    pub fn axes(&self) -> MouseAxes {
+        MouseAxes {
+            full_scale: self.full_scale,
+            deadzone: self.deadzone,
+            axis_scale: self.axis_scale,
+            axis_signs: self.axis_signs,
+        }
+    }
+
     /// Checks the settings.
     pub fn validate(&self) -> Result<(), String> {
-        if !(self.full_scale.is_finite() && self.full_scale > 0.0) {
-            return Err("full_scale must be positive".into());
-        }
-        if self.axis_signs.iter().any(|s| !s.is_finite()) {
-            return Err("axis_signs must be finite".into());
-        }
-        Ok(())
+        self.axes().validate()
     }
 }
 
-/// spacenavd's axes (x right, y up, z away from the user) to the bridge's
-/// right-handed frame (x right, y up, z towards the user), as libspnav's
-/// `spnav_posrot_moveobj` does: translation `(x, y, −z)`, rotation `(rx, ry, −rz)`.
-pub fn to_bridge_frame(translation: DVec3, rotation: DVec3) -> (DVec3, DVec3) {
-    (
-        DVec3::new(translation.x, translation.y, -translation.z),
-        DVec3::new(rotation.x, rotation.y, -rotation.z),
-    )
-}
+pub use super::mouse_axes::to_bridge_frame;
 
 /// Encodes an event in host byte order (for the fake daemon and tests).
 pub fn encode_event(words: [i32; 8]) -> [u8; EVENT_LEN] {
@@ -94,7 +99,7 @@ pub fn encode_event(words: [i32; 8]) -> [u8; EVENT_LEN] {
 
 /// The spacenavd event decoder.
 pub struct SpacenavdDecoder {
-    settings: SpacenavdSettings,
+    axes: MouseAxes,
     source: SourceId,
     buf: [u8; EVENT_LEN],
     len: usize,
@@ -106,7 +111,7 @@ impl SpacenavdDecoder {
     /// A decoder scaling motion by `settings`.
     pub fn new(source: SourceId, settings: SpacenavdSettings) -> Self {
         Self {
-            settings,
+            axes: settings.axes(),
             source,
             buf: [0; EVENT_LEN],
             len: 0,
@@ -133,20 +138,11 @@ impl SpacenavdDecoder {
                 return;
             }
             0 => {
-                let s = &self.settings;
-                let v = |i: usize| (f64::from(w[i + 1]) / s.full_scale).clamp(-1.0, 1.0);
-                let (t, r) =
-                    to_bridge_frame(DVec3::new(v(0), v(1), v(2)), DVec3::new(v(3), v(4), v(5)));
-                let sign = |v: DVec3, k: usize| {
-                    DVec3::new(
-                        v.x * s.axis_signs[k],
-                        v.y * s.axis_signs[k + 1],
-                        v.z * s.axis_signs[k + 2],
-                    )
-                };
+                let v = |i: usize| f64::from(w[i + 1]);
+                let (translation, rotation) = self.axes.apply([v(0), v(1), v(2), v(3), v(4), v(5)]);
                 Reading::Motion {
-                    translation: sign(t, 0),
-                    rotation: sign(r, 3),
+                    translation,
+                    rotation,
                 }
             }
             1 | 2 => match u16::try_from(w[1]) {
@@ -215,6 +211,15 @@ pub fn script() -> Script {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
+
+    /// No dead zone: these tests are about the wire format.
+    fn plain() -> SpacenavdSettings {
+        SpacenavdSettings {
+            deadzone: [0.0; 6],
+            ..Default::default()
+        }
+    }
 
     #[test]
     fn motion_and_buttons() {
@@ -222,7 +227,7 @@ mod tests {
         s.extend(encode_event([1, 3, 1, 0, 0, 0, 0, 0]));
         s.extend(encode_event([2, 3, 0, 0, 0, 0, 0, 0]));
         s.extend(encode_event([3, 0, 1, 6, 0x256f, 0xc635, 0, 0])); // v1 device event: ignored
-        let mut d = SpacenavdDecoder::new(SourceId(0), SpacenavdSettings::default());
+        let mut d = SpacenavdDecoder::new(SourceId(0), plain());
         let mut out = Vec::new();
         for c in s.chunks(5) {
             d.feed(c, Timestamp(0), &mut out);
@@ -257,7 +262,7 @@ mod tests {
     /// (`pos[2] -= ev->z`, axis z = `-ev->rz`).
     #[test]
     fn pushing_the_cap_away_is_minus_z() {
-        let mut d = SpacenavdDecoder::new(SourceId(0), SpacenavdSettings::default());
+        let mut d = SpacenavdDecoder::new(SourceId(0), plain());
         let mut out = Vec::new();
         let ev: Vec<u8> = [0i32, 0, 0, 350, 0, 0, 175, 16]
             .iter()
@@ -277,7 +282,7 @@ mod tests {
     fn out_of_step_stream_is_fatal() {
         let mut s = vec![0u8; 3];
         s.extend(encode_event([0, 1, 2, 3, 4, 5, 6, 7]));
-        let mut d = SpacenavdDecoder::new(SourceId(0), SpacenavdSettings::default());
+        let mut d = SpacenavdDecoder::new(SourceId(0), plain());
         let mut out = Vec::new();
         d.feed(&s, Timestamp(0), &mut out);
         // the shifted frame reads motion values of 1 << 24: never a motion

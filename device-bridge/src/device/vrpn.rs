@@ -14,6 +14,23 @@
 //!   in the sender field and a payload of BE `u32` (name length + 1), the name and a NUL;
 //! * `vrpn_Tracker Pos_Quat` payloads are exactly 64 bytes: `i32` sensor, `i32`
 //!   filler, 3 × `f64` position (metres), 4 × `f64` quaternion (x, y, z, w), all BE.
+//!
+//! VRPN over UDP (`vrpn_Connection.C`: `finish_new_connection_setup`,
+//! `pack_udp_description`, `handle_UDP_message`, `getOneUDPMessage`,
+//! `pack_message`): unless the connection is TCP-only, the client opens a UDP
+//! port and tells the server over TCP with a message of type −3 whose *sender*
+//! field is the port and whose payload is the client's IP address as a
+//! NUL-terminated string ([`udp_description`]); the server then sends every
+//! message of its "low latency" class — tracker reports among them — as UDP
+//! datagrams to that port, one or more messages per datagram, each framed exactly
+//! as on TCP (24-byte header, payload padded to 8). The header's sixth word is
+//! the sender's per-channel sequence number (`d_udpSequenceNumber`, one per
+//! message). A datagram is lossy: it may be lost, duplicated or arrive out of
+//! order. [`VrpnDecoder`]'s [`Decoder::feed_datagram`] keeps a message only when
+//! its sequence number is newer than the last kept (or, from a server that
+//! leaves it 0, its time is later), so a late or repeated datagram never moves a
+//! hand back; a malformed datagram is dropped whole and never breaks the TCP
+//! stream.
 
 use super::driver::{DecodeStats, Decoder, Script, Step};
 use super::sample::{QUAT_NORM_TOLERANCE, Reading, Sample, SourceId, Timestamp, is_unit_quat};
@@ -34,6 +51,8 @@ pub const MAX_MESSAGE: usize = 64000;
 pub const SENDER_DESCRIPTION: i32 = -1;
 /// Type id of a type description.
 pub const TYPE_DESCRIPTION: i32 = -2;
+/// Type id of a UDP description (`vrpn_CONNECTION_UDP_DESCRIPTION`).
+pub const UDP_DESCRIPTION: i32 = -3;
 /// Name of the tracker pose message type.
 pub const POS_QUAT: &str = "vrpn_Tracker Pos_Quat";
 /// Payload length of a Pos_Quat message.
@@ -41,18 +60,23 @@ pub const POS_QUAT_LEN: usize = 64;
 /// Longest name VRPN allows (`vrpn_CNAME`).
 const MAX_NAME: usize = 100;
 
-/// Which VRPN device to read.
+/// Which VRPN device to read, and how.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct VrpnSettings {
     /// The sender name on the server, e.g. `Tracker0`.
     pub device: String,
+    /// Ask the server for its low-latency messages (tracker reports) over UDP, as
+    /// VRPN's own clients do; `false`, or an address `…@tcp://host:port`, keeps
+    /// everything on the TCP connection.
+    pub udp: bool,
 }
 
 impl Default for VrpnSettings {
     fn default() -> Self {
         Self {
             device: "Tracker0".into(),
+            udp: true,
         }
     }
 }
@@ -93,6 +117,13 @@ pub fn encode_description(kind: i32, id: i32, name: &str) -> Vec<u8> {
     p.extend_from_slice(name.as_bytes());
     p.push(0);
     encode_message(0, 0, id, kind, &p)
+}
+
+/// The client's UDP description: "send your low-latency messages to `ip`:`port`".
+pub fn udp_description(port: u16, ip: &str) -> Vec<u8> {
+    let mut p = ip.as_bytes().to_vec();
+    p.push(0);
+    encode_message(0, 0, i32::from(port), UDP_DESCRIPTION, &p)
 }
 
 /// Encodes a Pos_Quat payload; `xyzw` in VRPN order.
@@ -162,6 +193,8 @@ pub struct VrpnDecoder {
     checked_name: bool,
     senders: HashMap<i32, String>,
     types: HashMap<i32, String>,
+    /// Sequence number and time (s, µs) of the last UDP message kept.
+    udp_last: Option<(u32, u32, u32)>,
     stats: DecodeStats,
     fatal: Option<String>,
 }
@@ -177,8 +210,21 @@ impl VrpnDecoder {
             checked_name: false,
             senders: HashMap::new(),
             types: HashMap::new(),
+            udp_last: None,
             stats: DecodeStats::default(),
             fatal: None,
+        }
+    }
+
+    /// True when a UDP message (`seq`, `sec`, `usec`) comes after the last one kept.
+    fn udp_is_newer(&self, seq: u32, sec: u32, usec: u32) -> bool {
+        match self.udp_last {
+            None => true,
+            Some((s, ts, tu)) => {
+                // Sequence numbers wrap: newer means ahead by less than half the range.
+                let ahead = seq.wrapping_sub(s) as i32;
+                ahead > 0 || (ahead == 0 && (sec, usec) > (ts, tu))
+            }
         }
     }
 
@@ -306,7 +352,54 @@ impl Decoder for VrpnDecoder {
         self.checked_name = false;
         self.senders.clear();
         self.types.clear();
+        self.udp_last = None;
         self.fatal = None;
+    }
+
+    fn feed_datagram(&mut self, datagram: &[u8], at: Timestamp, out: &mut Vec<Sample>) {
+        if self.fatal.is_some() {
+            return;
+        }
+        // Check the whole datagram's framing first: a malformed one is dropped whole.
+        let mut messages = Vec::new();
+        let mut pos = 0;
+        while pos < datagram.len() {
+            let rest = &datagram[pos..];
+            let len = if rest.len() >= HEADER_LEN {
+                be_u32(rest) as usize
+            } else {
+                0
+            };
+            let total = HEADER_LEN + padded(len.saturating_sub(HEADER_LEN));
+            if !(HEADER_LEN..=MAX_MESSAGE).contains(&len) || rest.len() < total {
+                self.stats.rejected_records += 1;
+                self.stats.discarded_bytes += datagram.len() as u64;
+                return;
+            }
+            messages.push((pos, len));
+            pos += total;
+        }
+        for (pos, len) in messages {
+            let h = &datagram[pos..pos + HEADER_LEN];
+            let (sec, usec) = (be_u32(&h[4..]), be_u32(&h[8..]));
+            let (sender, kind, seq) = (be_i32(&h[12..]), be_i32(&h[16..]), be_u32(&h[20..]));
+            // Descriptions travel reliably over TCP; a data message whose sender or
+            // type is not described yet cannot be read (and must not be mistaken for
+            // "the server serves no such device").
+            let described = self.senders.contains_key(&sender) && self.types.contains_key(&kind);
+            if kind < 0 || !described || !self.udp_is_newer(seq, sec, usec) {
+                self.stats.stale += 1;
+                continue;
+            }
+            self.udp_last = Some((seq, sec, usec));
+            self.handle(
+                sender,
+                kind,
+                &datagram[pos + HEADER_LEN..pos + len],
+                at,
+                out,
+            );
+        }
     }
 
     fn fatal(&self) -> Option<String> {
@@ -332,11 +425,17 @@ pub fn ping(device: &str) -> Vec<u8> {
 }
 
 /// The client's script for `device`: send our cookie (the server then sends its
-/// cookie and descriptions), and ping every [`PING_INTERVAL`] — every message back
-/// proves the server alive, so a hung one is noticed by silence.
-pub fn script(device: &str) -> Script {
+/// cookie and descriptions) unless the transport does (with UDP, the transport
+/// sends the cookie and its UDP description, [`super::vrpn_link`]), and ping
+/// every [`PING_INTERVAL`] — every message back proves the server alive, so a hung
+/// one is noticed by silence.
+pub fn script(device: &str, udp: bool) -> Script {
     Script {
-        open: vec![Step::Send(cookie().to_vec())],
+        open: if udp {
+            Vec::new()
+        } else {
+            vec![Step::Send(cookie().to_vec())]
+        },
         poll: Some(ping(device)),
         poll_interval: PING_INTERVAL,
         close: Vec::new(),

@@ -201,3 +201,28 @@ pub fn vrpn_pos_quat(sensor: i32, pos: [f64; 3], xyzw: [f64; 4]) -> Vec<u8> {
     }
     p
 }
+
+/// A VRPN message as the server marshals it for its UDP channel
+/// (`vrpn_Endpoint::marshall_message`): the same header with its time and the
+/// channel's sequence number in the sixth word, the payload padded to 8 bytes.
+pub fn vrpn_udp_message(
+    seq: u32,
+    sec: u32,
+    usec: u32,
+    sender: i32,
+    kind: i32,
+    payload: &[u8],
+) -> Vec<u8> {
+    let mut m = Vec::new();
+    m.extend(((24 + payload.len()) as u32).to_be_bytes());
+    m.extend(sec.to_be_bytes());
+    m.extend(usec.to_be_bytes());
+    m.extend(sender.to_be_bytes());
+    m.extend(kind.to_be_bytes());
+    m.extend(seq.to_be_bytes());
+    m.extend(payload);
+    while m.len() % 8 != 0 {
+        m.push(0);
+    }
+    m
+}
