@@ -125,6 +125,7 @@ fn per_sample(c: &mut Criterion) {
         .collect();
     let mut interaction = Interaction::new(&cfg);
     interaction.set_icons([IconView {
+        part: 1,
         id: 1,
         position: DVec3::ZERO,
         target: DVec3::ZERO,
@@ -136,7 +137,7 @@ fn per_sample(c: &mut Criterion) {
     interaction.handle(&grab(), &mut cmds);
     let mut decoder = build_decoder(SourceId(0), &cfg.devices[0]);
     let mut outbox = Outbox::new();
-    let wire = ProtocolWire;
+    let wire = ProtocolWire::default();
     let mut samples = Vec::new();
     let mut i = 0usize;
     c.bench_function("pipeline/record_to_encoded_drag", |b| {
@@ -206,7 +207,7 @@ fn session_cpu(c: &mut Criterion) {
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let cfg2 = cfg.clone();
     let engine = rt.spawn(async move {
-        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(ProtocolWire), rx, async {
+        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(ProtocolWire::default()), rx, async {
             let _ = stop_rx.await;
         })
         .await
@@ -277,7 +278,7 @@ fn record_to_server(c: &mut Criterion) {
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
     let cfg2 = cfg.clone();
     let engine = rt.spawn(async move {
-        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(ProtocolWire), rx, async {
+        vsculpt_bridge::bridge::drive(&cfg2, Arc::new(ProtocolWire::default()), rx, async {
             let _ = stop_rx.await;
         })
         .await

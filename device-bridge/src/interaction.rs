@@ -67,8 +67,10 @@ pub enum IconState {
 /// The bridge's view of an icon, as the server reports it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IconView {
-    /// Id.
+    /// Id (unique across the design's parts).
     pub id: IconId,
+    /// The part it is on.
+    pub part: u64,
     /// Current position on the surface, in scene units.
     pub position: DVec3,
     /// Its target (a position, derivative vector or normal direction); drags
@@ -117,6 +119,9 @@ pub enum MenuAction {
     ApplyEntry,
     /// Select the next icon (by id).
     SelectNextIcon,
+    /// Select the first icon (by id) of the next part (by part id) that has
+    /// icons to grab: the menu's way through a product's parts.
+    SelectNextPart,
 }
 
 /// A device's availability as reported to the server.
@@ -759,6 +764,30 @@ impl Interaction {
                 };
                 self.selected = next.map(|(id, _)| *id);
             }
+            MenuAction::SelectNextPart => {
+                if let Some(g) = self.mouse_hold.take() {
+                    g.release(out);
+                }
+                let current = self
+                    .selected
+                    .and_then(|s| self.icons.get(&s))
+                    .map(|i| i.part);
+                let first_of = |part: u64| {
+                    self.icons
+                        .values()
+                        .filter(|i| i.part == part)
+                        .map(|i| i.id)
+                        .min()
+                };
+                let mut parts: Vec<u64> = self.icons.values().map(|i| i.part).collect();
+                parts.sort_unstable();
+                parts.dedup();
+                let next = match current {
+                    Some(c) => parts.iter().find(|&&p| p > c).or_else(|| parts.first()),
+                    None => parts.first(),
+                };
+                self.selected = next.and_then(|&p| first_of(p));
+            }
             MenuAction::ApplyEntry => {
                 let Some(icon) = self.selected.and_then(|s| self.icons.get(&s)) else {
                     return;
@@ -895,6 +924,7 @@ mod tests {
     fn icon(id: IconId, p: DVec3, role: IconRole) -> IconView {
         IconView {
             id,
+            part: 1,
             position: p,
             target: p,
             role,
@@ -968,6 +998,7 @@ mod tests {
         let n0 = DVec3::new(0.0, 1.0, 0.0);
         i.set_icons([IconView {
             id: 3,
+            part: 1,
             position: DVec3::ZERO,
             target: n0,
             role: IconRole::Constraint,

@@ -5,5 +5,5 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 fn main() -> ExitCode {
-    vsculpt_bridge::cli::main(Arc::new(vsculpt_bridge::wire::ProtocolWire))
+    vsculpt_bridge::cli::main(Arc::new(vsculpt_bridge::wire::ProtocolWire::default()))
 }

@@ -11,22 +11,85 @@
 //! * device availability → `device_status`;
 //! * `snapshot` → the icon set and the surface area S (of the control net) for
 //!   k0 = κ S; `icon_created` / `icon_updated` / `icon_deleted`; `icon_feedback` → Δy.
+//! * parts (protocol 2): the wire keeps which part each icon is on (every icon
+//!   message names its part) and shows the interaction only the icons of visible,
+//!   unlocked parts — a grab picks the nearest icon across those; a part hidden,
+//!   locked or deleted takes its icons away, shown or unlocked brings them back.
+//!   S is the largest surface part's control-net area.
 
 use crate::interaction::{Command, DeviceCondition, IconKind, IconRole, IconState, IconView};
 use crate::link::{Rejection, ServerEvent, Wire};
 use glam::DVec3;
+use std::collections::BTreeMap;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 use vsculpt_protocol::{
-    ClientEnvelope, ClientKind, ClientMessage, Derivative, ErrorCode, Icon, PROTOCOL_VERSION, Role,
-    ServerMessage, SurfaceData,
+    ClientEnvelope, ClientKind, ClientMessage, Derivative, ErrorCode, Icon, PROTOCOL_VERSION, Part,
+    PartShape, Role, ServerMessage, SurfaceData,
 };
 
 /// Name the bridge gives itself in presence.
 pub const CLIENT_NAME: &str = "vsculpt-bridge";
 
 /// The protocol mapping.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ProtocolWire;
+#[derive(Debug, Default)]
+pub struct ProtocolWire {
+    parts: Mutex<Parts>,
+}
+
+/// What the wire knows of the design's parts (from the snapshot and the
+/// events since).
+#[derive(Debug, Default)]
+struct Parts {
+    parts: BTreeMap<u64, PartState>,
+}
+
+#[derive(Debug, Default)]
+struct PartState {
+    visible: bool,
+    locked: bool,
+    icons: BTreeMap<u64, IconView>,
+}
+
+impl PartState {
+    fn grabbable(&self) -> bool {
+        self.visible && !self.locked
+    }
+}
+
+impl Parts {
+    fn part_of(&self, icon: u64) -> u64 {
+        self.parts
+            .iter()
+            .find(|(_, p)| p.icons.contains_key(&icon))
+            .map_or(0, |(id, _)| *id)
+    }
+
+    fn insert(&mut self, p: &Part) {
+        let icons = p
+            .icons
+            .iter()
+            .filter_map(|i| icon_view(p.id, i))
+            .map(|v| (v.id, v))
+            .collect();
+        self.parts.insert(
+            p.id,
+            PartState {
+                visible: p.visible,
+                locked: p.locked,
+                icons,
+            },
+        );
+    }
+
+    fn grabbable(&self) -> Vec<IconView> {
+        self.parts
+            .values()
+            .filter(|p| p.grabbable())
+            .flat_map(|p| p.icons.values().copied())
+            .collect()
+    }
+}
 
 fn text(msg: ClientMessage) -> String {
     envelope(None, msg)
@@ -56,7 +119,7 @@ fn state_from_wire(s: vsculpt_protocol::IconState) -> IconState {
 }
 
 /// An icon as the bridge sees it; `None` when its numbers are not finite.
-pub fn icon_view(icon: &Icon) -> Option<IconView> {
+pub fn icon_view(part: u64, icon: &Icon) -> Option<IconView> {
     let position = DVec3::from_array(icon.xyz);
     let target = DVec3::from_array(icon.target);
     if !position.is_finite() || !target.is_finite() {
@@ -70,6 +133,7 @@ pub fn icon_view(icon: &Icon) -> Option<IconView> {
     };
     Some(IconView {
         id: icon.id,
+        part,
         position,
         target,
         role,
@@ -109,6 +173,12 @@ impl Wire for ProtocolWire {
     }
 
     fn encode(&self, cmd: &Command, ordered: bool) -> Vec<String> {
+        let part_of = |icon: &u64| {
+            self.parts
+                .lock()
+                .map(|p| p.part_of(*icon))
+                .unwrap_or_default()
+        };
         // A drag without a request number takes the server's coalesced drag path,
         // which may overtake commands; one that precedes a release or a state change
         // carries a number so that the server applies it in order.
@@ -117,6 +187,7 @@ impl Wire for ProtocolWire {
             return vec![envelope(
                 Some(req),
                 ClientMessage::Drag {
+                    part: part_of(icon),
                     icon: *icon,
                     xyz: target.to_array(),
                 },
@@ -125,27 +196,38 @@ impl Wire for ProtocolWire {
         let msgs = match cmd {
             Command::Grab { icon, sensor } => vec![
                 ClientMessage::BindSensor {
+                    part: part_of(icon),
                     icon: *icon,
                     sensor: sensor.clone(),
                 },
-                ClientMessage::DragStart { icon: *icon },
+                ClientMessage::DragStart {
+                    part: part_of(icon),
+                    icon: *icon,
+                },
             ],
             Command::Release { icon, sensor } => vec![
                 ClientMessage::UnbindSensor {
+                    part: part_of(icon),
                     icon: *icon,
                     sensor: sensor.clone(),
                 },
-                ClientMessage::DragEnd { icon: *icon },
+                ClientMessage::DragEnd {
+                    part: part_of(icon),
+                    icon: *icon,
+                },
             ],
             Command::Drag { icon, target } => vec![ClientMessage::Drag {
+                part: part_of(icon),
                 icon: *icon,
                 xyz: target.to_array(),
             }],
             Command::SetState { icon, state } => vec![ClientMessage::SetState {
+                part: part_of(icon),
                 icon: *icon,
                 state: state_to_wire(*state),
             }],
             Command::SetRole { icon, role } => vec![ClientMessage::SetRole {
+                part: part_of(icon),
                 icon: *icon,
                 role: match role {
                     IconRole::Load => Role::Load,
@@ -153,6 +235,7 @@ impl Wire for ProtocolWire {
                 },
             }],
             Command::SetKind { icon, kind } => vec![ClientMessage::SetRole {
+                part: part_of(icon),
                 icon: *icon,
                 role: match kind {
                     IconKind::Position => Role::Position,
@@ -198,17 +281,95 @@ impl Wire for ProtocolWire {
         let msg: ServerMessage = serde_json::from_str(text).map_err(|e| e.to_string())?;
         Ok(match msg {
             ServerMessage::Welcome { .. } => vec![ServerEvent::Welcome],
-            ServerMessage::Snapshot { surface, icons, .. } => vec![ServerEvent::Icons {
-                icons: icons.iter().filter_map(icon_view).collect(),
-                area: control_net_area(&surface),
-            }],
-            ServerMessage::IconCreated { icon } | ServerMessage::IconUpdated { icon } => {
-                icon_view(&icon)
-                    .map(ServerEvent::Icon)
-                    .into_iter()
-                    .collect()
+            ServerMessage::Snapshot { parts, .. } => {
+                let mut state = self.parts.lock().map_err(|_| "wire state poisoned")?;
+                *state = Parts::default();
+                for p in &parts {
+                    state.insert(p);
+                }
+                // S of the largest surface part (the spring's k0 = κ S).
+                let area = parts
+                    .iter()
+                    .filter_map(|p| match &p.shape {
+                        PartShape::Surface { surface } => control_net_area(surface),
+                        _ => None,
+                    })
+                    .reduce(f64::max);
+                vec![ServerEvent::Icons {
+                    icons: state.grabbable(),
+                    area,
+                }]
             }
-            ServerMessage::IconDeleted { icon } => vec![ServerEvent::IconRemoved(icon)],
+            ServerMessage::IconCreated { part, icon }
+            | ServerMessage::IconUpdated { part, icon } => {
+                let mut state = self.parts.lock().map_err(|_| "wire state poisoned")?;
+                let Some(view) = icon_view(part, &icon) else {
+                    return Ok(Vec::new());
+                };
+                let p = state.parts.entry(part).or_insert_with(|| PartState {
+                    visible: true,
+                    ..PartState::default()
+                });
+                p.icons.insert(icon.id, view);
+                if p.grabbable() {
+                    vec![ServerEvent::Icon(view)]
+                } else {
+                    Vec::new()
+                }
+            }
+            ServerMessage::IconDeleted { part, icon } => {
+                let mut state = self.parts.lock().map_err(|_| "wire state poisoned")?;
+                if let Some(p) = state.parts.get_mut(&part) {
+                    p.icons.remove(&icon);
+                }
+                vec![ServerEvent::IconRemoved(icon)]
+            }
+            ServerMessage::PartCreated { part } => {
+                let mut state = self.parts.lock().map_err(|_| "wire state poisoned")?;
+                state.insert(&part);
+                let p = &state.parts[&part.id];
+                if p.grabbable() {
+                    p.icons.values().map(|v| ServerEvent::Icon(*v)).collect()
+                } else {
+                    Vec::new()
+                }
+            }
+            ServerMessage::PartDeleted { part } => {
+                let mut state = self.parts.lock().map_err(|_| "wire state poisoned")?;
+                state
+                    .parts
+                    .remove(&part)
+                    .map(|p| {
+                        p.icons
+                            .keys()
+                            .map(|i| ServerEvent::IconRemoved(*i))
+                            .collect()
+                    })
+                    .unwrap_or_default()
+            }
+            ServerMessage::PartChanged {
+                part,
+                visible,
+                locked,
+                ..
+            } => {
+                let mut state = self.parts.lock().map_err(|_| "wire state poisoned")?;
+                let Some(p) = state.parts.get_mut(&part) else {
+                    return Ok(Vec::new());
+                };
+                let was = p.grabbable();
+                p.visible = visible;
+                p.locked = locked;
+                match (was, p.grabbable()) {
+                    (true, false) => p
+                        .icons
+                        .keys()
+                        .map(|i| ServerEvent::IconRemoved(*i))
+                        .collect(),
+                    (false, true) => p.icons.values().map(|v| ServerEvent::Icon(*v)).collect(),
+                    _ => Vec::new(),
+                }
+            }
             ServerMessage::IconFeedback { icon, actual, .. } => {
                 let actual = DVec3::from_array(actual);
                 if actual.is_finite() {
@@ -239,9 +400,83 @@ mod tests {
     use glam::DQuat;
     use vsculpt_protocol::parse_client;
 
+    /// A snapshot of two surface parts (7 visible with icons 1 and 2, 8
+    /// hidden with icon 5), as a server sends it.
+    const SNAPSHOT: &str = r##"{"type": "snapshot", "design": {"id": 1, "name": "d", "versions": 1}, "revision": 3,
+        "parts": [
+          {"id": 7, "name": "a", "visible": true, "locked": false, "colour": "#ffffff",
+           "material": {"alpha11": 0.1, "alpha12": 0.0, "alpha22": 0.1, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0},
+           "icons": [
+             {"id": 1, "anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}, "state": "passive", "xyz": [0.5, 0.5, 0.0], "target": [0.5, 0.5, 0.0], "sensors": []},
+             {"id": 2, "anchor": {"kind": "point", "u": 0.1, "v": 0.1}, "role": {"kind": "position"}, "state": "passive", "xyz": [0.1, 0.1, 0.0], "target": [0.1, 0.1, 0.0], "sensors": []}],
+           "shape": {"kind": "surface", "surface": {"u": {"degree": 1, "knots": [0, 0, 1, 1]}, "v": {"degree": 1, "knots": [0, 0, 1, 1]}, "nu": 2, "nv": 2,
+                     "points": [[0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]]}}},
+          {"id": 8, "name": "b", "visible": false, "locked": false, "colour": "#ffffff",
+           "material": {"alpha11": 0.1, "alpha12": 0.0, "alpha22": 0.1, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0},
+           "icons": [
+             {"id": 5, "anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}, "state": "passive", "xyz": [3.0, 0.5, 0.0], "target": [3.0, 0.5, 0.0], "sensors": []}],
+           "shape": {"kind": "surface", "surface": {"u": {"degree": 1, "knots": [0, 0, 1, 1]}, "v": {"degree": 1, "knots": [0, 0, 1, 1]}, "nu": 2, "nv": 2,
+                     "points": [[2, 0, 0], [2, 3, 0], [4, 0, 0], [4, 3, 0]]}}}],
+        "relations": [], "versions": [], "presence": [], "can_undo": false, "can_redo": false}"##;
+
+    fn ids(ev: &[ServerEvent]) -> Vec<(&'static str, u64)> {
+        ev.iter()
+            .flat_map(|e| match e {
+                ServerEvent::Icons { icons, .. } => icons.iter().map(|i| ("icon", i.id)).collect(),
+                ServerEvent::Icon(i) => vec![("icon", i.id)],
+                ServerEvent::IconRemoved(i) => vec![("removed", *i)],
+                _ => Vec::new(),
+            })
+            .collect()
+    }
+
+    #[test]
+    fn only_icons_of_visible_unlocked_parts_are_grabbable() {
+        let w = ProtocolWire::default();
+        let ev = w.decode(SNAPSHOT).unwrap();
+        assert_eq!(ids(&ev), vec![("icon", 1), ("icon", 2)]);
+        // S: the larger surface part (2 × 3 = 6, not 1 + 6).
+        assert!(
+            matches!(ev[0], ServerEvent::Icons { area: Some(a), .. } if (a - 6.0).abs() < 1e-12)
+        );
+        let change = |part: u64, visible: bool, locked: bool| {
+            format!(
+                r##"{{"type": "part_changed", "part": {part}, "name": "x", "visible": {visible}, "locked": {locked}, "colour": "#000000"}}"##
+            )
+        };
+        // Locking part 7 takes its icons away; showing part 8 brings its icon.
+        assert_eq!(
+            ids(&w.decode(&change(7, true, true)).unwrap()),
+            vec![("removed", 1), ("removed", 2)]
+        );
+        assert_eq!(
+            ids(&w.decode(&change(8, true, false)).unwrap()),
+            vec![("icon", 5)]
+        );
+        // An icon updated on a locked part is not offered; unlocking offers both.
+        let icon = r#"{"id": 2, "anchor": {"kind": "point", "u": 0.1, "v": 0.1}, "role": {"kind": "load"}, "state": "passive", "xyz": [0.1, 0.1, 0.5], "target": [0.1, 0.1, 0.5], "sensors": []}"#;
+        let ev = w
+            .decode(&format!(
+                r#"{{"type": "icon_updated", "part": 7, "icon": {icon}}}"#
+            ))
+            .unwrap();
+        assert!(ev.is_empty());
+        assert_eq!(
+            ids(&w.decode(&change(7, true, false)).unwrap()),
+            vec![("icon", 1), ("icon", 2)]
+        );
+        // A deleted part's icons go.
+        assert_eq!(
+            ids(&w.decode(r#"{"type": "part_deleted", "part": 8}"#).unwrap()),
+            vec![("removed", 5)]
+        );
+    }
+
     #[test]
     fn every_command_is_a_valid_client_message() {
-        let w = ProtocolWire;
+        let w = ProtocolWire::default();
+        // Icon 1 is on part 7: every message about it names part 7.
+        w.decode(SNAPSHOT).unwrap();
         let hello = parse_client(&w.hello("tok", Some(3))).unwrap();
         assert!(matches!(
             hello.msg,
@@ -293,27 +528,30 @@ mod tests {
         let parsed: Vec<ClientMessage> = cmds
             .iter()
             .flat_map(|c| w.encode(c, false))
-            .map(|t| parse_client(&t).unwrap().msg)
+            .map(|t| parse_client(t.as_str()).unwrap().msg)
             .collect();
         assert_eq!(
             parsed[0],
             ClientMessage::BindSensor {
+                part: 7,
                 icon: 1,
                 sensor: "right".into()
             }
         );
-        assert_eq!(parsed[1], ClientMessage::DragStart { icon: 1 });
+        assert_eq!(parsed[1], ClientMessage::DragStart { part: 7, icon: 1 });
         assert_eq!(
             parsed[2],
             ClientMessage::UnbindSensor {
+                part: 7,
                 icon: 1,
                 sensor: "right".into()
             }
         );
-        assert_eq!(parsed[3], ClientMessage::DragEnd { icon: 1 });
+        assert_eq!(parsed[3], ClientMessage::DragEnd { part: 7, icon: 1 });
         assert_eq!(
             parsed[4],
             ClientMessage::Drag {
+                part: 7,
                 icon: 1,
                 xyz: [0.1, 0.2, 0.3]
             }
@@ -321,6 +559,7 @@ mod tests {
         assert_eq!(
             parsed[7],
             ClientMessage::SetRole {
+                part: 7,
                 icon: 1,
                 role: Role::Derivative {
                     which: Derivative::R
@@ -363,15 +602,18 @@ mod tests {
 
     #[test]
     fn server_messages_become_events() {
-        let w = ProtocolWire;
+        let w = ProtocolWire::default();
         let icon = r#"{"id": 3, "anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}, "state": "passive", "xyz": [1.0, 2.0, 3.0], "target": [1.0, 2.0, 3.0], "sensors": []}"#;
         let ev = w
-            .decode(&format!(r#"{{"type": "icon_updated", "icon": {icon}}}"#))
+            .decode(&format!(
+                r#"{{"type": "icon_updated", "part": 2, "icon": {icon}}}"#
+            ))
             .unwrap();
         assert_eq!(
             ev,
             vec![ServerEvent::Icon(IconView {
                 id: 3,
+                part: 2,
                 position: DVec3::new(1.0, 2.0, 3.0),
                 target: DVec3::new(1.0, 2.0, 3.0),
                 role: IconRole::Load,
@@ -380,7 +622,7 @@ mod tests {
             })]
         );
         let ev = w
-            .decode(r#"{"type": "icon_feedback", "icon": 3, "requested": [0.5, 0.5, 0.4], "actual": [0.5, 0.5, 0.31], "revision": 13}"#)
+            .decode(r#"{"type": "icon_feedback", "part": 2, "icon": 3, "requested": [0.5, 0.5, 0.4], "actual": [0.5, 0.5, 0.31], "revision": 13}"#)
             .unwrap();
         assert_eq!(
             ev,

@@ -38,6 +38,7 @@ impl Wire for TestWire {
                 let p = |s: &str| s.parse::<f64>().map_err(|e| e.to_string());
                 Ok(vec![ServerEvent::Icons {
                     icons: vec![IconView {
+                        part: 1,
                         id: id.parse().map_err(|_| "id")?,
                         position: DVec3::new(p(x)?, p(y)?, p(z)?),
                         target: DVec3::new(p(x)?, p(y)?, p(z)?),

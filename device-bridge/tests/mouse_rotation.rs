@@ -201,6 +201,7 @@ fn calibration_from_the_config_file_applies_per_axis() {
 
 fn normal_icon(id: u64, at: DVec3, normal: DVec3) -> IconView {
     IconView {
+        part: 1,
         id,
         position: at,
         target: normal,
@@ -290,6 +291,7 @@ fn twisting_the_cap_turns_a_selected_normal_and_leaves_a_position_alone() {
     // a position icon selected: a twist alone sends nothing
     let mut i = Interaction::new(&config);
     i.set_icons([IconView {
+        part: 1,
         kind: IconKind::Position,
         target: at,
         ..normal_icon(8, at, n0)

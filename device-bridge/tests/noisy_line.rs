@@ -72,6 +72,7 @@ impl Rig {
         let mut interaction = Interaction::new(&c);
         let p0 = DVec3::from_array(P0) * SCALE;
         interaction.set_icons([IconView {
+            part: 1,
             id: 1,
             position: p0,
             target: p0,

@@ -65,6 +65,7 @@ fn icons() -> Vec<IconView> {
     ]
     .into_iter()
     .map(|(id, p)| IconView {
+        part: 1,
         id,
         position: p,
         target: p,

@@ -103,27 +103,28 @@ fn a_panicking_device_is_restarted_and_reported() {
 struct PanicsOnce {
     armed: AtomicBool,
     hellos: AtomicU32,
+    inner: ProtocolWire,
 }
 
 impl Wire for PanicsOnce {
     fn hello(&self, token: &str, design: Option<u64>) -> String {
         self.hellos.fetch_add(1, Ordering::SeqCst);
-        ProtocolWire.hello(token, design)
+        self.inner.hello(token, design)
     }
     fn encode(&self, cmd: &Command, ordered: bool) -> Vec<String> {
-        ProtocolWire.encode(cmd, ordered)
+        self.inner.encode(cmd, ordered)
     }
     fn decode(&self, text: &str) -> Result<Vec<ServerEvent>, String> {
         if self.armed.swap(false, Ordering::SeqCst) {
             panic!("wire bug");
         }
-        ProtocolWire.decode(text)
+        self.inner.decode(text)
     }
     fn decode_binary(&self, bytes: &[u8]) -> Vec<ServerEvent> {
-        ProtocolWire.decode_binary(bytes)
+        self.inner.decode_binary(bytes)
     }
     fn accepts(&self, event: &ServerEvent) -> bool {
-        ProtocolWire.accepts(event)
+        self.inner.accepts(event)
     }
 }
 
@@ -142,6 +143,7 @@ async fn a_panicking_link_task_is_restarted_and_reconnects() {
     let serving = tokio::spawn(server.run());
 
     let wire = Arc::new(PanicsOnce {
+        inner: ProtocolWire::default(),
         armed: AtomicBool::new(true),
         hellos: AtomicU32::new(0),
     });

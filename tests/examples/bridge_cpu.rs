@@ -198,7 +198,7 @@ fn main() {
         .unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let bridge = bridge_rt.spawn(async move {
-        vsculpt_bridge::bridge::run_live(config, Arc::new(ProtocolWire), None, async {
+        vsculpt_bridge::bridge::run_live(config, Arc::new(ProtocolWire::default()), None, async {
             let _ = stopped.await;
         })
         .await

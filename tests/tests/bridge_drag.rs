@@ -86,7 +86,7 @@ async fn hand_drags_an_icon_and_replay_repeats_it() {
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let (cfg, rec) = (config.clone(), recording.clone());
     let bridge = tokio::spawn(async move {
-        run_live(cfg, Arc::new(ProtocolWire), Some(&rec), async {
+        run_live(cfg, Arc::new(ProtocolWire::default()), Some(&rec), async {
             let _ = stopped.await;
         })
         .await
@@ -111,7 +111,7 @@ async fn hand_drags_an_icon_and_replay_repeats_it() {
     cfg2.server.url = server2.device_url.clone();
     let n = run_replay(
         cfg2,
-        Arc::new(ProtocolWire),
+        Arc::new(ProtocolWire::default()),
         &recording,
         4.0,
         std::future::pending(),
@@ -154,7 +154,7 @@ async fn hand_pulls_a_load_icon_within_the_spring_band() {
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let cfg = bridge_config(&dir, &server.device_url);
     let bridge = tokio::spawn(async move {
-        run_live(cfg, Arc::new(ProtocolWire), None, async {
+        run_live(cfg, Arc::new(ProtocolWire::default()), None, async {
             let _ = stopped.await;
         })
         .await
@@ -223,7 +223,7 @@ async fn space_mouse_selects_moves_and_puts_an_icon_to_sleep() {
     cfg.validate().unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let bridge = tokio::spawn(async move {
-        run_live(cfg, Arc::new(ProtocolWire), None, async {
+        run_live(cfg, Arc::new(ProtocolWire::default()), None, async {
             let _ = stopped.await;
         })
         .await

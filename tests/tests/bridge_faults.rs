@@ -23,7 +23,7 @@ fn start_bridge(
 ) {
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let task = tokio::spawn(async move {
-        run_live(config, Arc::new(ProtocolWire), None, async {
+        run_live(config, Arc::new(ProtocolWire::default()), None, async {
             let _ = stopped.await;
         })
         .await
@@ -229,7 +229,12 @@ async fn a_rejected_token_stops_the_bridge_with_a_clear_message() {
         ..Default::default()
     };
     config.server.url = format!("ws://{}/ws?design=1&token=not-a-token", server.addr);
-    let run = run_live(config, Arc::new(ProtocolWire), None, std::future::pending());
+    let run = run_live(
+        config,
+        Arc::new(ProtocolWire::default()),
+        None,
+        std::future::pending(),
+    );
     let err = tokio::time::timeout(Duration::from_secs(15), run)
         .await
         .expect("the bridge stops instead of retrying forever")

@@ -136,7 +136,7 @@ async fn replay_into_fresh_server(
     config.server.url = server.device_url.clone();
     let n = run_replay(
         config,
-        Arc::new(ProtocolWire),
+        Arc::new(ProtocolWire::default()),
         path,
         speed,
         std::future::pending(),

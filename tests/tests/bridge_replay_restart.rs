@@ -138,9 +138,14 @@ async fn record_live(dir: &Path) -> (PathBuf, Icon, Design) {
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let rec = recording.clone();
     let bridge = tokio::spawn(async move {
-        run_live(config, Arc::new(ProtocolWire), Some(&rec), async {
-            let _ = stopped.await;
-        })
+        run_live(
+            config,
+            Arc::new(ProtocolWire::default()),
+            Some(&rec),
+            async {
+                let _ = stopped.await;
+            },
+        )
         .await
         .unwrap();
     });
@@ -184,7 +189,7 @@ fn start_replay(url: String, recording: PathBuf, speed: f64) -> tokio::task::Joi
         config.server.url = url;
         run_replay(
             config,
-            Arc::new(ProtocolWire),
+            Arc::new(ProtocolWire::default()),
             &recording,
             speed,
             std::future::pending(),
