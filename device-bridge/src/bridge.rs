@@ -5,11 +5,10 @@
 //! bindings are restored.
 
 use crate::config::{Config, DeviceKind, build_driver};
+use crate::device::Sample;
 use crate::device::SourceId;
 use crate::device::runner::{DeviceRunner, DeviceStatus, RunOptions};
-use crate::device::{Reading, Sample};
 use crate::device::{TapEvent, Timestamp};
-use crate::inbox::{InboxReceiver, InboxSender, inbox};
 use crate::interaction::{Command, DeviceCondition, Interaction};
 use crate::link::{Link, LinkOptions, ServerEvent, Wire};
 use crate::recording::{Recorder, RecordingError, Replayer, recorded_config};
@@ -106,18 +105,7 @@ pub async fn drive(
     inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
 ) -> Result<(), String> {
-    let (tx, rx) = inbox();
-    tokio::spawn(forward(inputs, tx));
-    drive_inner(config, wire, rx, shutdown, None).await
-}
-
-/// Moves a channel's inputs into an inbox, each one urgent.
-async fn forward(mut inputs: mpsc::UnboundedReceiver<Input>, tx: InboxSender) {
-    while let Some(input) = inputs.recv().await {
-        if !tx.push(input, true) {
-            return;
-        }
-    }
+    drive_inner(config, wire, inputs, shutdown, None).await
 }
 
 /// [`drive`] for a replay: tells `ready` once the server's icons are known (the
@@ -131,50 +119,13 @@ pub async fn drive_until_ready(
     shutdown: impl Future<Output = ()>,
     ready: std::sync::mpsc::Sender<()>,
 ) -> Result<(), String> {
-    let (tx, rx) = inbox();
-    tokio::spawn(forward(inputs, tx));
-    drive_inner(config, wire, rx, shutdown, Some(ready)).await
-}
-
-/// Applies one input to the interaction, appending the commands to `cmds`.
-fn apply_input(
-    config: &Config,
-    interaction: &mut Interaction,
-    input: Input,
-    cmds: &mut Vec<Command>,
-) {
-    match input {
-        Input::Samples(batch) => {
-            for s in &batch {
-                interaction.handle(s, cmds);
-            }
-        }
-        Input::Status(source, status) => {
-            let device = config
-                .devices
-                .get(usize::from(source.0))
-                .map_or_else(|| source.0.to_string(), |d| d.name.clone());
-            let (condition, message) = match status {
-                DeviceStatus::Open => (DeviceCondition::Connected, String::new()),
-                DeviceStatus::Unavailable(e) => (DeviceCondition::Disconnected, e),
-                DeviceStatus::Lost(e) => {
-                    interaction.device_lost(source, cmds);
-                    (DeviceCondition::Disconnected, e)
-                }
-            };
-            cmds.push(Command::DeviceStatus {
-                device,
-                condition,
-                message,
-            });
-        }
-    }
+    drive_inner(config, wire, inputs, shutdown, Some(ready)).await
 }
 
 async fn drive_inner(
     config: &Config,
     wire: Arc<dyn Wire>,
-    inputs: InboxReceiver,
+    mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
     mut ready: Option<std::sync::mpsc::Sender<()>>,
 ) -> Result<(), String> {
@@ -189,7 +140,6 @@ async fn drive_inner(
     });
     tokio::pin!(shutdown);
     let mut cmds: Vec<Command> = Vec::new();
-    let mut batch: Vec<Input> = Vec::new();
     let mut samples_open = true;
     let mut refusals = std::collections::HashSet::new();
     // Once the inputs end, a grace period for the last commands to leave (one
@@ -198,42 +148,50 @@ async fn drive_inner(
     tokio::pin!(drain);
     let mut flush = tokio::time::interval(interaction.drag_period());
     flush.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    // Takes every queued input, applies it, sends what it implies and tells the
-    // devices when a pose next matters; true when the inputs have ended.
-    let mut take_inputs = |interaction: &mut Interaction, cmds: &mut Vec<Command>| {
-        batch.clear();
-        let ended = inputs.drain(&mut batch);
-        for input in batch.drain(..) {
-            apply_input(config, interaction, input, cmds);
-        }
-        inputs.set_due(interaction.next_due().0);
-        ended
-    };
     loop {
         tokio::select! {
             _ = flush.tick(), if live => {
                 cmds.clear();
-                // Quiet records (not worth a wake-up) are taken here at the latest.
-                if samples_open && take_inputs(&mut interaction, &mut cmds) {
-                    samples_open = false;
-                    drain.as_mut().reset(tokio::time::Instant::now() + DRAIN_GRACE);
-                }
                 interaction.flush_due(Timestamp::now(), &mut cmds);
                 if !cmds.is_empty() && let Some(l) = &link {
                     l.send(cmds.drain(..));
                 }
             }
-            _ = inputs.wait(), if samples_open => {
-                cmds.clear();
-                if take_inputs(&mut interaction, &mut cmds) {
+            input = inputs.recv(), if samples_open => match input {
+                Some(input) => {
+                    cmds.clear();
+                    match input {
+                        Input::Samples(batch) => {
+                            for s in &batch {
+                                interaction.handle(s, &mut cmds);
+                            }
+                        }
+                        Input::Status(source, status) => {
+                            let device = config
+                                .devices
+                                .get(usize::from(source.0))
+                                .map_or_else(|| source.0.to_string(), |d| d.name.clone());
+                            let (condition, message) = match status {
+                                DeviceStatus::Open => (DeviceCondition::Connected, String::new()),
+                                DeviceStatus::Unavailable(e) => (DeviceCondition::Disconnected, e),
+                                DeviceStatus::Lost(e) => {
+                                    interaction.device_lost(source, &mut cmds);
+                                    (DeviceCondition::Disconnected, e)
+                                }
+                            };
+                            cmds.push(Command::DeviceStatus { device, condition, message });
+                        }
+                    }
+                    if !cmds.is_empty() {
+                        match &link {
+                            Some(l) => l.send(cmds.drain(..)),
+                            None => tracing::debug!(?cmds, "no server configured"),
+                        }
+                    }
+                }
+                None => {
                     samples_open = false;
                     drain.as_mut().reset(tokio::time::Instant::now() + DRAIN_GRACE);
-                }
-                if !cmds.is_empty() {
-                    match &link {
-                        Some(l) => l.send(cmds.drain(..)),
-                        None => tracing::debug!(?cmds, "no server configured"),
-                    }
                 }
             },
             ev = events.recv() => if let Some(ev) = ev {
@@ -261,14 +219,6 @@ async fn drive_inner(
     Ok(())
 }
 
-/// True when `samples` may change what is sent now: anything but tracker poses,
-/// or a pose at or after `due` (the interaction's next drag or hand report).
-fn urgent(samples: &[Sample], due: u64) -> bool {
-    samples
-        .iter()
-        .any(|s| !matches!(s.reading, Reading::Pose { .. }) || s.time.0 >= due)
-}
-
 /// Runs every configured device (recording raw traffic to `record` when given)
 /// until `shutdown`.
 pub async fn run_live(
@@ -281,7 +231,7 @@ pub async fn run_live(
         Some(p) => Some(Recorder::create(p, &config)?),
         None => None,
     };
-    let (tx, rx) = inbox();
+    let (tx, rx) = mpsc::unbounded_channel::<Input>();
     let mut runners = Vec::new();
     for (i, d) in config.devices.iter().enumerate() {
         let mut driver = build_driver(SourceId(i as u16), d);
@@ -294,7 +244,7 @@ pub async fn run_live(
         runners.push(DeviceRunner::spawn_with_status(
             Box::new(driver),
             run_options(d.kind),
-            move |s| tx.push(Input::Samples(s.to_vec()), urgent(s, tx.due())),
+            move |s| tx.send(Input::Samples(s.to_vec())).is_ok(),
             move |st| {
                 if let Some(tap) = &status_tap {
                     // Recorded in order with the device's frames (same thread).
@@ -304,12 +254,12 @@ pub async fn run_live(
                         status: st.clone(),
                     });
                 }
-                let _ = tx_status.push(Input::Status(source, st), true);
+                let _ = tx_status.send(Input::Status(source, st));
             },
         ));
     }
     drop(tx);
-    let driven = drive_inner(&config, wire, rx, shutdown, None).await;
+    let driven = drive(&config, wire, rx, shutdown).await;
     for mut r in runners {
         tokio::task::block_in_place(|| r.stop());
     }

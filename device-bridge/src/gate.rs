@@ -26,9 +26,14 @@
 //! Continuity across a resync: after `max_gap` without an accepted record (a silent
 //! or garbled line, a wrong baud rate), or when the gate keeps refusing (the tracker
 //! re-zeroed, a hemisphere flip), the track is only taken up again after `confirm`
-//! consecutive records that agree with each other. That verdict is
-//! [`Verdict::Reacquired`]: a drag in progress is re-anchored there and continues,
-//! it never jumps.
+//! consecutive records that agree with each other. After a gap, when the new track
+//! starts where the old one could have reached in the meantime (within
+//! `noise + max_speed · gap` and the angular bound), it is the same hand that moved
+//! while nothing was heard (a starved host, a garbled stretch of line): the verdict
+//! is [`Verdict::Accept`] and a drag catches up with that motion instead of losing
+//! it. Otherwise (a run of refusals, or a track that starts out of reach) the
+//! verdict is [`Verdict::Reacquired`]: a drag in progress is re-anchored there and
+//! continues, it never jumps.
 
 use crate::device::Timestamp;
 use glam::{DQuat, DVec3};
@@ -145,6 +150,8 @@ pub struct MotionGate {
     min_interval: f64,
     clock: Option<f64>,
     track: Option<Track>,
+    /// The track as it was when a gap ended it (continued if the hand is in reach).
+    paused: Option<Track>,
     chain: Vec<Track>,
     rejected: u64,
 }
@@ -166,6 +173,7 @@ impl MotionGate {
             },
             clock: None,
             track: None,
+            paused: None,
             chain: Vec::new(),
             rejected: 0,
         }
@@ -184,6 +192,7 @@ impl MotionGate {
     /// Forgets the track (the device was lost): the next poses must confirm anew.
     pub fn reset(&mut self) {
         self.track = None;
+        self.paused = None;
         self.chain.clear();
         self.clock = None;
     }
@@ -218,7 +227,7 @@ impl MotionGate {
         let mut refused = false;
         if let Some(tr) = self.track {
             if t - tr.t > self.s.max_gap {
-                self.track = None;
+                self.paused = self.track.take();
             } else if self.plausible(&tr, p, q, t) {
                 let dt = t - tr.t;
                 let predicted = tr.x + tr.v * dt;
@@ -273,9 +282,21 @@ impl MotionGate {
         if v.length() > self.s.max_speed {
             v = v.normalize_or_zero() * self.s.max_speed;
         }
+        // After a gap (not a run of refusals): the same hand if it is within reach
+        // of where the old track was.
+        let continued = self.paused.take().is_some_and(|old| {
+            let gap = (first.t - old.t).max(0.0);
+            !refused
+                && first.p.distance(old.p) <= self.s.max_step(gap)
+                && angle(old.q, first.q) <= self.s.angular_noise + self.s.max_angular_speed * gap
+        });
         self.track = Some(Track { x: p, v, p, q, t });
         self.chain.clear();
-        Verdict::Reacquired
+        if continued {
+            Verdict::Accept
+        } else {
+            Verdict::Reacquired
+        }
     }
 }
 
@@ -289,6 +310,27 @@ mod tests {
 
     fn gate() -> MotionGate {
         MotionGate::new(GateSettings::default(), 0.0)
+    }
+
+    /// A gap with the hand in reach continues the track (the drag catches up with
+    /// the motion made meanwhile); a gap that ends out of reach starts a new one.
+    #[test]
+    fn after_a_gap_a_hand_in_reach_continues_and_one_out_of_reach_reacquires() {
+        let q = DQuat::IDENTITY;
+        for (moved, want) in [(0.004, Verdict::Accept), (0.9, Verdict::Reacquired)] {
+            let mut g = gate();
+            for k in 0..5 {
+                g.check(DVec3::ZERO, q, at(4.0 * k as f64));
+            }
+            assert_eq!(g.check(DVec3::ZERO, q, at(20.0)), Verdict::Accept);
+            // 80 ms of silence (> max_gap 50 ms) while the hand moved by `moved`
+            let p = DVec3::Z * moved;
+            assert_eq!(g.check(p, q, at(100.0)), Verdict::Reject);
+            assert_eq!(g.check(p, q, at(104.0)), Verdict::Reject);
+            assert_eq!(g.check(p, q, at(108.0)), want, "moved {moved} m");
+            assert_eq!(g.check(p, q, at(112.0)), Verdict::Accept);
+            assert_eq!(g.rejected(), 0, "held back, not refused");
+        }
     }
 
     #[test]
@@ -358,16 +400,17 @@ mod tests {
     }
 
     #[test]
-    fn a_gap_restarts_the_track() {
+    fn a_gap_needs_confirming() {
         let mut g = gate();
         let q = DQuat::IDENTITY;
         for k in 0..5 {
             g.check(DVec3::ZERO, q, at(k as f64));
         }
-        // 60 ms of silence: even a pose where the hand was needs confirming
+        // 60 ms of silence: even a pose where the hand was needs confirming (then
+        // the track goes on: the hand is where it could be)
         assert_eq!(g.check(DVec3::ZERO, q, at(64.0)), Verdict::Reject);
         assert_eq!(g.check(DVec3::ZERO, q, at(65.0)), Verdict::Reject);
-        assert_eq!(g.check(DVec3::ZERO, q, at(66.0)), Verdict::Reacquired);
+        assert_eq!(g.check(DVec3::ZERO, q, at(66.0)), Verdict::Accept);
         assert_eq!(g.rejected(), 0);
     }
 

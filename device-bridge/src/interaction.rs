@@ -434,26 +434,6 @@ impl Interaction {
         }
     }
 
-    /// The sample time from which a tracker pose may make something go out: a
-    /// held icon's next drag slot or a hand's next report (0 when one is due at
-    /// once; `u64::MAX` when no pose can, e.g. no hands). The device threads wake
-    /// the interaction's task for earlier poses only at its drag-rate tick
-    /// ([`crate::inbox`]).
-    pub fn next_due(&self) -> Timestamp {
-        let period = self.drag_period_us;
-        let mut due = u64::MAX;
-        for h in &self.hands {
-            let report = h
-                .last_report
-                .map_or(0, |t| t.0.saturating_add(HAND_SAMPLE_PERIOD_US));
-            due = due.min(report);
-            if let Some(g) = &h.hold {
-                due = due.min(g.sent_at.map_or(0, |t| t.0.saturating_add(period)));
-            }
-        }
-        Timestamp(due)
-    }
-
     /// The minimum time between two drags of one icon.
     pub fn drag_period(&self) -> std::time::Duration {
         std::time::Duration::from_micros(self.drag_period_us)

@@ -8,7 +8,6 @@
 //! * [`config`] — the TOML configuration and the driver factory.
 //! * [`gate`] — plausibility of tracker motion (a constant-velocity gate).
 //! * [`hand`] — tracker + glove → hand pose and gesture.
-//! * [`inbox`] — device threads → interaction, waking it only when something falls due.
 //! * [`spring`] — the adaptive spring of a load drag.
 //! * [`wire`] — the mapping onto the vsculpt protocol.
 //! * [`interaction`] — grab / drag / release and the 3D-mouse menu, as a pure state machine.
@@ -23,7 +22,6 @@ pub mod config;
 pub mod device;
 pub mod gate;
 pub mod hand;
-pub mod inbox;
 pub mod interaction;
 pub mod link;
 pub mod listing;
