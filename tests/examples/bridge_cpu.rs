@@ -97,11 +97,12 @@ async fn first_position_icon(url: &str) -> [f64; 3] {
     .unwrap();
     while let Some(Ok(m)) = rx.next().await {
         if let tokio_tungstenite::tungstenite::Message::Text(t) = m
-            && let Ok(vsculpt_protocol::ServerMessage::Snapshot { icons, .. }) =
+            && let Ok(vsculpt_protocol::ServerMessage::Snapshot { parts, .. }) =
                 serde_json::from_str(t.as_str())
         {
-            return icons
+            return parts
                 .iter()
+                .flat_map(|p| &p.icons)
                 .find(|i| i.role == vsculpt_protocol::Role::Position)
                 .map(|i| i.xyz)
                 .unwrap();

@@ -61,7 +61,7 @@ async fn twisting_the_cap_turns_a_normal_icon_on_the_server() {
     cfg.validate().unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     let bridge = tokio::spawn(async move {
-        run_live(cfg, Arc::new(ProtocolWire), None, async {
+        run_live(cfg, Arc::new(ProtocolWire::default()), None, async {
             let _ = stopped.await;
         })
         .await

@@ -184,7 +184,8 @@ pub async fn watch_frames(addr: SocketAddr, token: &str) -> mpsc::UnboundedRecei
     frx
 }
 
-/// The icons of design 1 as a new client sees them (its join snapshot).
+/// The icons of design 1 (every part's) as a new client sees them (its join
+/// snapshot).
 pub async fn snapshot_icons(addr: SocketAddr, token: &str) -> Vec<Icon> {
     let (_tx, mut rx) = join(addr, token).await;
     loop {
@@ -192,8 +193,8 @@ pub async fn snapshot_icons(addr: SocketAddr, token: &str) -> Vec<Icon> {
             .await
             .unwrap()
             .unwrap();
-        if let ServerMessage::Snapshot { icons, .. } = m {
-            return icons;
+        if let ServerMessage::Snapshot { parts, .. } = m {
+            return parts.into_iter().flat_map(|p| p.icons).collect();
         }
     }
 }
@@ -224,7 +225,8 @@ pub async fn wait_bridge(server: &RunningServer) {
     tokio::time::sleep(Duration::from_millis(400)).await;
 }
 
-/// The snapshot's surface control points.
+/// The snapshot's control points: every part's, in part order (the demo's
+/// joined panels and bound curve move with the shell).
 pub async fn snapshot_points(addr: SocketAddr, token: &str) -> Vec<[f64; 3]> {
     let (_tx, mut rx) = join(addr, token).await;
     loop {
@@ -232,8 +234,14 @@ pub async fn snapshot_points(addr: SocketAddr, token: &str) -> Vec<[f64; 3]> {
             .await
             .unwrap()
             .unwrap();
-        if let ServerMessage::Snapshot { surface, .. } = m {
-            return surface.points;
+        if let ServerMessage::Snapshot { parts, .. } = m {
+            return parts
+                .into_iter()
+                .flat_map(|p| match p.shape {
+                    vsculpt_protocol::PartShape::Surface { surface } => surface.points,
+                    vsculpt_protocol::PartShape::Curve { curve } => curve.points,
+                })
+                .collect();
         }
     }
 }
