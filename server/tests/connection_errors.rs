@@ -103,23 +103,26 @@ async fn refused_drags_without_req_come_back() {
     let d = server.demo().clone();
     let mut a = Client::connect(server.addr, d.id, &d.editor, "a").await;
     let mut b = Client::connect(server.addr, d.id, &d.editor, "b").await;
-    let icon = a.snapshot["icons"][0]["id"].as_u64().unwrap();
+    let icon = common::parts::icons(&a.snapshot, 1)[0]["id"]
+        .as_u64()
+        .unwrap();
     // An unknown icon.
-    b.send(json!({"type": "drag", "icon": 999, "xyz": [0.0, 0.0, 1.0]}))
+    b.send(json!({"type": "drag", "part": 1, "icon": 999, "xyz": [0.0, 0.0, 1.0]}))
         .await;
     let e = b.wait_for("error").await;
     assert_eq!(e["code"], "unknown_icon", "{e}");
     assert!(e.get("req").is_none());
     // An icon another editor holds.
-    a.ok(json!({"type": "drag_start", "icon": icon})).await;
-    b.send(json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, 1.0]}))
+    a.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
+    b.send(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [0.0, 0.0, 1.0]}))
         .await;
     let e = b.wait_for("error").await;
     assert_eq!(e["code"], "conflict", "{e}");
     // A burst of refused frames is answered by at least one error and the
     // connection stays up.
     for k in 0..50 {
-        b.send(json!({"type": "drag", "icon": 999, "xyz": [0.0, 0.0, k as f64]}))
+        b.send(json!({"type": "drag", "part": 1, "icon": 999, "xyz": [0.0, 0.0, k as f64]}))
             .await;
     }
     assert_eq!(b.wait_for("error").await["code"], "unknown_icon");
