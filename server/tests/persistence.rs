@@ -10,7 +10,7 @@ use common::parts::{self, load_icon};
 use common::ChildServer;
 use common::http::get;
 use common::ws::Client;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::time::Duration;
 
 async fn drag(c: &mut Client, icon: u64, to: [f64; 3]) {

@@ -13,7 +13,7 @@ use common::ChildServer;
 use common::http::get;
 use common::ws::Client;
 use futures_util::SinkExt;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::io::BufRead;
 use std::process::Command;
 use std::time::{Duration, Instant};
