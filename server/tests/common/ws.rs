@@ -207,8 +207,10 @@ impl Client {
         got
     }
 
-    /// Sends `msg` with a fresh `req` and returns the `ack` or `error`
-    /// carrying it (other messages are skipped).
+    /// Sends `msg` with a fresh `req` and returns the reply carrying it —
+    /// `ack`, `error`, or a query's answer (`design_created`, `versions`,
+    /// `designs`, `pong`); other messages are skipped (events carry no
+    /// `req`).
     pub async fn request(&mut self, mut msg: Value) -> Value {
         let req = self.next_req;
         self.next_req += 1;
@@ -216,11 +218,7 @@ impl Client {
         self.send(msg).await;
         loop {
             match self.next().await {
-                Got::Text(v)
-                    if (v["type"] == "ack" || v["type"] == "error") && v["req"] == json!(req) =>
-                {
-                    return v;
-                }
+                Got::Text(v) if v["req"] == json!(req) => return v,
                 Got::Closed => panic!("closed while waiting for reply to {req}"),
                 _ => {}
             }
