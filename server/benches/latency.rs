@@ -426,8 +426,18 @@ async fn export_memory(addr: SocketAddr, admin: &str) {
     let created = post(addr, "/api/designs", admin, r#"{"name": "big"}"#).await;
     let id = created["id"].as_u64().unwrap();
     let t = Instant::now();
-    let r = post(addr, &format!("/api/designs/{id}/import"), admin, &igs).await;
+    // `?part=1`: the surface replaces the new design's plate (part 1), so
+    // the design is the 400 × 400 surface alone (without it, the file's
+    // surface would be added beside the plate as a new part).
+    let r = post(
+        addr,
+        &format!("/api/designs/{id}/import?part=1"),
+        admin,
+        &igs,
+    )
+    .await;
     assert!(r.get("error").is_none(), "{r}");
+    assert_eq!(r["parts"], json!([1]), "{r}");
     println!(
         "400 x 400 IGES import ({} bytes): {:.2} s",
         igs.len(),
