@@ -1,6 +1,7 @@
 //! Live collaboration on the real server (in-process, ephemeral port,
 //! tokio-tungstenite clients): two editors and a viewer see the same state,
-//! a drag by one editor reaches the others as geometry frames, presence
+//! a drag by one editor reaches the others as geometry frames (per part:
+//! the demo's shell and the side panels joined to it), presence
 //! shows who holds what, events arrive in order at everyone, and a viewer's
 //! edits are refused without changing anything.
 
