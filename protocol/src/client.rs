@@ -9,7 +9,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{ErrorCode, ProtocolError};
 use crate::limits::MAX_MESSAGE_BYTES;
 use crate::parts::{PartMaterial, PartSpec, RelationSpec};
-use crate::types::{Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Role, Vec3};
+use crate::types::{
+    Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Role, Vec3,
+};
 
 /// A client message with its optional request number.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -108,7 +108,14 @@ pub struct Layout {
 
 impl Layout {
     /// The layout of a frame of `kind`, or `None` if the sizes overflow.
-    pub fn new(kind: u8, nu: usize, nv: usize, du: usize, dv: usize, icons: usize) -> Option<Self> {
+    pub fn new(
+        kind: u8,
+        nu: usize,
+        nv: usize,
+        du: usize,
+        dv: usize,
+        icons: usize,
+    ) -> Option<Self> {
         let knots_u = HEADER_BYTES;
         let knots_v = knots_u.checked_add(nu.checked_add(du + 1)?.checked_mul(8)?)?;
         let v_knots = if kind == KIND_CURVE {
@@ -175,7 +182,8 @@ impl GeometryFrame {
         } else {
             nv + self.degree_v as usize + 1
         };
-        if self.knots_u.len() != nu + self.degree_u as usize + 1 || self.knots_v.len() != v_knots {
+        if self.knots_u.len() != nu + self.degree_u as usize + 1 || self.knots_v.len() != v_knots
+        {
             return Err(bad("knot count does not match degree and control points"));
         }
         for k in [&self.knots_u, &self.knots_v] {

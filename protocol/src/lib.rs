@@ -33,7 +33,7 @@ pub mod version;
 pub use client::{ClientEnvelope, ClientMessage, parse_client};
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};
-pub use parts::*;
 pub use server::ServerMessage;
+pub use parts::*;
 pub use types::*;
 pub use version::PROTOCOL_VERSION;

@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::ErrorCode;
 use crate::parts::{Part, PartMaterial, Relation};
-use crate::types::{Access, DesignInfo, DesignTokens, Icon, PresenceEntry, Vec3, VersionInfo};
+use crate::types::{
+    Access, DesignInfo, DesignTokens, Icon, PresenceEntry, Vec3, VersionInfo,
+};
 
 /// Everything the server tells a client.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

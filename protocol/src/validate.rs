@@ -156,10 +156,7 @@ fn knots(k: &Knots, points: usize) -> Result<(), ProtocolError> {
 
 fn surface(s: &SurfaceData) -> Result<(), ProtocolError> {
     if s.nu as usize > MAX_GRID || s.nv as usize > MAX_GRID {
-        return Err(ProtocolError::new(
-            ErrorCode::TooLarge,
-            "control grid too large",
-        ));
+        return Err(ProtocolError::new(ErrorCode::TooLarge, "control grid too large"));
     }
     if s.points.len() != s.nu as usize * s.nv as usize {
         return Err(ProtocolError::new(
@@ -169,22 +166,15 @@ fn surface(s: &SurfaceData) -> Result<(), ProtocolError> {
     }
     knots(&s.u, s.nu as usize)?;
     knots(&s.v, s.nv as usize)?;
-    s.points
-        .iter()
-        .try_for_each(|p| numbers("control point", p))
+    s.points.iter().try_for_each(|p| numbers("control point", p))
 }
 
 fn curve(c: &CurveData) -> Result<(), ProtocolError> {
     if c.points.len() > MAX_KNOTS {
-        return Err(ProtocolError::new(
-            ErrorCode::TooLarge,
-            "too many control points",
-        ));
+        return Err(ProtocolError::new(ErrorCode::TooLarge, "too many control points"));
     }
     knots(&c.knots, c.points.len())?;
-    c.points
-        .iter()
-        .try_for_each(|p| numbers("control point", p))
+    c.points.iter().try_for_each(|p| numbers("control point", p))
 }
 
 fn colour(c: &str) -> Result<(), ProtocolError> {
@@ -277,9 +267,7 @@ impl ClientMessage {
             } => match line {
                 crate::parts::IsoLine::U(x) | crate::parts::IsoLine::V(x) => number("line", *x),
             },
-            SetPart {
-                name, colour: c, ..
-            } => {
+            SetPart { name, colour: c, .. } => {
                 if let Some(n) = name {
                     name_text("name", n)?;
                 }

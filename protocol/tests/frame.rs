@@ -189,12 +189,7 @@ fn curve_bytes_from_the_readme() -> Vec<u8> {
         b.extend_from_slice(&k.to_le_bytes());
     }
     // No v knots for a curve; control points at 48 + 56 = 104.
-    for p in [
-        [0.0f32, 0.0, 1.0],
-        [1.0, 0.25, 1.0],
-        [2.0, 0.0, 1.5],
-        [3.0, 0.0, 1.0],
-    ] {
+    for p in [[0.0f32, 0.0, 1.0], [1.0, 0.25, 1.0], [2.0, 0.0, 1.5], [3.0, 0.0, 1.0]] {
         for c in p {
             b.extend_from_slice(&c.to_le_bytes());
         }
