@@ -127,7 +127,7 @@ async fn own_frames(a: &mut Ws, icon: u64, after: u64, n: usize) -> Vec<f64> {
     let mut last = after;
     for k in 0..n {
         let z = 5.0 * ((k % 40) as f64 / 40.0);
-        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
+        let msg = json!({"type": "drag", "part": 1, "icon": icon, "xyz": [0.0, 0.0, z + 0.002 * k as f64]})
             .to_string();
         let t0 = Instant::now();
         a.send(Message::text(msg)).await.unwrap();
@@ -188,7 +188,7 @@ async fn bench_server(
     let editor = created["tokens"]["editor"].as_str().unwrap().to_string();
     let viewer = created["tokens"]["viewer"].as_str().unwrap().to_string();
     let mut a = connect(addr, id, &editor, "driver").await;
-    let spec = json!({"type": "create_icon", "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}});
+    let spec = json!({"type": "create_icon", "part": 1, "req": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}});
     a.send(Message::text(spec.to_string())).await.unwrap();
     let icon = loop {
         if let Message::Text(t) = a.next().await.unwrap().unwrap() {
@@ -199,7 +199,7 @@ async fn bench_server(
         }
     };
     a.send(Message::text(
-        json!({"type": "drag_start", "icon": icon}).to_string(),
+        json!({"type": "drag_start", "part": 1, "icon": icon}).to_string(),
     ))
     .await
     .unwrap();
@@ -256,7 +256,7 @@ async fn run() {
     let mut bytes = 0;
     for k in 0..n {
         let z = 5.0 * ((k % 40) as f64 / 40.0);
-        let msg = json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, z + 0.001 * k as f64]})
+        let msg = json!({"type": "drag", "part": 1, "icon": icon, "xyz": [0.0, 0.0, z + 0.001 * k as f64]})
             .to_string();
         let t0 = Instant::now();
         a.send(Message::text(msg)).await.unwrap();
@@ -328,7 +328,7 @@ async fn run() {
         for k in 0..180 {
             tick.tick().await;
             let msg =
-                json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, 3.0 + 0.01 * k as f64]})
+                json!({"type": "drag", "part": 1, "icon": icon, "xyz": [0.0, 0.0, 3.0 + 0.01 * k as f64]})
                     .to_string();
             a.send(Message::text(msg)).await.unwrap();
         }
@@ -426,8 +426,18 @@ async fn export_memory(addr: SocketAddr, admin: &str) {
     let created = post(addr, "/api/designs", admin, r#"{"name": "big"}"#).await;
     let id = created["id"].as_u64().unwrap();
     let t = Instant::now();
-    let r = post(addr, &format!("/api/designs/{id}/import"), admin, &igs).await;
+    // `?part=1`: the surface replaces the new design's plate (part 1), so
+    // the design is the 400 × 400 surface alone (without it, the file's
+    // surface would be added beside the plate as a new part).
+    let r = post(
+        addr,
+        &format!("/api/designs/{id}/import?part=1"),
+        admin,
+        &igs,
+    )
+    .await;
     assert!(r.get("error").is_none(), "{r}");
+    assert_eq!(r["parts"], json!([1]), "{r}");
     println!(
         "400 x 400 IGES import ({} bytes): {:.2} s",
         igs.len(),

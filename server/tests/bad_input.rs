@@ -28,7 +28,8 @@ async fn bad_messages_get_their_codes_and_change_nothing() {
     let before = state(&server, &d.editor).await;
 
     // Malformed JSON: no req can be read, the error carries none.
-    c.send_text("{\"type\": \"move_icon\", \"icon\": 1,").await;
+    c.send_text("{\"type\": \"move_icon\", \"part\": 1, \"icon\": 1,")
+        .await;
     let e = c.wait_for("error").await;
     assert_eq!(e["code"], "malformed");
     assert!(e.get("req").is_none());
@@ -36,12 +37,38 @@ async fn bad_messages_get_their_codes_and_change_nothing() {
     assert_eq!(c.wait_for("error").await["code"], "malformed");
     // A field of the wrong type: malformed, with the req echoed.
     c.refused(
-        json!({"type": "move_icon", "icon": "one", "xyz": [0, 0, 0]}),
+        json!({"type": "move_icon", "part": 1, "icon": "one", "xyz": [0, 0, 0]}),
         "malformed",
     )
     .await;
-    c.refused(json!({"type": "move_icon", "icon": 1}), "malformed")
-        .await;
+    c.refused(
+        json!({"type": "move_icon", "part": 1, "icon": 1}),
+        "malformed",
+    )
+    .await;
+    // Version 2: an icon message names its part; without one it is
+    // malformed, and an icon named on a part it is not on (or a part that
+    // does not exist) is refused with `unknown_part`.
+    c.refused(
+        json!({"type": "move_icon", "icon": 1, "xyz": [0.0, 0.0, 0.0]}),
+        "malformed",
+    )
+    .await;
+    c.refused(
+        json!({"type": "move_icon", "part": 2, "icon": 1, "xyz": [0.0, 0.0, 0.0]}),
+        "unknown_part",
+    )
+    .await;
+    c.refused(
+        json!({"type": "drag_start", "part": 99, "icon": 1}),
+        "unknown_part",
+    )
+    .await;
+    c.refused(
+        json!({"type": "set_material", "part": 99, "material": {"alpha11": 0.1, "alpha12": 0.0, "alpha22": 0.1, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0}}),
+        "unknown_part",
+    )
+    .await;
     // Unknown message.
     c.refused(json!({"type": "teleport", "icon": 1}), "unknown_message")
         .await;
@@ -55,38 +82,46 @@ async fn bad_messages_get_their_codes_and_change_nothing() {
     assert_eq!(e["code"], "too_large");
     // ∞ cannot be written in JSON; the nearest thing is a literal that
     // overflows f64, which the JSON layer refuses.
-    c.send_text("{\"type\": \"move_icon\", \"req\": 8, \"icon\": 1, \"xyz\": [1e999, 0, 0]}")
-        .await;
+    c.send_text(
+        "{\"type\": \"move_icon\", \"part\": 1, \"req\": 8, \"icon\": 1, \"xyz\": [1e999, 0, 0]}",
+    )
+    .await;
     let e = c.wait_for("error").await;
     assert!(e["code"] == "malformed" || e["code"] == "not_finite", "{e}");
-    c.send_text("{\"type\": \"drag\", \"req\": 9, \"icon\": 1, \"xyz\": [NaN, 0, 0]}")
+    c.send_text("{\"type\": \"drag\", \"part\": 1, \"req\": 9, \"icon\": 1, \"xyz\": [NaN, 0, 0]}")
         .await;
     let e = c.wait_for("error").await;
     assert!(e["code"] == "malformed" || e["code"] == "not_finite", "{e}");
     // Out of range magnitudes.
     c.refused(
-        json!({"type": "move_icon", "icon": 1, "xyz": [1e300, 0.0, 0.0]}),
+        json!({"type": "move_icon", "part": 1, "icon": 1, "xyz": [1e300, 0.0, 0.0]}),
         "out_of_range",
     )
     .await;
-    c.refused(json!({"type": "set_material", "material": {"alpha11": -1.0, "alpha12": 0.0, "alpha22": 1.0, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0}}), "out_of_range").await;
+    c.refused(json!({"type": "set_material", "part": 1, "material": {"alpha11": -1.0, "alpha12": 0.0, "alpha22": 1.0, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0}}), "out_of_range").await;
     // Unknown ids.
     c.refused(
-        json!({"type": "move_icon", "icon": 999, "xyz": [0.0, 0.0, 0.0]}),
-        "unknown_icon",
-    )
-    .await;
-    c.refused(json!({"type": "delete_icon", "icon": 999}), "unknown_icon")
-        .await;
-    c.refused(json!({"type": "drag_start", "icon": 999}), "unknown_icon")
-        .await;
-    c.refused(
-        json!({"type": "drag", "icon": 999, "xyz": [0.0, 0.0, 0.0]}),
+        json!({"type": "move_icon", "part": 1, "icon": 999, "xyz": [0.0, 0.0, 0.0]}),
         "unknown_icon",
     )
     .await;
     c.refused(
-        json!({"type": "set_state", "icon": 999, "state": "sleeping"}),
+        json!({"type": "delete_icon", "part": 1, "icon": 999}),
+        "unknown_icon",
+    )
+    .await;
+    c.refused(
+        json!({"type": "drag_start", "part": 1, "icon": 999}),
+        "unknown_icon",
+    )
+    .await;
+    c.refused(
+        json!({"type": "drag", "part": 1, "icon": 999, "xyz": [0.0, 0.0, 0.0]}),
+        "unknown_icon",
+    )
+    .await;
+    c.refused(
+        json!({"type": "set_state", "part": 1, "icon": 999, "state": "sleeping"}),
         "unknown_icon",
     )
     .await;
@@ -101,14 +136,14 @@ async fn bad_messages_get_their_codes_and_change_nothing() {
     )
     .await;
     // (u, v) outside the domain [0, 1]².
-    c.refused(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 1.5, "v": 0.5}, "role": {"kind": "position"}}}), "out_of_domain").await;
-    c.refused(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 0.5, "v": -0.01}, "role": {"kind": "load"}}}), "out_of_domain").await;
+    c.refused(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": 1.5, "v": 0.5}, "role": {"kind": "position"}}}), "out_of_domain").await;
+    c.refused(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": -0.01}, "role": {"kind": "load"}}}), "out_of_domain").await;
     c.refused(
-        json!({"type": "edit_icon", "icon": 1, "anchor": {"kind": "point", "u": 2.0, "v": 0.5}}),
+        json!({"type": "edit_icon", "part": 1, "icon": 1, "anchor": {"kind": "point", "u": 2.0, "v": 0.5}}),
         "out_of_domain",
     )
     .await;
-    c.refused(json!({"type": "create_icon", "spec": {"anchor": {"kind": "region", "u0": 0.2, "v0": 0.2, "u1": 1.2, "v1": 0.5, "inside": true}, "role": {"kind": "load"}}}), "out_of_domain").await;
+    c.refused(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "region", "u0": 0.2, "v0": 0.2, "u1": 1.2, "v1": 0.5, "inside": true}, "role": {"kind": "load"}}}), "out_of_domain").await;
     // Nothing to redo.
     c.refused(json!({"type": "redo"}), "conflict").await;
     // A client sends binary.
@@ -192,9 +227,12 @@ async fn a_deleted_design_refuses_everything() {
     // b hears of the deletion; its icon edits now fail.
     let e = b.wait_for("error").await;
     assert_eq!(e["code"], "unknown_design");
-    b.refused(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}}), "unknown_design").await;
-    b.refused(json!({"type": "drag_start", "icon": 1}), "unknown_design")
-        .await;
+    b.refused(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.5}, "role": {"kind": "load"}}}), "unknown_design").await;
+    b.refused(
+        json!({"type": "drag_start", "part": 1, "icon": 1}),
+        "unknown_design",
+    )
+    .await;
     // New connections and REST calls are refused.
     let e = Client::try_connect(server.addr, id, &editor, "c")
         .await

@@ -7,6 +7,8 @@
 
 mod common;
 
+use common::parts::{self, load_icon};
+
 use common::ChildServer;
 use common::http::get;
 use common::ws::Client;
@@ -73,19 +75,6 @@ fn sigterm_and_wait(mut child: Child) -> std::process::ExitStatus {
     }
 }
 
-fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
-    let i = snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == "load")
-        .unwrap();
-    (
-        i["id"].as_u64().unwrap(),
-        serde_json::from_value(i["xyz"].clone()).unwrap(),
-    )
-}
-
 fn metric(text: &str, name: &str) -> f64 {
     text.lines()
         .find_map(|l| l.strip_prefix(&format!("{name} ")))
@@ -112,10 +101,12 @@ async fn a_closed_log_reader_changes_nothing_for_editors_or_shutdown() {
     // A drag and a commit.
     let (icon, p) = load_icon(&ann.snapshot);
     let to = [p[0], p[1], p[2] + 9.0];
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
-    ann.ok(json!({"type": "drag", "icon": icon, "xyz": to}))
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
         .await;
-    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": to}))
+        .await;
+    ann.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
     let committed = ann
         .request(json!({"type": "commit", "message": "after the log reader left"}))
         .await;
@@ -123,7 +114,11 @@ async fn a_closed_log_reader_changes_nothing_for_editors_or_shutdown() {
     let seen = bob.wait_for("committed").await;
     assert_eq!(seen["version"]["message"], "after the log reader left");
     let shape = get(addr, "/api/designs/1", Some(editor)).await.json();
-    assert_ne!(shape["design"]["surface"], Value::Null, "{shape}");
+    assert_ne!(
+        parts::surface(&shape["design"], 1)["points"],
+        Value::Null,
+        "{shape}"
+    );
 
     // The lines nobody could read were dropped and counted.
     let admin = std::fs::read_to_string(data.join("admin-token")).unwrap();
@@ -141,7 +136,7 @@ async fn a_closed_log_reader_changes_nothing_for_editors_or_shutdown() {
     let after = get(server.addr, "/api/designs/1", Some(editor))
         .await
         .json();
-    assert_eq!(after["design"]["surface"], shape["design"]["surface"]);
+    assert_eq!(after["design"]["parts"], shape["design"]["parts"]);
     let versions = get(server.addr, "/api/designs/1/versions", Some(editor))
         .await
         .json();

@@ -1,6 +1,7 @@
 //! Live collaboration on the real server (in-process, ephemeral port,
 //! tokio-tungstenite clients): two editors and a viewer see the same state,
-//! a drag by one editor reaches the others as geometry frames, presence
+//! a drag by one editor reaches the others as geometry frames (per part:
+//! the demo's shell and the side panels joined to it), presence
 //! shows who holds what, events arrive in order at everyone, and a viewer's
 //! edits are refused without changing anything.
 
@@ -8,17 +9,12 @@ mod common;
 
 use common::TestServer;
 use common::http;
+use common::parts::{self, SHELL, SIDES};
 use common::ws::Client;
 use serde_json::{Value, json};
 
 fn icon_of_role(snapshot: &Value, kind: &str) -> Value {
-    snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == kind)
-        .cloned()
-        .unwrap_or_else(|| panic!("no {kind} icon in {snapshot}"))
+    parts::icon_of_role(snapshot, SHELL, kind)
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -33,29 +29,42 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
     assert_eq!(b.welcome["access"], "editor");
     assert_eq!(v.welcome["access"], "viewer");
 
-    // The same state everywhere: surface, icons, material.
+    // The same state everywhere: every part (shape, material, icons),
+    // relations, versions.
     for c in [&b, &v] {
-        for key in ["surface", "icons", "material", "versions"] {
+        for key in ["parts", "relations", "versions"] {
             assert_eq!(c.snapshot[key], a.snapshot[key], "{key} differs");
         }
     }
-    assert_eq!(a.snapshot["surface"]["nu"], 16);
-    assert_eq!(a.snapshot["surface"]["nv"], 12);
-    assert_eq!(a.snapshot["icons"].as_array().unwrap().len(), 4);
+    assert_eq!(parts::part_ids(&a.snapshot), vec![1, 2, 3, 4]);
+    assert_eq!(parts::surface(&a.snapshot, SHELL)["nu"], 16);
+    assert_eq!(parts::surface(&a.snapshot, SHELL)["nv"], 12);
+    assert_eq!(parts::icons(&a.snapshot, SHELL).len(), 4);
 
-    // Every client gets the current geometry on joining.
-    let fa = a.frame().await;
-    let fb = b.frame().await;
-    let fv = v.frame().await;
-    assert_eq!(fa.points, fb.points);
-    assert_eq!(fa.points, fv.points);
-    assert_eq!((fa.nu, fa.nv), (16, 12));
-    let snap_points = a.snapshot["surface"]["points"].as_array().unwrap();
-    for (k, p) in fa.points.iter().enumerate() {
-        for c in 0..3 {
-            assert_eq!(p[c], snap_points[k][c].as_f64().unwrap() as f32);
+    // Every client gets the current geometry of every part on joining.
+    let fa = a.join_frames().await;
+    let fb = b.join_frames().await;
+    let fv = v.join_frames().await;
+    assert_eq!(fa.len(), 4);
+    for k in 0..fa.len() {
+        assert_eq!(fa[k].part, fb[k].part);
+        assert_eq!(fa[k].points, fb[k].points);
+        assert_eq!(fa[k].points, fv[k].points);
+    }
+    assert_eq!((fa[0].part, fa[0].nu, fa[0].nv), (SHELL, 16, 12));
+    for f in &fa {
+        let shape = &parts::part(&a.snapshot, f.part)["shape"];
+        let snap_points = shape[shape["kind"].as_str().unwrap()]["points"]
+            .as_array()
+            .unwrap();
+        assert_eq!(f.points.len(), snap_points.len(), "part {}", f.part);
+        for (k, p) in f.points.iter().enumerate() {
+            for c in 0..3 {
+                assert_eq!(p[c], snap_points[k][c].as_f64().unwrap() as f32);
+            }
         }
     }
+    let (fb, fv) = (&fb[0], &fv[0]);
 
     // Presence: the viewer (the last to join) sees three clients.
     let names: Vec<&str> = v.snapshot["presence"]
@@ -75,7 +84,8 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
         .iter()
         .map(|x| x.as_f64().unwrap())
         .collect();
-    a.ok(json!({"type": "drag_start", "icon": id})).await;
+    a.ok(json!({"type": "drag_start", "part": 1, "icon": id}))
+        .await;
     let held = loop {
         let p = b.wait_for("presence_changed").await;
         let c = &p["client"];
@@ -86,19 +96,44 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
     assert_eq!(held["access"], "editor");
     for step in 1..=5 {
         let z = start[2] + 2.0 * step as f64;
-        a.send(json!({"type": "drag", "icon": id, "xyz": [start[0], start[1], z]}))
+        a.send(json!({"type": "drag", "part": 1, "icon": id, "xyz": [start[0], start[1], z]}))
             .await;
     }
     let icon_z = |f: &vsculpt_protocol::GeometryFrame| {
         f.icons.iter().find(|i| i.id == id).unwrap().xyz[2] as f64
     };
-    for (c, f0) in [(&mut b, &fb), (&mut v, &fv)] {
-        // Frames until the drag settles (coalescing may skip some).
-        let mut last = c.frame_after(f0.revision).await;
+    let side_points: Vec<_> = SIDES
+        .iter()
+        .map(|s| fa.iter().find(|f| f.part == *s).unwrap().points.clone())
+        .collect();
+    for (c, f0) in [(&mut b, fb), (&mut v, fv)] {
+        // Frames until the drag settles (coalescing may skip some), per part.
+        let mut last = c.frame_of_after(SHELL, f0.revision).await;
+        let mut sides = vec![None; SIDES.len()];
         while let Ok(f) =
             tokio::time::timeout(std::time::Duration::from_millis(500), c.frame()).await
         {
-            last = f;
+            if f.part == SHELL {
+                last = f;
+            } else if let Some(k) = SIDES.iter().position(|s| *s == f.part) {
+                sides[k] = Some(f);
+            }
+        }
+        // The side panels are joined G1 to the shell: pulling the shell
+        // moves them too, and their frames come too, flagged as a drag.
+        for (k, side) in sides.iter().enumerate() {
+            let side = side
+                .as_ref()
+                .unwrap_or_else(|| panic!("no frame of side panel {}", SIDES[k]));
+            assert_ne!(
+                side.points, side_points[k],
+                "side {} did not move",
+                SIDES[k]
+            );
+            assert_eq!(
+                side.flags & vsculpt_protocol::frame::FLAG_DRAG,
+                vsculpt_protocol::frame::FLAG_DRAG
+            );
         }
         // The load pulls through the spring model: the icon follows the
         // pointer with a ratio the kernel keeps within [0.8, 1.2].
@@ -116,11 +151,16 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
     // Ann hears where the icon went (for the spring model).
     let fb_msg = a.wait_for("icon_feedback").await;
     assert_eq!(fb_msg["icon"], json!(id));
+    assert_eq!(fb_msg["part"], json!(SHELL));
 
     // Bob cannot grab what Ann holds.
-    b.refused(json!({"type": "drag_start", "icon": id}), "conflict")
+    b.refused(
+        json!({"type": "drag_start", "part": 1, "icon": id}),
+        "conflict",
+    )
+    .await;
+    a.ok(json!({"type": "drag_end", "part": 1, "icon": id}))
         .await;
-    a.ok(json!({"type": "drag_end", "icon": id})).await;
 
     // The viewer can change nothing.
     let before = http::get(
@@ -131,24 +171,30 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
     .await
     .json();
     v.refused(
-        json!({"type": "move_icon", "icon": 1, "xyz": [0.0, 0.0, 0.0]}),
+        json!({"type": "move_icon", "part": 1, "icon": 1, "xyz": [0.0, 0.0, 0.0]}),
         "forbidden",
     )
     .await;
     v.refused(
-        json!({"type": "drag", "icon": id, "xyz": [0.0, 0.0, 50.0]}),
+        json!({"type": "drag", "part": 1, "icon": id, "xyz": [0.0, 0.0, 50.0]}),
         "forbidden",
     )
     .await;
-    v.refused(json!({"type": "drag_start", "icon": id}), "forbidden")
-        .await;
-    v.refused(json!({"type": "delete_icon", "icon": 1}), "forbidden")
-        .await;
+    v.refused(
+        json!({"type": "drag_start", "part": 1, "icon": id}),
+        "forbidden",
+    )
+    .await;
+    v.refused(
+        json!({"type": "delete_icon", "part": 1, "icon": 1}),
+        "forbidden",
+    )
+    .await;
     v.refused(json!({"type": "commit", "message": "mine"}), "forbidden")
         .await;
     v.refused(json!({"type": "undo"}), "forbidden").await;
-    v.refused(json!({"type": "set_material", "material": {"alpha11": 1.0, "alpha12": 0.0, "alpha22": 1.0, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0}}), "forbidden").await;
-    v.send(json!({"type": "drag", "icon": id, "xyz": [0.0, 0.0, 80.0]}))
+    v.refused(json!({"type": "set_material", "part": 1, "material": {"alpha11": 1.0, "alpha12": 0.0, "alpha22": 1.0, "beta11": 1.0, "beta12": 1.0, "beta22": 1.0}}), "forbidden").await;
+    v.send(json!({"type": "drag", "part": 1, "icon": id, "xyz": [0.0, 0.0, 80.0]}))
         .await;
     assert_eq!(v.wait_for("error").await["code"], "forbidden");
     let after = http::get(
@@ -163,13 +209,14 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
 
     // Bob creates an icon: everyone hears of it, in order, with the commit after.
     let r = b
-        .request(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.2}, "role": {"kind": "position"}}}))
+        .request(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": 0.5, "v": 0.2}, "role": {"kind": "position"}}}))
         .await;
     assert_eq!(r["type"], "ack");
     b.ok(json!({"type": "commit", "message": "pinned the side"}))
         .await;
     for c in [&mut a, &mut v] {
         let created = c.wait_for("icon_created").await;
+        assert_eq!(created["part"], json!(SHELL));
         assert_eq!(
             created["icon"]["anchor"],
             json!({"kind": "point", "u": 0.5, "v": 0.2})
@@ -183,10 +230,10 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
     // Undo and redo go to everyone as snapshots.
     a.ok(json!({"type": "undo"})).await;
     let s = v.wait_for("snapshot").await;
-    assert_eq!(s["icons"].as_array().unwrap().len(), 4);
+    assert_eq!(parts::icons(&s, SHELL).len(), 4);
     a.ok(json!({"type": "redo"})).await;
     let s = v.wait_for("snapshot").await;
-    assert_eq!(s["icons"].as_array().unwrap().len(), 5);
+    assert_eq!(parts::icons(&s, SHELL).len(), 5);
 
     server.stop().await;
 }
@@ -199,28 +246,33 @@ async fn a_device_drags_but_cannot_edit_or_commit() {
     assert_eq!(dev.welcome["access"], "device");
     let load = icon_of_role(&dev.snapshot, "load");
     let id = load["id"].as_u64().unwrap();
-    dev.ok(json!({"type": "drag_start", "icon": id})).await;
-    dev.ok(json!({"type": "drag", "icon": id, "xyz": [0.0, 0.0, 60.0]}))
+    dev.ok(json!({"type": "drag_start", "part": 1, "icon": id}))
         .await;
-    dev.ok(json!({"type": "drag_end", "icon": id})).await;
-    dev.ok(json!({"type": "bind_sensor", "icon": id, "sensor": "right-hand"}))
+    dev.ok(json!({"type": "drag", "part": 1, "icon": id, "xyz": [0.0, 0.0, 60.0]}))
+        .await;
+    dev.ok(json!({"type": "drag_end", "part": 1, "icon": id}))
+        .await;
+    dev.ok(json!({"type": "bind_sensor", "part": 1, "icon": id, "sensor": "right-hand"}))
         .await;
     dev.ok(json!({"type": "device_sample", "sensor": "right-hand", "position": [1.0, 2.0, 3.0], "orientation": [1.0, 0.0, 0.0, 0.0], "time_us": 5})).await;
     dev.ok(json!({"type": "device_status", "device": "glove", "condition": "connected"}))
         .await;
     // The 3D mouse's menu: role and state switches are allowed.
-    dev.ok(json!({"type": "set_state", "icon": id, "state": "sleeping"}))
+    dev.ok(json!({"type": "set_state", "part": 1, "icon": id, "state": "sleeping"}))
         .await;
-    dev.ok(json!({"type": "set_role", "icon": id, "role": {"kind": "load"}}))
+    dev.ok(json!({"type": "set_role", "part": 1, "icon": id, "role": {"kind": "load"}}))
         .await;
-    dev.ok(json!({"type": "set_state", "icon": id, "state": "passive"}))
+    dev.ok(json!({"type": "set_state", "part": 1, "icon": id, "state": "passive"}))
         .await;
-    dev.ok(json!({"type": "bind_sensor", "icon": id, "sensor": "right-hand"}))
+    dev.ok(json!({"type": "bind_sensor", "part": 1, "icon": id, "sensor": "right-hand"}))
         .await;
     dev.refused(json!({"type": "commit", "message": "x"}), "forbidden")
         .await;
-    dev.refused(json!({"type": "delete_icon", "icon": 1}), "forbidden")
-        .await;
+    dev.refused(
+        json!({"type": "delete_icon", "part": 1, "icon": 1}),
+        "forbidden",
+    )
+    .await;
     dev.refused(json!({"type": "create_design", "name": "x"}), "forbidden")
         .await;
     let state = http::get(
@@ -230,13 +282,7 @@ async fn a_device_drags_but_cannot_edit_or_commit() {
     )
     .await
     .json();
-    let icon = state["design"]["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["id"] == json!(id))
-        .unwrap()
-        .clone();
+    let icon = parts::icon(&state["design"], SHELL, id).clone();
     assert_eq!(icon["sensors"], json!(["right-hand"]));
     // A bound sensor makes the icon driving (paper 003).
     assert_eq!(icon["state"], "driving");
@@ -341,25 +387,19 @@ async fn edits_are_solved_by_the_kernel() {
     let p: [f64; 3] = serde_json::from_value(pin["xyz"].clone()).unwrap();
     // Moving a position constraint's target moves the surface through it.
     let to = [p[0], p[1] + 1.0, p[2] + 6.0];
-    e.ok(json!({"type": "move_icon", "icon": id, "xyz": to}))
+    e.ok(json!({"type": "move_icon", "part": 1, "icon": id, "xyz": to}))
         .await;
     let s = http::get(server.addr, "/api/designs/1", Some(&d.viewer))
         .await
         .json();
-    let icon = s["design"]["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["id"] == json!(id))
-        .unwrap()
-        .clone();
+    let icon = parts::icon(&s["design"], SHELL, id).clone();
     let xyz: [f64; 3] = serde_json::from_value(icon["xyz"].clone()).unwrap();
     for k in 0..3 {
         assert!((xyz[k] - to[k]).abs() < 1e-6, "{xyz:?} vs {to:?}");
     }
     // Sleeping, it holds nothing; its state round-trips.
     // (No req: the event may overtake an ack, and `ok` would skip it.)
-    e.send(json!({"type": "set_state", "icon": id, "state": "sleeping"}))
+    e.send(json!({"type": "set_state", "part": 1, "icon": id, "state": "sleeping"}))
         .await;
     // Updates arrive in order; the move above updated every icon the
     // solve moved, so look for this icon's new state.
@@ -368,7 +408,7 @@ async fn edits_are_solved_by_the_kernel() {
         u = e.wait_for("icon_updated").await;
     }
     // Switching role: position → normal (target becomes the current normal).
-    e.send(json!({"type": "set_role", "icon": id, "role": {"kind": "normal"}}))
+    e.send(json!({"type": "set_role", "part": 1, "icon": id, "role": {"kind": "normal"}}))
         .await;
     let mut u = e.wait_for("icon_updated").await;
     while !(u["icon"]["id"] == json!(id) && u["icon"]["role"] == json!({"kind": "normal"})) {
@@ -377,8 +417,9 @@ async fn edits_are_solved_by_the_kernel() {
     let n: [f64; 3] = serde_json::from_value(u["icon"]["target"].clone()).unwrap();
     assert!(((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-9);
     // The material change reaches everyone.
-    e.send(json!({"type": "set_material", "material": {"alpha11": 0.02, "alpha12": 0.0, "alpha22": 0.02, "beta11": 2.0, "beta12": 1.0, "beta22": 2.0}})).await;
+    e.send(json!({"type": "set_material", "part": 1, "material": {"alpha11": 0.02, "alpha12": 0.0, "alpha22": 0.02, "beta11": 2.0, "beta12": 1.0, "beta22": 2.0}})).await;
     let m = e.wait_for("material_changed").await;
+    assert_eq!(m["part"], json!(SHELL));
     assert_eq!(m["material"]["beta11"], 2.0);
     server.stop().await;
 }

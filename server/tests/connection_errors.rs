@@ -2,7 +2,8 @@
 //! that is not UTF-8 and a frame over the hard limit get an error message
 //! and the matching close code (1007, 1009); a refused drag frame without a
 //! `req` still comes back as an error; a hello of a future protocol version
-//! (with fields this version does not know) gets `bad_version`.
+//! (with fields this version does not know) and a version-1 hello get
+//! `bad_version`.
 
 mod common;
 
@@ -103,23 +104,26 @@ async fn refused_drags_without_req_come_back() {
     let d = server.demo().clone();
     let mut a = Client::connect(server.addr, d.id, &d.editor, "a").await;
     let mut b = Client::connect(server.addr, d.id, &d.editor, "b").await;
-    let icon = a.snapshot["icons"][0]["id"].as_u64().unwrap();
+    let icon = common::parts::icons(&a.snapshot, 1)[0]["id"]
+        .as_u64()
+        .unwrap();
     // An unknown icon.
-    b.send(json!({"type": "drag", "icon": 999, "xyz": [0.0, 0.0, 1.0]}))
+    b.send(json!({"type": "drag", "part": 1, "icon": 999, "xyz": [0.0, 0.0, 1.0]}))
         .await;
     let e = b.wait_for("error").await;
     assert_eq!(e["code"], "unknown_icon", "{e}");
     assert!(e.get("req").is_none());
     // An icon another editor holds.
-    a.ok(json!({"type": "drag_start", "icon": icon})).await;
-    b.send(json!({"type": "drag", "icon": icon, "xyz": [0.0, 0.0, 1.0]}))
+    a.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
+    b.send(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [0.0, 0.0, 1.0]}))
         .await;
     let e = b.wait_for("error").await;
     assert_eq!(e["code"], "conflict", "{e}");
     // A burst of refused frames is answered by at least one error and the
     // connection stays up.
     for k in 0..50 {
-        b.send(json!({"type": "drag", "icon": 999, "xyz": [0.0, 0.0, k as f64]}))
+        b.send(json!({"type": "drag", "part": 1, "icon": 999, "xyz": [0.0, 0.0, k as f64]}))
             .await;
     }
     assert_eq!(b.wait_for("error").await["code"], "unknown_icon");
@@ -131,12 +135,22 @@ async fn refused_drags_without_req_come_back() {
 async fn a_future_protocol_version_gets_bad_version() {
     let server = TestServer::start(common::data_dir("future-version")).await;
     let d = server.demo().clone();
-    // A version-2 hello as a future client might write it: other fields,
-    // none of version 1's optional ones.
-    let hello = json!({"type": "hello", "protocol": 2, "token": d.editor, "design": d.id,
+    // A hello of the next version as a future client might write it: other
+    // fields, none of this version's optional ones.
+    let future = vsculpt_protocol::PROTOCOL_VERSION + 1;
+    let hello = json!({"type": "hello", "protocol": future, "token": d.editor, "design": d.id,
         "session": {"resume": "abc"}, "capabilities": ["deltas"]});
     let mut s = ws::raw(server.addr).await;
     s.send(Message::text(hello.to_string())).await.unwrap();
+    let (texts, code) = until_close(&mut s).await;
+    assert_eq!(last_error(&texts)["code"], "bad_version", "{texts:?}");
+    assert_eq!(code, Some(1008));
+    // Version 1 (one surface per design) is gone: its hello is refused too.
+    assert_eq!(vsculpt_protocol::PROTOCOL_VERSION, 2);
+    let mut old = ws::hello(d.id, &d.editor, "v1");
+    old["protocol"] = json!(1);
+    let mut s = ws::raw(server.addr).await;
+    s.send(Message::text(old.to_string())).await.unwrap();
     let (texts, code) = until_close(&mut s).await;
     assert_eq!(last_error(&texts)["code"], "bad_version", "{texts:?}");
     assert_eq!(code, Some(1008));

@@ -11,6 +11,8 @@
 
 mod common;
 
+use common::parts::load_icon;
+
 use common::ChildServer;
 use common::http::get;
 use common::ws::Client;
@@ -42,19 +44,6 @@ fn finish(mut cmd: Command) -> Output {
         std::thread::sleep(Duration::from_millis(20));
     }
     child.wait_with_output().unwrap()
-}
-
-fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
-    let i = snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == "load")
-        .unwrap();
-    (
-        i["id"].as_u64().unwrap(),
-        serde_json::from_value(i["xyz"].clone()).unwrap(),
-    )
 }
 
 fn messages(versions: &Value) -> Vec<String> {
@@ -95,10 +84,12 @@ async fn a_second_server_on_a_directory_in_use_exits_naming_the_owner() {
 
     // The first serves on, undisturbed.
     let (icon, p) = load_icon(&ann.snapshot);
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
-    ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 4.0]}))
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
         .await;
-    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], p[2] + 4.0]}))
+        .await;
+    ann.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
     ann.ok(json!({"type": "commit", "message": "still mine"}))
         .await;
     let v = get(first.addr, "/api/designs/1/versions", Some(&d.viewer))
@@ -149,10 +140,12 @@ async fn a_backup_of_a_busy_studio_is_sound_and_restores() {
                     break;
                 }
                 let z = p[2] + 0.05 * k as f64;
-                c.ok(json!({"type": "drag_start", "icon": icon})).await;
-                c.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], z]}))
+                c.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
                     .await;
-                c.ok(json!({"type": "drag_end", "icon": icon})).await;
+                c.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], z]}))
+                    .await;
+                c.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+                    .await;
                 c.ok(json!({"type": "commit", "message": format!("step {k}")}))
                     .await;
                 acked.store(k, Ordering::SeqCst);

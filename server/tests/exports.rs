@@ -1,7 +1,8 @@
 //! Mesh exports are bounded and streamed: the tessellation never exceeds
 //! the vertex budget (coarsened to fit, still a valid closed grid of the
-//! whole surface), the body goes out chunked (never assembled whole), and
-//! the default budget is one million vertices.
+//! whole surface; a product's parts share the budget), the body goes out
+//! chunked (never assembled whole), and the default budget is one million
+//! vertices.
 
 mod common;
 
@@ -43,24 +44,48 @@ async fn mesh_exports_keep_to_the_vertex_budget_and_stream() {
     let d = server.demo().clone();
     let path = |ext: &str| format!("/api/designs/{}/export.{ext}", d.id);
 
-    let obj = get(server.addr, &path("obj"), Some(&d.viewer)).await;
+    // The top shell alone (`?part=1`).
+    let shell = |ext: &str| format!("{}?part=1", path(ext));
+    let obj = get(server.addr, &shell("obj"), Some(&d.viewer)).await;
     assert_eq!(obj.status, 200);
     assert_eq!(obj.header("transfer-encoding"), Some("chunked"));
     assert!(obj.header("content-length").is_none());
     let text = obj.text();
     let v = text.lines().filter(|l| l.starts_with("v ")).count();
     let f = text.lines().filter(|l| l.starts_with("f ")).count();
-    // The demo is 16 × 12 bicubic (13 × 9 spans): 8 per span would be
+    // The shell is 16 × 12 bicubic (13 × 9 spans): 8 per span would be
     // 105 × 73 = 7665 vertices; one per span, 14 × 10 = 140, fits 500.
     assert!(v <= budget, "{v} vertices");
     assert_eq!(v, 14 * 10);
     assert_eq!(f, 2 * 13 * 9);
 
-    let stl = get(server.addr, &path("stl"), Some(&d.viewer)).await;
+    let stl = get(server.addr, &shell("stl"), Some(&d.viewer)).await;
     assert_eq!(stl.header("transfer-encoding"), Some("chunked"));
     let n = u32::from_le_bytes(stl.body[80..84].try_into().unwrap()) as usize;
     assert_eq!((n, stl.body.len()), (f, 84 + 50 * f));
 
+    let gltf = get(server.addr, &shell("gltf"), Some(&d.viewer)).await;
+    let doc = gltf.json();
+    assert_eq!(doc["accessors"][0]["count"], v);
+    assert_eq!(doc["accessors"][2]["count"], 3 * f);
+
+    // The whole product: the budget is shared by the surface parts by
+    // their knot spans — the shell 13 × 9 = 117, each side panel 13 × 1 =
+    // 13, of 143: the shell gets 409 vertices (one sample per span, 140;
+    // two would be 27 × 19 = 513), each side 45 (14 × 2 = 28; two per span
+    // would be 27 × 3 = 81). The feature line is a curve: no mesh.
+    let obj = get(server.addr, &path("obj"), Some(&d.viewer)).await;
+    assert_eq!(obj.status, 200);
+    assert_eq!(obj.header("transfer-encoding"), Some("chunked"));
+    let text = obj.text();
+    let v = text.lines().filter(|l| l.starts_with("v ")).count();
+    let f = text.lines().filter(|l| l.starts_with("f ")).count();
+    assert!(v <= budget, "{v} vertices");
+    assert_eq!(v, 14 * 10 + 2 * 14 * 2);
+    assert_eq!(f, 2 * 13 * 9 + 2 * (2 * 13));
+    let stl = get(server.addr, &path("stl"), Some(&d.viewer)).await;
+    let n = u32::from_le_bytes(stl.body[80..84].try_into().unwrap()) as usize;
+    assert_eq!((n, stl.body.len()), (f, 84 + 50 * f));
     let gltf = get(server.addr, &path("gltf"), Some(&d.viewer)).await;
     let doc = gltf.json();
     assert_eq!(doc["accessors"][0]["count"], v);
@@ -68,6 +93,12 @@ async fn mesh_exports_keep_to_the_vertex_budget_and_stream() {
 
     let igs = get(server.addr, &path("igs"), Some(&d.viewer)).await;
     assert_eq!(igs.status, 200);
-    assert!(vsculpt_server::cad::read_iges(&igs.text()).is_ok());
+    // Every part: three surfaces and the feature line.
+    assert_eq!(
+        vsculpt_server::cad::read_iges_parts(&igs.text())
+            .unwrap()
+            .len(),
+        4
+    );
     server.stop().await;
 }

@@ -7,27 +7,16 @@
 
 mod common;
 
+use common::parts::{self, load_icon};
+
 use common::http::get;
 use common::ws::Client;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::time::Duration;
 use vsculpt_server::config::Config;
 use vsculpt_server::design::DesignDoc;
 use vsculpt_server::server::Server;
 use vsculpt_server::shutdown::Shutdown;
-
-fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
-    let i = snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == "load")
-        .unwrap();
-    (
-        i["id"].as_u64().unwrap(),
-        serde_json::from_value(i["xyz"].clone()).unwrap(),
-    )
-}
 
 async fn start(data: &std::path::Path) -> (Server, Shutdown) {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
@@ -41,9 +30,12 @@ async fn start(data: &std::path::Path) -> (Server, Shutdown) {
 }
 
 async fn drag(c: &mut Client, icon: u64, to: [f64; 3]) {
-    c.ok(json!({"type": "drag_start", "icon": icon})).await;
-    c.ok(json!({"type": "drag", "icon": icon, "xyz": to})).await;
-    c.ok(json!({"type": "drag_end", "icon": icon})).await;
+    c.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
+    c.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": to}))
+        .await;
+    c.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -88,7 +80,7 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
     // writes fail and are retried; commits keep being refused.
     for k in 0..12 {
         let u = 0.1 + 0.06 * k as f64;
-        ann.ok(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": u, "v": 0.35}, "role": {"kind": "position"}}}))
+        ann.ok(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": u, "v": 0.35}, "role": {"kind": "position"}}}))
             .await;
     }
     let again = ann
@@ -98,14 +90,17 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
     let in_memory = get(addr, "/api/designs/1", Some(&d.tokens.editor))
         .await
         .json();
-    assert_eq!(in_memory["design"]["icons"].as_array().unwrap().len(), 16);
+    assert_eq!(parts::icons(&in_memory["design"], 1).len(), 16);
     let stored = |store: &vsculpt_server::store::Store| {
         let bytes = store.working(d.id).unwrap().unwrap();
         serde_json::to_value(DesignDoc::from_bytes(&bytes).unwrap()).unwrap()
     };
     // Give the writer time to try (and fail).
     tokio::time::sleep(Duration::from_millis(400)).await;
-    assert_ne!(stored(&store)["icons"], in_memory["design"]["icons"]);
+    assert_ne!(
+        parts::icons(&stored(&store), 1),
+        parts::icons(&in_memory["design"], 1)
+    );
     let m = get(addr, "/metrics", Some(&admin)).await.text();
     assert!(!m.contains("vsculpt_store_write_errors_total 0\n"), "{m}");
 
@@ -113,7 +108,7 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
     store.limit_pages(None).unwrap();
     let mut saved = false;
     for _ in 0..400 {
-        if stored(&store)["icons"] == in_memory["design"]["icons"] {
+        if parts::icons(&stored(&store), 1) == parts::icons(&in_memory["design"], 1) {
             saved = true;
             break;
         }
@@ -147,7 +142,7 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
     let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
         .await
         .json();
-    assert_eq!(now["design"]["icons"], in_memory["design"]["icons"]);
+    assert_eq!(now["design"]["parts"], in_memory["design"]["parts"]);
     shutdown.trigger();
     serving.await.unwrap().unwrap();
 }

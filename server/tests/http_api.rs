@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::parts;
+
 use base64::Engine;
 use common::TestServer;
 use common::http::{self, get};
@@ -87,8 +89,9 @@ async fn health_metrics_and_tokens() {
     )
     .await
     .json();
-    assert_eq!(s["design"]["surface"]["nu"], 8);
-    assert_eq!(s["design"]["surface"]["nv"], 6);
+    assert_eq!(parts::part_ids(&s["design"]), vec![parts::PLATE]);
+    assert_eq!(parts::surface(&s["design"], parts::PLATE)["nu"], 8);
+    assert_eq!(parts::surface(&s["design"], parts::PLATE)["nv"], 6);
     // The demo's tokens do not open the new design.
     assert_eq!(
         get(server.addr, &format!("/api/designs/{id}"), Some(&d.editor))
@@ -303,14 +306,38 @@ async fn iges_export_import_round_trip() {
     assert_eq!(igs.status, 200);
     let text = igs.text();
     assert!(text.lines().all(|l| l.len() == 80));
-    // The exported file parses on its own to the same control points.
+    // The exported file parses on its own to the same control points: the
+    // whole product, every surface part (128) in order, then `?part=`.
+    let surfaces: Vec<u64> = parts::part_ids(&state["design"])
+        .into_iter()
+        .filter(|id| parts::part(&state["design"], *id)["body"]["kind"] == "surface")
+        .collect();
+    assert_eq!(surfaces, vec![1, 2, 3]);
     let parsed = vsculpt_server::cad::read_iges(&text).unwrap();
+    assert_eq!(parsed.len(), surfaces.len());
+    for (surface, id) in parsed.iter().zip(&surfaces) {
+        let points: Vec<[f64; 3]> = surface.points.iter().map(|p| p.to_array()).collect();
+        let original: Vec<[f64; 3]> =
+            serde_json::from_value(parts::surface(&state["design"], *id)["points"].clone())
+                .unwrap();
+        assert_eq!(points, original, "part {id}");
+    }
+    let shell = get(
+        server.addr,
+        "/api/designs/1/export.igs?part=1",
+        Some(&d.viewer),
+    )
+    .await;
+    assert_eq!(shell.status, 200);
+    let shell = shell.text();
+    let parsed = vsculpt_server::cad::read_iges(&shell).unwrap();
+    assert_eq!(parsed.len(), 1);
     let points: Vec<[f64; 3]> = parsed[0].points.iter().map(|p| p.to_array()).collect();
     let original: Vec<[f64; 3]> =
-        serde_json::from_value(state["design"]["surface"]["points"].clone()).unwrap();
+        serde_json::from_value(parts::surface(&state["design"], 1)["points"].clone()).unwrap();
     assert_eq!(points, original);
 
-    // Into a new design: the same surface comes back through import.
+    // Into a new design: the same surfaces come back through import.
     let c = http::request(
         server.addr,
         "POST",
@@ -333,12 +360,49 @@ async fn iges_export_import_round_trip() {
     );
     let bad = http::request(server.addr, "POST", &p, Some(editor), b"not an iges file").await;
     assert_eq!(bad.status, 400);
-    let r = http::request(server.addr, "POST", &p, Some(editor), text.as_bytes()).await;
+    let untouched = get(server.addr, &format!("/api/designs/{id}"), Some(viewer))
+        .await
+        .json();
+    assert_eq!(parts::part_ids(&untouched["design"]), vec![parts::PLATE]);
+    // `?part=1` replaces the plate's shape with the shell's.
+    let r = http::request(
+        server.addr,
+        "POST",
+        &format!("{p}?part=1"),
+        Some(editor),
+        shell.as_bytes(),
+    )
+    .await;
     assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["parts"], json!([1]));
     let copy = get(server.addr, &format!("/api/designs/{id}"), Some(viewer))
         .await
         .json();
-    assert_eq!(copy["design"]["surface"], state["design"]["surface"]);
+    assert_eq!(parts::part_ids(&copy["design"]), vec![parts::PLATE]);
+    assert_eq!(
+        parts::surface(&copy["design"], parts::PLATE),
+        parts::surface(&state["design"], 1)
+    );
+    // The whole product: every part of the file is added as a new part,
+    // each with the shape it was exported with.
+    let r = http::request(server.addr, "POST", &p, Some(editor), text.as_bytes()).await;
+    assert_eq!(r.status, 200, "{}", r.text());
+    let added: Vec<u64> = serde_json::from_value(r.json()["parts"].clone()).unwrap();
+    let originals = parts::part_ids(&state["design"]);
+    assert_eq!(added.len(), originals.len(), "{}", r.text());
+    let copy = get(server.addr, &format!("/api/designs/{id}"), Some(viewer))
+        .await
+        .json();
+    assert_eq!(parts::part_ids(&copy["design"]).len(), 1 + originals.len());
+    for (new, old) in added.iter().zip(&originals) {
+        let (n, o) = (
+            &parts::part(&copy["design"], *new)["body"],
+            &parts::part(&state["design"], *old)["body"],
+        );
+        assert_eq!(n["kind"], o["kind"], "part {old}");
+        let kind = o["kind"].as_str().unwrap();
+        assert_eq!(n[kind], o[kind], "part {old} → {new}");
+    }
     server.stop().await;
 }
 
@@ -379,7 +443,17 @@ async fn iges_of_a_non_ascii_name_exports_and_reimports() {
     let after = get(server.addr, &format!("/api/designs/{id}"), Some(editor))
         .await
         .json();
-    assert_eq!(after["design"]["surface"], before["design"]["surface"]);
+    // The file's surface comes back as a new part with the plate's shape.
+    let added: Vec<u64> = serde_json::from_value(r.json()["parts"].clone()).unwrap();
+    assert_eq!(added.len(), 1, "{}", r.text());
+    assert_eq!(
+        parts::surface(&after["design"], added[0]),
+        parts::surface(&before["design"], parts::PLATE)
+    );
+    assert_eq!(
+        parts::part(&after["design"], parts::PLATE),
+        parts::part(&before["design"], parts::PLATE)
+    );
 
     // A coordinate of 1e300 (or 2e9) is refused with a clear error and
     // changes nothing.

@@ -1,8 +1,9 @@
 //! Creating an icon through the server never moves the shape (kernel issue
 //! 15): on the demo design, every anchor kind × role a client can create, at
-//! random places, as the web client sends it (no target: the server takes
-//! the surface's value at the anchor's centre) leaves every control point
-//! within 1e-9 of the model's size, and each creation is undone again.
+//! random places on the top shell (part 1), as the web client sends it (no
+//! target: the server takes the surface's value at the anchor's centre)
+//! leaves every control point of every part within 1e-9 of the model's
+//! size, and each creation is undone again.
 
 mod common;
 
@@ -24,16 +25,25 @@ impl Lcg {
     }
 }
 
+/// Every control point of every part (surfaces and curves), in order.
 fn points(design: &Value) -> Vec<[f64; 3]> {
-    design["design"]["surface"]["points"]
-        .as_array()
-        .unwrap_or_else(|| panic!("no surface points in {design}"))
-        .iter()
-        .map(|p| {
-            let c = |k: usize| p[k].as_f64().unwrap();
-            [c(0), c(1), c(2)]
-        })
-        .collect()
+    let doc = &design["design"];
+    let mut out = Vec::new();
+    for id in common::parts::part_ids(doc) {
+        let body = &common::parts::part(doc, id)["body"];
+        let shape = &body[body["kind"].as_str().unwrap()];
+        out.extend(
+            shape["points"]
+                .as_array()
+                .unwrap_or_else(|| panic!("no points on part {id} in {design}"))
+                .iter()
+                .map(|p| {
+                    let c = |k: usize| p[k].as_f64().unwrap();
+                    [c(0), c(1), c(2)]
+                }),
+        );
+    }
+    out
 }
 
 /// A clicked curve as the web client builds it (web-client/src/app.js).
@@ -101,7 +111,7 @@ async fn creating_any_icon_on_the_demo_moves_nothing() {
     for (anchor, role) in specs {
         let spec = json!({"anchor": anchor, "role": role, "state": "passive"});
         let reply = c
-            .request(json!({"type": "create_icon", "spec": spec}))
+            .request(json!({"type": "create_icon", "part": 1, "spec": spec}))
             .await;
         assert_eq!(reply["type"], "ack", "{spec} → {reply}");
         let now = points(&http::get(server.addr, &path, Some(&d.editor)).await.json());

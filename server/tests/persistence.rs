@@ -5,27 +5,21 @@
 
 mod common;
 
+use common::parts::{self, load_icon};
+
 use common::ChildServer;
 use common::http::get;
 use common::ws::Client;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::time::Duration;
 
-fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
-    let i = snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == "load")
-        .unwrap();
-    let p: [f64; 3] = serde_json::from_value(i["xyz"].clone()).unwrap();
-    (i["id"].as_u64().unwrap(), p)
-}
-
 async fn drag(c: &mut Client, icon: u64, to: [f64; 3]) {
-    c.ok(json!({"type": "drag_start", "icon": icon})).await;
-    c.ok(json!({"type": "drag", "icon": icon, "xyz": to})).await;
-    c.ok(json!({"type": "drag_end", "icon": icon})).await;
+    c.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
+    c.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": to}))
+        .await;
+    c.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -43,7 +37,7 @@ async fn commit_stop_restart_brings_everything_back() {
         .json();
     // Uncommitted work after the commit: a second drag and a new icon.
     drag(&mut c, icon, [p[0], p[1], p[2] + 13.0]).await;
-    c.ok(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 0.4, "v": 0.7}, "role": {"kind": "position"}}})).await;
+    c.ok(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": 0.4, "v": 0.7}, "role": {"kind": "position"}}})).await;
     let working = get(server.addr, "/api/designs/1", Some(&d.editor))
         .await
         .json();
@@ -86,7 +80,10 @@ async fn commit_stop_restart_brings_everything_back() {
     let reverted = get(server.addr, "/api/designs/1", Some(&d.viewer))
         .await
         .json();
-    assert_eq!(reverted["design"]["icons"], committed["design"]["icons"]);
+    assert_eq!(
+        parts::icons(&reverted["design"], 1),
+        parts::icons(&committed["design"], 1)
+    );
     assert_eq!(reverted["design"], committed["design"]);
     drop(c);
     assert!(server.terminate().success());
@@ -112,8 +109,9 @@ async fn kill_9_keeps_every_committed_version() {
         );
     }
     // Mid-session: a drag in flight, then SIGKILL right after the last ack.
-    c.send(json!({"type": "drag_start", "icon": icon})).await;
-    c.send(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 30.0]}))
+    c.send(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
+    c.send(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], p[2] + 30.0]}))
         .await;
     c.ok(json!({"type": "commit", "message": "step 4"})).await;
     server.kill9();
@@ -147,7 +145,10 @@ async fn kill_9_keeps_every_committed_version() {
     let last = get(server.addr, "/api/designs/1/versions/5", Some(&d.viewer))
         .await
         .json();
-    assert_ne!(last["design"]["surface"], states[2]["design"]["surface"]);
+    assert_ne!(
+        parts::surface(&last["design"], 1),
+        parts::surface(&states[2]["design"], 1)
+    );
     tokio::time::sleep(Duration::from_millis(50)).await;
     assert!(server.terminate().success());
     let _ = std::fs::remove_dir_all(&data);

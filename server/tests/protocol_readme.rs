@@ -89,7 +89,7 @@ async fn acks_carry_what_was_made_and_created_designs_open() {
     // The shortest hello, no client_name or client_kind.
     let mut c = Client::connect(server.addr, d.id, &d.editor, "").await;
     let ack = c
-        .request(json!({"type": "create_icon", "spec": {"anchor": {"kind": "point", "u": 0.3, "v": 0.3}, "role": {"kind": "load"}}}))
+        .request(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": 0.3, "v": 0.3}, "role": {"kind": "load"}}}))
         .await;
     assert_eq!(ack["type"], "ack");
     let state = common::http::get(
@@ -99,7 +99,7 @@ async fn acks_carry_what_was_made_and_created_designs_open() {
     )
     .await
     .json();
-    let icons = state["design"]["icons"].as_array().unwrap();
+    let icons = common::parts::icons(&state["design"], 1);
     let newest = icons
         .iter()
         .map(|i| i["id"].as_u64().unwrap())

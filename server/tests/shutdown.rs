@@ -7,28 +7,17 @@
 
 mod common;
 
+use common::parts::load_icon;
+
 use common::ChildServer;
 use common::http::get;
 use common::ws::Client;
 use futures_util::SinkExt;
-use serde_json::{Value, json};
+use serde_json::json;
 use std::io::BufRead;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use tokio_tungstenite::tungstenite::Message;
-
-fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
-    let i = snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == "load")
-        .unwrap();
-    (
-        i["id"].as_u64().unwrap(),
-        serde_json::from_value(i["xyz"].clone()).unwrap(),
-    )
-}
 
 fn dropped(metrics: &str) -> f64 {
     metrics
@@ -87,13 +76,14 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
     // An editor works until the stuck pipe has made the server drop lines.
     let mut ann = Client::connect(addr, d.id, &d.editor, "ann").await;
     let (icon, p) = load_icon(&ann.snapshot);
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
     let mut z = p[2];
     let start = Instant::now();
     loop {
         for _ in 0..50 {
             z += 0.01;
-            ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], z]}))
+            ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], z]}))
                 .await;
         }
         let m = get(addr, "/metrics", Some(admin.trim())).await.text();
@@ -105,7 +95,8 @@ async fn sigterm_stops_cleanly_with_a_stuck_log_pipe_and_a_silent_client() {
             "the stuck log pipe never made the server drop a line"
         );
     }
-    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    ann.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
     let working = get(addr, "/api/designs/1", Some(&d.editor)).await.json();
 
     sigterm(child.id());
@@ -204,10 +195,12 @@ async fn sigterm_ends_the_process_even_with_a_stuck_actor_flushing_the_others() 
     let _lid = Client::connect(addr, 2, &lid_editor, "bob").await;
     let mut ann = Client::connect(addr, d.id, &d.editor, "ann").await;
     let (icon, p) = load_icon(&ann.snapshot);
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
-    ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 7.0]}))
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
         .await;
-    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], p[2] + 7.0]}))
+        .await;
+    ann.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
     let working = get(addr, "/api/designs/1", Some(&d.editor)).await.json();
 
     sigterm(child.id());

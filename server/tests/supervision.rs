@@ -8,6 +8,8 @@
 
 mod common;
 
+use common::parts::{self, load_icon};
+
 use common::http::get;
 use common::ws::{Client, Got};
 use serde_json::{Value, json};
@@ -17,19 +19,6 @@ use vsculpt_server::design::DesignDoc;
 use vsculpt_server::server::Server;
 use vsculpt_server::shutdown::Shutdown;
 use vsculpt_server::store::Store;
-
-fn load_icon(snapshot: &Value) -> (u64, [f64; 3]) {
-    let i = snapshot["icons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["role"]["kind"] == "load")
-        .unwrap();
-    (
-        i["id"].as_u64().unwrap(),
-        serde_json::from_value(i["xyz"].clone()).unwrap(),
-    )
-}
 
 fn metric(text: &str, name: &str) -> f64 {
     text.lines()
@@ -86,18 +75,21 @@ async fn a_panicking_actor_restarts_from_its_persisted_state() {
     let mut ann = Client::connect(addr, d.id, &d.tokens.editor, "ann").await;
     let mut bob = Client::connect(addr, d.id, &d.tokens.viewer, "bob").await;
     let (icon, p) = load_icon(&ann.snapshot);
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
-    ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 6.0]}))
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
         .await;
-    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], p[2] + 6.0]}))
+        .await;
+    ann.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
     ann.ok(json!({"type": "commit", "message": "before the fault"}))
         .await;
     let committed = get(addr, "/api/designs/1", Some(&d.tokens.editor))
         .await
         .json();
     // Mid-drag: the icon is held and moved when the actor panics.
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
-    ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 12.0]}))
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
+        .await;
+    ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], p[2] + 12.0]}))
         .await;
     hub.hold_restarts(true);
     hub.inject_panic(d.id).await.unwrap();
@@ -130,8 +122,15 @@ async fn a_panicking_actor_restarts_from_its_persisted_state() {
     let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
         .await
         .json();
-    assert_eq!(now["design"]["surface"], persisted["surface"]);
-    assert_eq!(now["design"]["icons"], persisted["icons"]);
+    for id in parts::part_ids(&persisted) {
+        assert_eq!(
+            parts::part(&now["design"], id),
+            parts::part(&persisted, id),
+            "part {id}"
+        );
+    }
+    assert_eq!(now["design"]["parts"], persisted["parts"]);
+    assert_eq!(now["design"]["relations"], persisted["relations"]);
     // Nothing committed is lost.
     let v2 = get(addr, "/api/designs/1/versions/2", Some(&d.tokens.viewer))
         .await
@@ -139,10 +138,12 @@ async fn a_panicking_actor_restarts_from_its_persisted_state() {
     assert_eq!(v2["version"]["message"], "before the fault", "{v2}");
     assert_eq!(v2["design"], committed["design"]);
     // The restarted actor works: drag and commit again.
-    ann.ok(json!({"type": "drag_start", "icon": icon})).await;
-    ann.ok(json!({"type": "drag", "icon": icon, "xyz": [p[0], p[1], p[2] + 3.0]}))
+    ann.ok(json!({"type": "drag_start", "part": 1, "icon": icon}))
         .await;
-    ann.ok(json!({"type": "drag_end", "icon": icon})).await;
+    ann.ok(json!({"type": "drag", "part": 1, "icon": icon, "xyz": [p[0], p[1], p[2] + 3.0]}))
+        .await;
+    ann.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
+        .await;
     ann.ok(json!({"type": "commit", "message": "after the restart"}))
         .await;
     let m = get(addr, "/metrics", Some(&admin)).await.text();

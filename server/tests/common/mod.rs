@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod http;
+pub mod parts;
 pub mod ws;
 
 use std::net::SocketAddr;

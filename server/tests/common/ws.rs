@@ -1,5 +1,5 @@
 //! A WebSocket test client (tokio-tungstenite 0.29, the same tungstenite
-//! as axum) speaking protocol v1: hello, requests with `req` numbers,
+//! as axum) speaking protocol v2: hello, requests with `req` numbers,
 //! waiting for a given message type, decoding geometry frames.
 
 use futures_util::{SinkExt, StreamExt};
@@ -162,8 +162,55 @@ impl Client {
         }
     }
 
-    /// Sends `msg` with a fresh `req` and returns the `ack` or `error`
-    /// carrying it (other messages are skipped).
+    /// The next geometry frame of part `part`, skipping text and other
+    /// parts' frames.
+    pub async fn frame_of(&mut self, part: u64) -> GeometryFrame {
+        loop {
+            let f = self.frame().await;
+            if f.part == part {
+                return f;
+            }
+        }
+    }
+
+    /// The next frame of part `part` with revision > `after`.
+    pub async fn frame_of_after(&mut self, part: u64, after: u64) -> GeometryFrame {
+        loop {
+            let f = self.frame_of(part).await;
+            if f.revision > after {
+                return f;
+            }
+        }
+    }
+
+    /// The geometry frames a join sends, one per part of the snapshot, by
+    /// part id (in the snapshot's order).
+    pub async fn join_frames(&mut self) -> Vec<GeometryFrame> {
+        let ids: Vec<u64> = self.snapshot["parts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| p["id"].as_u64().unwrap())
+            .collect();
+        let mut got: Vec<GeometryFrame> = Vec::new();
+        while got.len() < ids.len() {
+            let f = self.frame().await;
+            assert!(ids.contains(&f.part), "a frame of unknown part {}", f.part);
+            assert!(
+                got.iter().all(|g| g.part != f.part),
+                "two join frames of part {}",
+                f.part
+            );
+            got.push(f);
+        }
+        got.sort_by_key(|f| ids.iter().position(|i| *i == f.part));
+        got
+    }
+
+    /// Sends `msg` with a fresh `req` and returns the reply carrying it —
+    /// `ack`, `error`, or a query's answer (`design_created`, `versions`,
+    /// `designs`, `pong`); other messages are skipped (events carry no
+    /// `req`).
     pub async fn request(&mut self, mut msg: Value) -> Value {
         let req = self.next_req;
         self.next_req += 1;
@@ -171,11 +218,7 @@ impl Client {
         self.send(msg).await;
         loop {
             match self.next().await {
-                Got::Text(v)
-                    if (v["type"] == "ack" || v["type"] == "error") && v["req"] == json!(req) =>
-                {
-                    return v;
-                }
+                Got::Text(v) if v["req"] == json!(req) => return v,
                 Got::Closed => panic!("closed while waiting for reply to {req}"),
                 _ => {}
             }
