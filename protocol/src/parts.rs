@@ -4,8 +4,8 @@
 //! B-spline `surface` or a deformable `curve`, paper 003), each with its own
 //! material, icons, visibility, colour and lock. Relations tie parts
 //! together: a `join` holds two surface edges together with position (G0)
-//! or tangent-plane (G1) continuity; a `binding` makes a surface's curve
-//! icon follow a curve part. A new kind of part is one new variant of
+//! or tangent-plane (G1) continuity; a `binding` makes a surface follow a
+//! curve part along one of its parameter lines. A new kind of part is one new variant of
 //! [`PartShape`] (and of [`PartMaterial`] where it needs its own material);
 //! a new relation one new variant of [`RelationSpec`].
 
@@ -173,17 +173,33 @@ pub enum RelationSpec {
         #[serde(default)]
         reversed: bool,
     },
-    /// A surface's curve icon follows a curve part: editing the curve edits
-    /// the surface along it (paper 003: "curve icon edited by editing the
-    /// curve").
+    /// A surface follows a curve part along one of its parameter lines:
+    /// editing the curve edits the surface along it (paper 003: "curve icon
+    /// edited by editing the curve"), held as an identity along the whole
+    /// line. The curve needs the line's degree, control-point count and
+    /// knots (up to reversal and an affine change of parameter).
     Binding {
-        /// The curve part.
+        /// The curve part (it drives).
         curve: u64,
-        /// The surface part.
+        /// The surface part (it follows).
         surface: u64,
-        /// The surface's curve-anchored icon that follows the curve.
-        icon: u64,
+        /// The surface's parameter line: `{"u": 0.5}` (u = 0.5, running
+        /// along v) or `{"v": 0.25}`.
+        line: IsoLine,
+        /// Whether the curve runs against the line's parameter.
+        #[serde(default)]
+        reversed: bool,
     },
+}
+
+/// A parameter line of a surface part.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum IsoLine {
+    /// u = this value, running along v.
+    U(f64),
+    /// v = this value, running along u.
+    V(f64),
 }
 
 /// A relation as clients see it.

@@ -262,6 +262,11 @@ impl ClientMessage {
             }
             SetMaterial { material: m, .. } => part_material(m),
             CreatePart { spec } => part_spec(spec),
+            Relate {
+                relation: crate::parts::RelationSpec::Binding { line, .. },
+            } => match line {
+                crate::parts::IsoLine::U(x) | crate::parts::IsoLine::V(x) => number("line", *x),
+            },
             SetPart { name, colour: c, .. } => {
                 if let Some(n) = name {
                     name_text("name", n)?;
