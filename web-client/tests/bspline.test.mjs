@@ -161,3 +161,25 @@ test('the fast tessellator equals the reference evaluation to 1e-12 on random su
     assert.equal(t.fits({ ...s, knotsU: s.knotsU.map((k, i) => (i === pu + 1 ? k + 1e-9 : k)) }), false);
   }
 });
+
+test('a curve part: a quadratic Bézier has its analytic point, derivatives and curvature', async () => {
+  const { curveDerivs } = await import('../src/bspline.js');
+  const { curvePartSamples } = await import('../src/comb.js');
+  // Control points (0,0,0), (1,2,0), (2,0,0): c(t) = (2t, 4t(1−t), 0), c' = (2, 4 − 8t, 0), c'' = (0, −8, 0);
+  // κ = |c' × c''| / |c'|³ = 16 / (4 + (4 − 8t)²)^{3/2}.
+  const curve = { degree: 2, knots: [0, 0, 0, 1, 1, 1], n: 3, points: [0, 0, 0, 1, 2, 0, 2, 0, 0] };
+  for (let k = 0; k <= 20; k++) {
+    const t = k / 20;
+    const d = curveDerivs(curve, t);
+    const want = { p: [2 * t, 4 * t * (1 - t), 0], d1: [2, 4 - 8 * t, 0], d2: [0, -8, 0] };
+    for (const key of ['p', 'd1', 'd2']) for (let x = 0; x < 3; x++) assert.ok(Math.abs(d[key][x] - want[key][x]) < 1e-12, `${key} at ${t}`);
+  }
+  const samples = curvePartSamples(curve, 11);
+  samples.forEach((s, i) => {
+    const t = i / 10;
+    const exact = 16 / (4 + (4 - 8 * t) ** 2) ** 1.5;
+    assert.ok(Math.abs(s.kappa - exact) < 1e-12, `κ at ${t}: ${s.kappa} vs ${exact}`);
+  });
+  // The arch bends down (toward −y) at its top.
+  assert.ok(samples[5].vector[1] < 0);
+});

@@ -136,7 +136,7 @@ test('part events: created, changed (every field), deleted with its icons and re
 test('relation events: a join and a binding come and go', () => {
   const d = new Design();
   d.applySnapshot(snapshot());
-  d.applyEvent({ type: 'relation_created', relation: { id: 6, kind: 'binding', curve: 3, surface: 1, icon: 12 } });
+  d.applyEvent({ type: 'relation_created', relation: { id: 6, kind: 'binding', curve: 3, surface: 1, line: { u: 0.25 }, reversed: true } });
   assert.deepEqual(d.applyEvent({ type: 'relation_deleted', relation: 5 }), [1, 2]);
   assert.deepEqual([...d.relations.keys()], [6]);
 });
