@@ -120,7 +120,10 @@ const sample = (page) =>
     js: window.__js,
     render: window.__render,
     rafs: window.__rafs,
-    uploads: window.vsculpt.view.geometry.attributes.position.version,
+    // Uploads of every part's mesh positions (a benchmark run drags one part).
+    uploads: window.vsculpt.partsView
+      ? [...window.vsculpt.partsView.drawings.values()].reduce((n, d) => n + (d.mesh.geometry.attributes.position?.version || 0), 0)
+      : window.vsculpt.view.geometry.attributes.position.version,
     frames: window.vsculpt.state.frames,
     perf: window.vsculpt.perf ? { ...window.vsculpt.perf } : null,
   }));
