@@ -58,6 +58,9 @@ export function domainOf(g) {
   return [[g.knotsU[g.degreeU], g.knotsU[g.nu]], [g.knotsV[g.degreeV], g.knotsV[g.nv]]];
 }
 
+/** How many unknown parts' frames are held after joining. */
+const HELD = 64;
+
 /** The colour of a part drawn from its frame before the snapshot names it. */
 export const PROVISIONAL_COLOUR = '#b8c4d6';
 
@@ -71,8 +74,10 @@ export class Design {
     this.icons = new Map();
     /** The design's newest revision seen (snapshot or frame). */
     this.revision = 0;
-    /** Whether a snapshot arrived (frames of unknown parts after that are stale, unless they announce a snapshot). */
+    /** Whether a snapshot arrived (frames of unknown parts after that are held, not drawn, unless they announce a snapshot). */
     this.joined = false;
+    /** After joining, the newest frame of each part not known (yet): a part that then arrives without points takes its shape from here. */
+    this.held = new Map();
   }
 
   /** The part of icon `id`, or undefined. */
@@ -105,9 +110,12 @@ export class Design {
     if (old) for (const i of old.icons) this.icons.delete(i);
     const geometry = geometryFromShape(p.shape);
     let rev = revision;
-    if (!geometry.points && old && old.geometry && old.geometry.kind === geometry.kind) {
-      Object.assign(geometry, old.geometry);
-      rev = Math.max(old.revision, revision);
+    const held = this.held.get(p.id);
+    this.held.delete(p.id);
+    const kept = old && old.geometry ? { geometry: old.geometry, revision: old.revision } : held;
+    if (!geometry.points && kept && kept.geometry.kind === geometry.kind) {
+      Object.assign(geometry, kept.geometry);
+      rev = Math.max(kept.revision, revision);
     }
     const part = {
       id: p.id,
@@ -215,7 +223,9 @@ export class Design {
    * part not known yet that comes before a snapshot (the compact join: the
    * picture before the snapshot) makes a provisional part — drawn in a
    * neutral colour, no name, no icons — that the snapshot then names or
-   * drops; any other frame of an unknown part is stale and ignored.
+   * drops. Any other frame of an unknown part is held (newest per part,
+   * at most HELD parts) in case the part arrives without points; it is not
+   * drawn, since it may be a late frame of a deleted part.
    * Returns true when the part's geometry changed.
    */
   applyFrame(f) {
@@ -223,7 +233,15 @@ export class Design {
     const geometry = geometryFromFrame(f);
     let part = this.parts.get(f.part);
     if (!part) {
-      if (this.joined && !(f.flags & FLAG_SNAPSHOT)) return false;
+      if (this.joined && !(f.flags & FLAG_SNAPSHOT)) {
+        const held = this.held.get(f.part);
+        if (!held || held.revision <= f.revision) {
+          this.held.delete(f.part);
+          this.held.set(f.part, { geometry, revision: f.revision });
+          if (this.held.size > HELD) this.held.delete(this.held.keys().next().value);
+        }
+        return false;
+      }
       part = { id: f.part, name: `part ${f.part}`, kind: geometry.kind, visible: true, locked: false, colour: PROVISIONAL_COLOUR, material: null, icons: new Set(), geometry: null, revision: 0, provisional: true };
       this.parts.set(f.part, part);
     }

@@ -112,9 +112,13 @@ test('frames per part: newest revision wins, a frame of one part never changes a
   assert.deepEqual(d.icons.get(3).xyz, [0.5, 0.5, 1]);
   assert.equal(d.applyFrame(curveFrame(1, 16, [[0, 0, 0], [1, 1, 1]])), false);
   assert.equal(d.parts.get(1).geometry.kind, 'surface');
-  // After the snapshot, a frame of an unknown part is stale (the part was deleted): no part appears.
+  // After the snapshot, a frame of an unknown part is not drawn (it may be a late frame of a deleted part)…
   assert.equal(d.applyFrame(surfaceFrame(44, 20, PLATE)), false);
   assert.equal(d.parts.has(44), false);
+  // …but a part that then arrives without points (a restore, a snapshot without points) takes its shape.
+  d.applyEvent({ type: 'part_created', part: { id: 44, name: 'lid', visible: true, locked: false, colour: '#88aa66', material: MAT, icons: [], shape: SURFACE([]) } });
+  assert.deepEqual(Array.from(d.parts.get(44).geometry.points), PLATE.flat());
+  assert.equal(d.parts.get(44).revision, 20);
 });
 
 test('part events: created, changed (every field), deleted with its icons and relations', () => {
