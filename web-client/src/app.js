@@ -15,7 +15,7 @@ import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
 import { XRSculpt } from './xr.js';
-import { Design } from './design.js';
+import { Design, domainOf } from './design.js';
 import { PartsView } from './parts-view.js';
 import { PartsPanel } from './parts-panel.js';
 
@@ -234,7 +234,7 @@ function renderPanels() {
   const part = selectedPart();
   $('target-part').textContent = part ? `on ${part.name} (${part.kind})${part.locked ? ' · locked' : ''}` : 'no part selected';
   const curve = part && part.kind === 'curve';
-  for (const o of $('create').options) o.disabled = curve && o.value === 'curve';
+  for (const o of $('create').options) o.disabled = curve && (o.value === 'curve' || o.value === 'join');
   $('create').querySelector('option[value=point]').textContent = curve ? 'param icon (t)' : 'point icon';
   $('create').querySelector('option[value=region]').textContent = curve ? 'span icon (t0…t1)' : 'region icon';
   for (const sel of [$('create-role'), $('sel-role')]) for (const o of sel.options) o.hidden = curve && !CURVE_ROLES.has(o.value);
@@ -549,7 +549,7 @@ function select(id) {
 /** Selects part `id`: the icon tools and the material act on it; a selected icon of another part is let go. */
 function selectPart(id) {
   if (!design.parts.has(id)) return;
-  if (state.selectedPart !== id) {
+  if (state.selectedPart !== id && state.create !== 'join') {
     state.pending = [];
     $('pending').textContent = '';
   }
@@ -598,10 +598,14 @@ function pick(u, v) {
       }
     } else if (mode === 'curve') {
       toast('a curve icon goes on a surface part: pick a surface, or make a param or span icon here', 'info');
+    } else if (mode === 'join') {
+      toast('a join ties two surface edges: pick an edge of a surface part', 'info');
     }
     return;
   }
-  if (mode === 'point') {
+  if (mode === 'join') {
+    pickEdge(part, u, v);
+  } else if (mode === 'point') {
     createIcon({ kind: 'point', u, v }, role);
   } else if (mode === 'curve') {
     state.pending.push([u, v]);
@@ -616,6 +620,34 @@ function pick(u, v) {
       createIcon({ kind: 'region', u0, v0, u1, v1, inside: $('region-inside').checked }, role);
     }
   }
+}
+
+/** The edge of surface geometry `g` nearest to (u, v), measured across the domain (u_min, u_max, v_min, v_max). */
+function nearestEdge(g, u, v) {
+  const [[u0, u1], [v0, v1]] = domainOf(g);
+  const su = (u - u0) / (u1 - u0);
+  const sv = (v - v0) / (v1 - v0);
+  return [['u_min', su], ['u_max', 1 - su], ['v_min', sv], ['v_max', 1 - sv]].sort((a, b) => a[1] - b[1])[0][0];
+}
+
+/**
+ * The join tool in the view: a click on a surface picks its nearest edge;
+ * the second click (on another part) joins the two with the continuity and
+ * direction chosen in the panel's join form.
+ */
+function pickEdge(part, u, v) {
+  const edge = nearestEdge(part.geometry, u, v);
+  const f = $('join').elements;
+  if (!state.pending.length) {
+    state.pending = [{ part: part.id, edge }];
+    $('pending').textContent = `${part.name} ${edge.replace('_', ' ')} picked: click the edge to join it to (Esc cancels)`;
+    return;
+  }
+  const [a] = state.pending;
+  state.pending = [];
+  $('pending').textContent = '';
+  if (a.part === part.id && a.edge === edge) return;
+  send({ type: 'relate', relation: { kind: 'join', a, b: { part: part.id, edge }, continuity: f['join-continuity'].value, reversed: f['join-reversed'].checked } });
 }
 
 /** Creates an icon on part `part` (default: the selected part); refused here when a curve part cannot take the role. */

@@ -228,6 +228,19 @@ test('selecting a part makes the icon tools act on it; every icon message names 
   assert.equal(await page.evaluate(() => window.vsculpt.gizmoAttached()), false, 'no gizmo on a locked part');
   await attached(3);
   assert.equal(await page.evaluate(() => window.vsculpt.gizmoAttached()), true, 'a gizmo on an unlocked part');
+  // The join tool in the view: an edge of one surface, then an edge of another, with the form's continuity.
+  await page.selectOption('#create', 'join');
+  await page.click('#join-tool summary');
+  await page.selectOption('select[name="join-continuity"]', 'g1');
+  await page.evaluate(() => {
+    window.vsculpt.selectPart(1);
+    window.vsculpt.pick(0.93, 0.4);
+    window.vsculpt.selectPart(2);
+    window.vsculpt.pick(0.1, 0.55);
+  });
+  const relate = sent.filter((m) => m.type === 'relate').at(-1);
+  assert.deepEqual(relate.relation, { kind: 'join', a: { part: 1, edge: 'u_max' }, b: { part: 2, edge: 'u_min' }, continuity: 'g1', reversed: false });
+  await page.selectOption('#create', 'none');
   // Material of a curve part: alpha and beta.
   await page.click('#parts li[data-part="3"] .part-name');
   await page.fill('#alpha', '0.02');
