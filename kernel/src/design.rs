@@ -112,6 +112,22 @@ struct ActiveDrag {
     grabbed_at: DVec3,
 }
 
+/// Solves a design's problem somewhere else than in its own solver: a
+/// design joined to others is solved jointly ([`crate::product`]).
+pub(crate) trait SolveBackend {
+    /// Solves for `design`'s control points into `out` (its length is the
+    /// design's). `problem_changed`: [`Design::problem`] may differ from the
+    /// last call's; `drag`: the running drag's group key and (load-scaled)
+    /// input.
+    fn solve(
+        &mut self,
+        design: &Design,
+        problem_changed: bool,
+        drag: Option<(u64, DVec3)>,
+        out: &mut [DVec3],
+    ) -> Result<SolveReport, DesignError>;
+}
+
 /// Most adaptation steps of the spring in one drag frame. Each step scales
 /// κ by at most 100 (see [`crate::spring`]), so 16 steps span the whole
 /// range [κ_min, κ_max] = [1e-6, 1e9] twice over; each costs one fast drag
@@ -677,6 +693,86 @@ impl Design {
     /// Solves for the shape under every active icon (including the current
     /// drag) and re-places the icons on the surface.
     pub fn solve(&mut self) -> Result<SolveReport, DesignError> {
+        self.solve_own()
+    }
+
+    /// [`Self::solve`] through `backend` when given (a design solved jointly
+    /// with others, [`crate::product`]), else through the design's own solver.
+    pub(crate) fn solve_via(
+        &mut self,
+        backend: Option<&mut (dyn SolveBackend + '_)>,
+    ) -> Result<SolveReport, DesignError> {
+        let Some(backend) = backend else {
+            return self.solve_own();
+        };
+        let changed = self.problem_dirty;
+        if changed {
+            self.built_k = self.spring.stiffness();
+        }
+        let scale = match self.drag {
+            Some(a) if self.icons.get(&a.id).is_some_and(|i| i.role == Role::Load) => {
+                self.spring.stiffness() / self.built_k
+            }
+            _ => 1.0,
+        };
+        let drag = self.drag.map(|d| (d.id.0, d.t * scale));
+        let mut out = std::mem::take(&mut self.scratch);
+        out.resize(self.reference.len(), DVec3::ZERO);
+        let result = backend.solve(self, changed, drag, &mut out);
+        let report = match result {
+            Ok(r) => r,
+            Err(e) => {
+                self.scratch = out;
+                return Err(e);
+            }
+        };
+        self.problem_dirty = false;
+        std::mem::swap(self.surface.points_mut_vec(), &mut out);
+        self.scratch = out;
+        self.replace_icons();
+        self.revision += 1;
+        Ok(report)
+    }
+
+    /// Takes control points solved elsewhere (a joint solve of joined
+    /// parts, [`crate::product`]) and re-places the icons.
+    pub(crate) fn adopt_points(&mut self, points: &[DVec3]) -> Result<(), DesignError> {
+        if points.len() != self.surface.points().len() {
+            return Err(DesignError::Solve(SolveError::Size {
+                expected: self.surface.points().len(),
+                got: points.len(),
+            }));
+        }
+        if points.iter().any(|p| !p.is_finite()) {
+            return Err(DesignError::NotFinite("control points"));
+        }
+        self.surface.points_mut().copy_from_slice(points);
+        self.replace_icons();
+        self.revision += 1;
+        Ok(())
+    }
+
+    /// The current shape becomes the reference shape (see [`Self::release`]):
+    /// a joint solve's result kept as the parts' rest shape.
+    pub(crate) fn keep_shape(&mut self) {
+        self.bake();
+    }
+
+    /// Folds a running drag into its icon's target (the icon stays
+    /// driving): another part of the same joint group is grabbed.
+    pub(crate) fn finish_drag(&mut self) {
+        if let Some(d) = self.drag {
+            self.finish_drag_of(d.id);
+        }
+    }
+
+    /// The next solve rebuilds the problem (the design joined or left a
+    /// group solved elsewhere, so its own solver's problem may be stale).
+    pub(crate) fn mark_problem_dirty(&mut self) {
+        self.problem_dirty = true;
+    }
+
+    fn solve_own(&mut self) -> Result<SolveReport, DesignError> {
         let drag = self.drag;
         let load_scale = |d: &Design| -> f64 {
             match d.drag {
@@ -778,6 +874,16 @@ impl Design {
     /// solver's precomputed columns (no factorisation, no sparse solve) unless
     /// the icon is a normal constraint, whose direction enters S.
     pub fn drag(&mut self, id: IconId, xyz: DVec3) -> Result<DragReport, DesignError> {
+        self.drag_via(id, xyz, None)
+    }
+
+    /// [`Self::drag`], solved through `backend` when given.
+    pub(crate) fn drag_via(
+        &mut self,
+        id: IconId,
+        xyz: DVec3,
+        mut backend: Option<&mut dyn SolveBackend>,
+    ) -> Result<DragReport, DesignError> {
         if !xyz.is_finite() {
             return Err(DesignError::NotFinite("xyz"));
         }
@@ -795,7 +901,7 @@ impl Design {
                 .try_normalize()
                 .ok_or(DesignError::NotFinite("normal"))?;
             self.drag_start(id)?;
-            let report = self.solve()?;
+            let report = self.solve_via(backend.as_deref_mut())?;
             let actual = self.icons[&id].xyz;
             return Ok(DragReport {
                 report,
@@ -806,7 +912,7 @@ impl Design {
         let previous = d.t;
         d.t = target - d.origin;
         self.drag = Some(d);
-        let report = match self.solve() {
+        let report = match self.solve_via(backend.as_deref_mut()) {
             Ok(r) => r,
             Err(e) => {
                 d.t = previous;
@@ -831,7 +937,7 @@ impl Design {
                 ) {
                     break;
                 }
-                report = self.solve()?;
+                report = self.solve_via(backend.as_deref_mut())?;
                 actual = self.icons[&id].xyz;
             }
         }

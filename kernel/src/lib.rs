@@ -21,6 +21,8 @@
 //! * [`curve_design`] — the same icons sculpting a deformable curve.
 //! * [`design`] — a design (surface, icons, material) as a value: edit, solve,
 //!   snapshot, restore.
+//! * [`product`] — a design of many parts (surfaces, curves), joins between
+//!   surfaces and curves bound to them, solved jointly where related.
 //! * [`dsm`] — the Density Spatial Model (paper 001): implicit shapes from primitives,
 //!   shape groups and passing-points nets, meshed by dual contouring.
 
@@ -31,6 +33,7 @@ pub mod design;
 pub mod dsm;
 pub mod energy;
 pub mod icon;
+pub mod product;
 pub mod quadrature;
 pub mod solve;
 pub mod spring;

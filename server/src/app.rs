@@ -64,9 +64,13 @@ impl From<crate::design::CommandError> for ApiError {
     fn from(e: crate::design::CommandError) -> Self {
         let status = match e.kind {
             ErrorKind::Forbidden => StatusCode::FORBIDDEN,
-            ErrorKind::UnknownDesign | ErrorKind::UnknownIcon | ErrorKind::UnknownVersion => {
-                StatusCode::NOT_FOUND
-            }
+            ErrorKind::UnknownDesign
+            | ErrorKind::UnknownIcon
+            | ErrorKind::UnknownVersion
+            | ErrorKind::UnknownPart
+            | ErrorKind::UnknownRelation => StatusCode::NOT_FOUND,
+            ErrorKind::Locked => StatusCode::CONFLICT,
+            ErrorKind::Incompatible => StatusCode::BAD_REQUEST,
             ErrorKind::InvalidValue
             | ErrorKind::NotFinite
             | ErrorKind::OutOfDomain
@@ -95,6 +99,10 @@ fn code_name(code: vsculpt_protocol::ErrorCode) -> &'static str {
         C::UnknownDesign => "unknown_design",
         C::UnknownIcon => "unknown_icon",
         C::UnknownVersion => "unknown_version",
+        C::UnknownPart => "unknown_part",
+        C::UnknownRelation => "unknown_relation",
+        C::Locked => "locked",
+        C::Incompatible => "incompatible",
         C::OutOfDomain => "out_of_domain",
         C::Forbidden => "forbidden",
         C::Conflict => "conflict",
@@ -178,6 +186,21 @@ impl Shared {
 }
 
 type Q = Query<HashMap<String, String>>;
+
+/// The `part` query parameter (one part of the product), if given.
+fn part_param(q: &HashMap<String, String>) -> Result<Option<u64>, ApiError> {
+    q.get("part")
+        .map(|p| {
+            p.parse::<u64>().map_err(|_| {
+                ApiError(
+                    StatusCode::BAD_REQUEST,
+                    "malformed",
+                    format!("part {p:?} is not a part id"),
+                )
+            })
+        })
+        .transpose()
+}
 
 async fn need_role(
     state: &Shared,
@@ -382,6 +405,7 @@ async fn import(
     })?;
     let text = text.to_owned();
     drop(body);
+    let target = part_param(&q)?;
     let handle = s.hub.open(id).await?;
     let current = handle.state().await?;
     // Parsing and building the new surface are CPU work proportional to
@@ -395,10 +419,25 @@ async fn import(
             ApiError(StatusCode::BAD_REQUEST, code, format!("IGES: {e}"))
         })?;
         drop(text);
-        Ok::<_, ApiError>(crate::design::model::with_surface(
-            &current.doc,
-            &surfaces[0],
-        )?)
+        let mut doc = (*current.doc).clone();
+        let part = doc
+            .parts
+            .iter_mut()
+            .find(|p| {
+                matches!(p.body, crate::design::part::PartBody::Surface(_))
+                    && target.is_none_or(|t| t == p.id)
+            })
+            .ok_or_else(|| {
+                ApiError(
+                    StatusCode::BAD_REQUEST,
+                    "unknown_part",
+                    "no such surface part to import into".into(),
+                )
+            })?;
+        if let crate::design::part::PartBody::Surface(sp) = &mut part.body {
+            *sp = crate::design::model::with_surface(sp, &surfaces[0])?;
+        }
+        Ok::<_, ApiError>(doc)
     })
     .await
     .map_err(storage)??;
@@ -435,13 +474,17 @@ async fn export(
             ));
         }
     };
+    let part = part_param(&q)?;
     let handle = s.hub.open(id).await?;
     let doc = handle.state().await?.doc.clone();
     let body = match format {
-        None => crate::export::iges(doc).await,
-        Some(f) => crate::export::mesh(doc, f, s.config.export_max_vertices).await,
+        None => crate::export::iges(doc, part).await,
+        Some(f) => crate::export::mesh(doc, part, f, s.config.export_max_vertices).await,
     }
-    .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()))?;
+    .map_err(|e| match e {
+        crate::export::ExportError::Part(m) => ApiError(StatusCode::NOT_FOUND, "unknown_part", m),
+        e => ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.to_string()),
+    })?;
     let disposition = format!("attachment; filename=\"design-{id}.{ext}\"");
     Ok((
         [

@@ -53,6 +53,9 @@ pub enum ExportError {
     /// The blocking task died.
     #[error("export task failed")]
     Task,
+    /// The part asked for is not there or has no such export.
+    #[error("{0}")]
+    Part(String),
 }
 
 /// Samples along u and v for a surface of `spans_u` × `spans_v` knot spans
@@ -77,12 +80,40 @@ pub fn samples(spans_u: usize, spans_v: usize, budget: usize) -> (usize, usize) 
     (a, b)
 }
 
-fn kernel_surface(doc: &DesignDoc) -> Result<BSplineSurface, ExportError> {
-    let s = &doc.surface;
+fn kernel_surface(s: &crate::design::doc::SurfaceDoc) -> Result<BSplineSurface, ExportError> {
     let bad = |e: &dyn std::fmt::Display| ExportError::Surface(e.to_string());
     let u = KnotVector::new(s.u_degree, s.u_knots.clone()).map_err(|e| bad(&e))?;
     let v = KnotVector::new(s.v_degree, s.v_knots.clone()).map_err(|e| bad(&e))?;
     BSplineSurface::new(u, v, s.dpoints()).map_err(|e| bad(&e))
+}
+
+/// The surface parts an export covers: `part` alone (an error if it is not
+/// a surface part of `doc`), or every visible surface part.
+pub fn export_surfaces(
+    doc: &DesignDoc,
+    part: Option<u64>,
+) -> Result<Vec<(String, crate::design::doc::SurfaceDoc)>, ExportError> {
+    use crate::design::part::PartBody;
+    let pick = |p: &crate::design::part::PartDoc| match &p.body {
+        PartBody::Surface(s) => Some((p.name.clone(), s.surface.clone())),
+        _ => None,
+    };
+    match part {
+        Some(id) => {
+            let p = doc
+                .part(id)
+                .ok_or_else(|| ExportError::Part(format!("no part {id}")))?;
+            Ok(vec![pick(p).ok_or_else(|| {
+                ExportError::Part(format!("part {id} is not a surface: it has no mesh"))
+            })?])
+        }
+        None => Ok(doc
+            .parts
+            .iter()
+            .filter(|p| p.visible)
+            .filter_map(pick)
+            .collect()),
+    }
 }
 
 /// Sends what it is given to the HTTP body in [`CHUNK_BYTES`] pieces,
@@ -157,23 +188,45 @@ where
     Ok(Body::from_stream(body))
 }
 
-/// A mesh export of `doc` with at most `max_vertices` vertices, streamed.
+/// A mesh export of `doc` — one part, or every visible surface part — with
+/// at most `max_vertices` vertices in all (shared among the parts by their
+/// number of knot spans), streamed.
 pub async fn mesh(
     doc: Arc<DesignDoc>,
+    part: Option<u64>,
     format: MeshFormat,
     max_vertices: usize,
 ) -> Result<Body, ExportError> {
-    let name = doc.name.clone();
+    let name = match part.and_then(|id| doc.part(id)) {
+        Some(p) => format!("{} - {}", doc.name, p.name),
+        None => doc.name.clone(),
+    };
+    let surfaces = export_surfaces(&doc, part)?;
+    drop(doc);
     stream(
         move || {
-            let surface = kernel_surface(&doc)?;
-            drop(doc);
-            let (su, sv) = samples(
-                surface.u_knots().spans().len(),
-                surface.v_knots().spans().len(),
-                max_vertices,
-            );
-            let t = tessellate(&surface, su, sv);
+            let surfaces = surfaces
+                .iter()
+                .map(|(_, s)| kernel_surface(s))
+                .collect::<Result<Vec<_>, _>>()?;
+            let spans: Vec<usize> = surfaces
+                .iter()
+                .map(|s| s.u_knots().spans().len() * s.v_knots().spans().len())
+                .collect();
+            let total = spans.iter().sum::<usize>().max(1);
+            let mut t = vsculpt_kernel::analysis::Tessellation::default();
+            for (surface, n) in surfaces.iter().zip(&spans) {
+                let (su, sv) = samples(
+                    surface.u_knots().spans().len(),
+                    surface.v_knots().spans().len(),
+                    max_vertices * n / total,
+                );
+                let one = tessellate(surface, su, sv);
+                let base = t.positions.len() as u32;
+                t.positions.extend(one.positions);
+                t.normals.extend(one.normals);
+                t.indices.extend(one.indices.iter().map(|i| i + base));
+            }
             Mesh::new(&t.positions, &t.normals, &t.indices)?;
             Ok(t)
         },
@@ -192,12 +245,19 @@ pub async fn mesh(
     .await
 }
 
-/// The IGES export of `doc`, written on a blocking thread and streamed.
-pub async fn iges(doc: Arc<DesignDoc>) -> Result<Body, ExportError> {
+/// The IGES export of `doc` (one part, or every surface part), written on
+/// a blocking thread and streamed.
+pub async fn iges(doc: Arc<DesignDoc>, part: Option<u64>) -> Result<Body, ExportError> {
+    let surfaces = export_surfaces(&doc, part)?;
+    let name = doc.name.clone();
+    drop(doc);
     stream(
         move || {
-            let meta = IgesMeta::now(&doc.name, "vsculpt");
-            Ok(cad::write_iges(&doc.surface.to_iges(), &meta)?)
+            let meta = IgesMeta::now(&name, "vsculpt");
+            let first = surfaces
+                .first()
+                .ok_or_else(|| ExportError::Part("the design has no surface part".into()))?;
+            Ok(cad::write_iges(&first.1.to_iges(), &meta)?)
         },
         |text, out| out.write_all(text.as_bytes()),
     )

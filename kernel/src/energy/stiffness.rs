@@ -104,6 +104,32 @@ impl Stiffness {
         Self::from_csc(n, col_ptr, rows, vals)
     }
 
+    /// The block-diagonal stiffness of independent parts solved together
+    /// (joined surfaces, [`crate::product`]): block `k`'s unknowns follow
+    /// those of blocks `0..k`.
+    pub fn block_diagonal(blocks: &[&Stiffness]) -> Result<Self, StiffnessError> {
+        let n: usize = blocks.iter().map(|b| b.dim()).sum();
+        let nnz: usize = blocks.iter().map(|b| b.lower.val().len()).sum();
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut rows = Vec::with_capacity(nnz);
+        let mut vals = Vec::with_capacity(nnz);
+        col_ptr.push(0);
+        let mut offset = 0;
+        for b in blocks {
+            let s = b.lower.symbolic();
+            let (cp, ri, v) = (s.col_ptr(), s.row_idx(), b.lower.val());
+            for c in 0..b.dim() {
+                for e in cp[c]..cp[c + 1] {
+                    rows.push(ri[e] + offset);
+                    vals.push(v[e]);
+                }
+                col_ptr.push(rows.len());
+            }
+            offset += b.dim();
+        }
+        Self::from_csc(n, col_ptr, rows, vals)
+    }
+
     fn from_csc(
         n: usize,
         col_ptr: Vec<usize>,

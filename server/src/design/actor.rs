@@ -9,9 +9,11 @@
 //!   full state (see [`Request::Resync`]).
 
 use super::command::{Ack, Command};
-use super::doc::{IconDoc, MaterialDoc};
+use super::doc::IconDoc;
+use super::edit::MaterialEdit;
+use super::part::{PartDoc, RelationDoc};
 use super::error::{CommandError, ErrorKind};
-use super::model::{DesignDoc, DesignModel, Geometry};
+use super::model::{DesignDoc, DesignModel, GeometrySet};
 use super::undo::UndoStack;
 use crate::metrics::Metrics;
 use crate::store::{DesignId, Role, Store, VersionInfo};
@@ -73,8 +75,31 @@ pub struct SnapshotView {
 }
 
 /// Where a dragged icon actually went (the bridge's spring model needs it).
+/// The parts whose geometry a batch of requests changed.
+#[derive(Clone, Debug, Default)]
+struct Dirty {
+    /// Every part (a new state: undo, restore, import).
+    all: bool,
+    /// A part was deleted (its frame goes from the set).
+    removed: bool,
+    /// These parts moved.
+    parts: std::collections::BTreeSet<u64>,
+}
+
+impl Dirty {
+    fn parts(&mut self, ids: Vec<u64>) {
+        self.parts.extend(ids);
+    }
+
+    fn is_empty(&self) -> bool {
+        !self.all && !self.removed && self.parts.is_empty()
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Feedback {
+    /// The part the icon is on.
+    pub part: u64,
     /// The icon.
     pub icon: u64,
     /// Where the client asked it to be.
@@ -99,17 +124,26 @@ pub struct Refusal {
 /// An ordered event every client of a design receives.
 #[derive(Clone, Debug)]
 pub enum DesignEvent {
-    /// The whole state (after undo, redo, revert, restore, import).
+    /// The whole state changed (undo, redo, revert, restore, import).
     Snapshot(Arc<SnapshotView>),
-    /// An icon was created (with its holder).
-    IconCreated(IconDoc, Option<u64>),
-    /// An icon changed (with its holder).
-    IconUpdated(IconDoc, Option<u64>),
-    /// An icon was deleted.
-    IconDeleted(u64),
-    /// The material changed.
-    MaterialChanged(MaterialDoc),
-    /// A version was committed.
+    /// An icon was created on a part (with its holder).
+    IconCreated(u64, IconDoc, Option<u64>),
+    /// An icon of a part changed (with its holder).
+    IconUpdated(u64, IconDoc, Option<u64>),
+    /// An icon of a part was deleted.
+    IconDeleted(u64, u64),
+    /// A part's material changed.
+    MaterialChanged(u64, MaterialEdit),
+    /// A part was created (with the holders of its icons).
+    PartCreated(PartDoc, BTreeMap<u64, u64>),
+    /// A part was deleted.
+    PartDeleted(u64),
+    /// A part was renamed, shown or hidden, locked or unlocked, recoloured.
+    PartChanged(PartDoc),
+    /// A relation was created.
+    RelationCreated(RelationDoc),
+    /// A relation was removed.
+    RelationDeleted(u64),
     Committed(VersionInfo),
     /// A client joined, or what it holds or points at changed.
     PresenceChanged(Presence),
@@ -133,7 +167,7 @@ pub struct Joined {
     /// Events after that state.
     pub events: broadcast::Receiver<DesignEvent>,
     /// Latest geometry.
-    pub geometry: watch::Receiver<Arc<Geometry>>,
+    pub geometry: watch::Receiver<Arc<GeometrySet>>,
     /// This client's drag feedback (latest wins).
     pub feedback: watch::Receiver<Option<Feedback>>,
     /// This client's refused drag frames (latest wins).
@@ -189,6 +223,8 @@ pub enum Request {
     },
     /// A tessellation for mesh export.
     Mesh {
+        /// One part, or the whole product.
+        part: Option<u64>,
         /// Samples per knot span.
         density: usize,
         /// The answer.
@@ -305,10 +341,16 @@ impl DesignHandle {
     }
 
     /// Queues a drag frame (no ack; errors come back only as events).
-    pub async fn drag(&self, client: u64, icon: u64, xyz: DVec3) -> Result<(), CommandError> {
+    pub async fn drag(
+        &self,
+        client: u64,
+        part: u64,
+        icon: u64,
+        xyz: DVec3,
+    ) -> Result<(), CommandError> {
         self.send(Request::Command {
             client,
-            command: Command::Drag { icon, xyz },
+            command: Command::Drag { part, icon, xyz },
             reply: None,
         })
         .await
@@ -328,10 +370,19 @@ impl DesignHandle {
         rx.await.map_err(|_| self.gone())
     }
 
-    /// A tessellation of the current surface.
-    pub async fn mesh(&self, density: usize) -> Result<super::model::MeshData, CommandError> {
+    /// A tessellation of one part, or of the whole product.
+    pub async fn mesh(
+        &self,
+        part: Option<u64>,
+        density: usize,
+    ) -> Result<super::model::MeshData, CommandError> {
         let (reply, rx) = oneshot::channel();
-        self.send(Request::Mesh { density, reply }).await?;
+        self.send(Request::Mesh {
+            part,
+            density,
+            reply,
+        })
+        .await?;
         rx.await.map_err(|_| self.gone())?
     }
 
@@ -379,15 +430,15 @@ struct Actor {
     feedback: BTreeMap<u64, watch::Sender<Option<Feedback>>>,
     refusals: BTreeMap<u64, watch::Sender<Option<Refusal>>>,
     events: broadcast::Sender<DesignEvent>,
-    geometry: watch::Sender<Arc<Geometry>>,
+    geometry: watch::Sender<Arc<GeometrySet>>,
     doc: Arc<DesignDoc>,
     versions: Arc<Vec<VersionInfo>>,
     rev: u64,
     persist_at: Option<Instant>,
     /// The back-off of the working-state write while it fails.
     persist_retry: Option<Duration>,
-    /// The icon each client is dragging.
-    dragging: BTreeMap<u64, u64>,
+    /// The (part, icon) each client is dragging.
+    dragging: BTreeMap<u64, (u64, u64)>,
     /// Whether the geometry published last came from a drag.
     drag_frame: bool,
 }
@@ -405,7 +456,7 @@ pub fn spawn(
     let model = DesignModel::load(&doc)?;
     let (tx, rx) = mpsc::channel(REQUEST_CAPACITY);
     let doc = Arc::new(model.to_doc());
-    let geometry = watch::channel(Arc::new(model.geometry(id, 0, false))).0;
+    let geometry = watch::channel(Arc::new(model.geometry_set(id, 0))).0;
     metrics.design_open(1);
     let retired = Arc::new(std::sync::atomic::AtomicBool::new(false));
     let actor = Actor {
@@ -469,7 +520,7 @@ impl Actor {
         for k in 0..n {
             let Request::Command {
                 client,
-                command: Command::Drag { icon, .. },
+                command: Command::Drag { part, icon, .. },
                 reply: None,
             } = &batch[k]
             else {
@@ -486,11 +537,15 @@ impl Actor {
                     continue;
                 }
                 if let Request::Command {
-                    command: Command::Drag { icon: i2, .. },
+                    command:
+                        Command::Drag {
+                            part: p2, icon: i2, ..
+                        },
                     reply: None,
                     ..
                 } = later
                     && i2 == icon
+                    && p2 == part
                 {
                     skip[k] = true;
                 }
@@ -503,7 +558,7 @@ impl Actor {
     /// Runs a batch; returns true when the actor must stop.
     async fn handle_batch(&mut self, batch: &mut Vec<Request>) -> bool {
         let skip = Self::superseded(batch);
-        let mut geometry_dirty = false;
+        let mut geometry_dirty = Dirty::default();
         let mut stop = false;
         for (k, req) in batch.drain(..).enumerate() {
             if skip[k] || stop {
@@ -532,12 +587,12 @@ impl Actor {
                 Request::Leave { client } => {
                     self.feedback.remove(&client);
                     self.refusals.remove(&client);
-                    if let Some(icon) = self.dragging.remove(&client) {
-                        if self.model.release(icon).is_ok() {
+                    if let Some((part, icon)) = self.dragging.remove(&client) {
+                        if let Ok(moved) = self.model.release(part, icon) {
                             self.changed();
                             self.announce_icon(icon);
+                            geometry_dirty.parts(moved);
                         }
-                        geometry_dirty = true;
                     }
                     if self.clients.remove(&client).is_some() {
                         self.broadcast_presence(client);
@@ -583,8 +638,12 @@ impl Actor {
                 Request::State { reply } => {
                     let _ = reply.send(self.view());
                 }
-                Request::Mesh { density, reply } => {
-                    let _ = reply.send(self.model.mesh(density));
+                Request::Mesh {
+                    part,
+                    density,
+                    reply,
+                } => {
+                    let _ = reply.send(self.model.mesh(part, density));
                 }
                 Request::Replace { doc, reply } => {
                     let out = match heavy(|| DesignModel::load(&doc)) {
@@ -594,7 +653,7 @@ impl Actor {
                             self.clear_drags();
                             self.changed();
                             self.broadcast_snapshot();
-                            geometry_dirty = true;
+                            geometry_dirty.all = true;
                             Ok(Ack::default())
                         }
                         Err(e) => Err(e),
@@ -621,14 +680,14 @@ impl Actor {
                 Request::Panic => panic!("fault injection: design {} actor panics", self.id),
             }
         }
-        if geometry_dirty && !stop {
-            self.publish_geometry();
+        if !geometry_dirty.is_empty() && !stop {
+            self.publish_geometry(&geometry_dirty);
         }
         stop
     }
 
     fn holders(&self) -> BTreeMap<u64, u64> {
-        self.dragging.iter().map(|(&c, &i)| (i, c)).collect()
+        self.dragging.iter().map(|(&c, &(_, i))| (i, c)).collect()
     }
 
     fn view(&self) -> Arc<SnapshotView> {
@@ -708,51 +767,98 @@ impl Actor {
         }
     }
 
-    /// Events for what differs between `before` and the current document.
+    /// Events for what differs between `before` and the current document:
+    /// parts created, deleted and changed; per part, icons created, changed
+    /// and deleted and the material; relations created and removed.
     fn announce_diff(&self, before: &DesignDoc) {
         let holders = self.holders();
-        for icon in &self.doc.icons {
-            match before.icon(icon.id) {
-                None => {
-                    let _ = self.events.send(DesignEvent::IconCreated(
-                        icon.clone(),
-                        holders.get(&icon.id).copied(),
-                    ));
-                }
-                Some(old) if old != icon => {
-                    let _ = self.events.send(DesignEvent::IconUpdated(
-                        icon.clone(),
-                        holders.get(&icon.id).copied(),
-                    ));
-                }
-                Some(_) => {}
+        let send = |e: DesignEvent| {
+            let _ = self.events.send(e);
+        };
+        for old in &before.parts {
+            if self.doc.part(old.id).is_none() {
+                send(DesignEvent::PartDeleted(old.id));
             }
         }
-        for old in &before.icons {
-            if self.doc.icon(old.id).is_none() {
-                let _ = self.events.send(DesignEvent::IconDeleted(old.id));
+        for old in &before.relations {
+            if !self.doc.relations.iter().any(|r| r.id == old.id) {
+                send(DesignEvent::RelationDeleted(old.id));
             }
         }
-        if before.material != self.doc.material {
-            let _ = self
-                .events
-                .send(DesignEvent::MaterialChanged(self.doc.material));
+        for part in &self.doc.parts {
+            let Some(old) = before.part(part.id) else {
+                send(DesignEvent::PartCreated(part.clone(), holders.clone()));
+                continue;
+            };
+            if (&old.name, old.visible, old.locked, &old.colour)
+                != (&part.name, part.visible, part.locked, &part.colour)
+            {
+                send(DesignEvent::PartChanged(part.clone()));
+            }
+            let old_icons = old.body.icons();
+            for icon in part.body.icons() {
+                match old_icons.iter().find(|i| i.id == icon.id) {
+                    None => send(DesignEvent::IconCreated(
+                        part.id,
+                        icon.clone(),
+                        holders.get(&icon.id).copied(),
+                    )),
+                    Some(o) if o != icon => send(DesignEvent::IconUpdated(
+                        part.id,
+                        icon.clone(),
+                        holders.get(&icon.id).copied(),
+                    )),
+                    Some(_) => {}
+                }
+            }
+            for o in old_icons {
+                if !part.body.icons().iter().any(|i| i.id == o.id) {
+                    send(DesignEvent::IconDeleted(part.id, o.id));
+                }
+            }
+            let (m_old, m_new) = (
+                crate::convert::parts::body_material(&old.body),
+                crate::convert::parts::body_material(&part.body),
+            );
+            if m_old != m_new {
+                send(DesignEvent::MaterialChanged(part.id, m_new));
+            }
+        }
+        for r in &self.doc.relations {
+            if !before.relations.iter().any(|o| o.id == r.id) {
+                send(DesignEvent::RelationCreated(r.clone()));
+            }
         }
     }
 
     fn announce_icon(&self, icon: u64) {
-        if let Some(i) = self.doc.icon(icon) {
+        if let Some((p, i)) = self.doc.icon(icon) {
             let _ = self.events.send(DesignEvent::IconUpdated(
+                p.id,
                 i.clone(),
                 self.holders().get(&icon).copied(),
             ));
         }
     }
 
-    fn publish_geometry(&mut self) {
+    /// Publishes new frames of the dirty parts (every part when `all`);
+    /// the other parts keep their frames, so a writer resends only what
+    /// changed.
+    fn publish_geometry(&mut self, dirty: &Dirty) {
         self.rev += 1;
-        let g = Arc::new(self.model.geometry(self.id, self.rev, self.drag_frame));
-        self.geometry.send_replace(g);
+        let set = if dirty.all {
+            self.model.geometry_set(self.id, self.rev)
+        } else {
+            let mut set = (**self.geometry.borrow()).clone();
+            set.parts.retain(|id, _| self.model.doc().part(*id).is_some());
+            for &part in &dirty.parts {
+                if let Some(g) = self.model.geometry(self.id, part, self.rev, self.drag_frame) {
+                    set.parts.insert(part, Arc::new(g));
+                }
+            }
+            set
+        };
+        self.geometry.send_replace(Arc::new(set));
         self.drag_frame = false;
     }
 
@@ -816,7 +922,7 @@ impl Actor {
         &mut self,
         client: u64,
         command: Command,
-        geometry_dirty: &mut bool,
+        geometry_dirty: &mut Dirty,
     ) -> Result<Ack, CommandError> {
         // REST callers (client 0) were checked by the HTTP layer.
         let role = if client == 0 {
@@ -836,12 +942,13 @@ impl Actor {
                 Command::Grab { .. }
                     | Command::Drag { .. }
                     | Command::Release { .. }
-                    | Command::Edit(
-                        super::model::Edit::BindSensor { .. }
-                            | super::model::Edit::UnbindSensor { .. }
-                            | super::model::Edit::SetRole { .. }
-                            | super::model::Edit::SetState { .. }
-                    )
+                    | Command::Edit(super::model::Edit::Part {
+                        edit: super::model::PartEdit::BindSensor { .. }
+                            | super::model::PartEdit::UnbindSensor { .. }
+                            | super::model::PartEdit::SetRole { .. }
+                            | super::model::PartEdit::SetState { .. },
+                        ..
+                    })
             ),
         };
         if !allowed {
@@ -852,19 +959,35 @@ impl Actor {
         }
         match command {
             Command::Edit(edit) => {
-                if let super::model::Edit::DeleteIcon { id } = &edit {
+                if let super::model::Edit::Part {
+                    edit: super::model::PartEdit::DeleteIcon { id },
+                    ..
+                } = &edit
+                {
                     self.check_holder(client, *id)?;
+                }
+                if let super::model::Edit::DeletePart { part } = &edit
+                    && let Some(holder) = self
+                        .dragging
+                        .iter()
+                        .find(|(c, (p, _))| p == part && **c != client)
+                        .map(|(c, _)| *c)
+                {
+                    return Err(CommandError::new(
+                        ErrorKind::Conflict,
+                        format!("part {part} has an icon held by client {holder}"),
+                    ));
                 }
                 let before = self.doc.clone();
                 let t = Instant::now();
-                let created = heavy(|| self.model.apply(edit))?;
+                let (created, moved) = heavy(|| self.model.apply(edit))?;
                 self.metrics.solve(t.elapsed());
                 self.undo.push((*before).clone());
-                // A deleted icon can no longer be held.
+                // A deleted icon (or part) can no longer be held.
                 let gone: Vec<u64> = self
                     .dragging
                     .iter()
-                    .filter(|(_, i)| self.model.icon(**i).is_none())
+                    .filter(|(_, (_, i))| self.model.icon(*i).is_none())
                     .map(|(&c, _)| c)
                     .collect();
                 for c in gone {
@@ -874,46 +997,56 @@ impl Actor {
                 self.changed();
                 self.announce_diff(&before);
                 self.broadcast_history();
-                *geometry_dirty = true;
+                geometry_dirty.parts(moved);
+                // Parts whose frames must appear or vanish.
+                if self.doc.parts.len() != before.parts.len() {
+                    geometry_dirty.parts(self.doc.parts.iter().map(|p| p.id).filter(|id| before.part(*id).is_none()).collect());
+                    geometry_dirty.removed = true;
+                }
                 Ok(Ack {
-                    created_icon: created,
+                    created_icon: created.icon,
+                    created_part: created.part,
+                    created_relation: created.relation,
                     version: None,
                 })
             }
-            Command::Grab { icon } => {
-                self.model.check_icon(icon)?;
+            Command::Grab { part, icon } => {
+                self.model.check_icon(part, icon)?;
+                self.model.check_unlocked(part)?;
                 self.check_holder(client, icon)?;
-                if self.dragging.get(&client) == Some(&icon) {
+                if self.dragging.get(&client) == Some(&(part, icon)) {
                     return Ok(Ack::default());
                 }
-                if let Some(prev) = self.dragging.remove(&client) {
-                    let _ = self.model.release(prev);
+                if let Some((pp, prev)) = self.dragging.remove(&client) {
+                    let _ = self.model.release(pp, prev);
                 }
                 self.undo.push(self.model.to_doc());
-                self.model.grab(icon)?;
-                self.dragging.insert(client, icon);
+                self.model.grab(part, icon)?;
+                self.dragging.insert(client, (part, icon));
                 self.set_holding(client, Some(icon));
                 self.changed();
                 self.announce_icon(icon);
                 self.broadcast_history();
                 Ok(Ack::default())
             }
-            Command::Drag { icon, xyz } => {
+            Command::Drag { part, icon, xyz } => {
                 self.check_holder(client, icon)?;
-                if self.dragging.get(&client) != Some(&icon) {
+                if self.dragging.get(&client) != Some(&(part, icon)) {
                     // A drag without drag_start grabs implicitly.
-                    Box::pin(self.command(client, Command::Grab { icon }, geometry_dirty)).await?;
+                    Box::pin(self.command(client, Command::Grab { part, icon }, geometry_dirty))
+                        .await?;
                 }
                 let t = Instant::now();
-                let actual = self.model.drag(icon, xyz)?;
+                let (actual, moved) = self.model.drag(part, icon, xyz)?;
                 self.metrics.solve(t.elapsed());
                 if self.persist_at.is_none() {
                     self.persist_at = Some(Instant::now() + self.persist_delay);
                 }
                 self.drag_frame = true;
-                *geometry_dirty = true;
+                geometry_dirty.parts(moved);
                 if let Some(tx) = self.feedback.get(&client) {
                     tx.send_replace(Some(Feedback {
+                        part,
                         icon,
                         requested: xyz,
                         actual,
@@ -922,18 +1055,18 @@ impl Actor {
                 }
                 Ok(Ack::default())
             }
-            Command::Release { icon } => {
-                self.model.check_icon(icon)?;
-                if self.dragging.get(&client) != Some(&icon) {
+            Command::Release { part, icon } => {
+                self.model.check_icon(part, icon)?;
+                if self.dragging.get(&client) != Some(&(part, icon)) {
                     self.check_holder(client, icon)?;
                     return Ok(Ack::default());
                 }
-                self.model.release(icon)?;
+                let moved = self.model.release(part, icon)?;
                 self.dragging.remove(&client);
                 self.set_holding(client, None);
                 self.changed();
                 self.announce_icon(icon);
-                *geometry_dirty = true;
+                geometry_dirty.parts(moved);
                 Ok(Ack::default())
             }
             Command::Undo | Command::Redo => {
@@ -969,7 +1102,7 @@ impl Actor {
                 self.clear_drags();
                 self.changed();
                 self.broadcast_snapshot();
-                *geometry_dirty = true;
+                geometry_dirty.all = true;
                 Ok(Ack::default())
             }
             Command::Commit { message } => {
@@ -1001,8 +1134,8 @@ impl Actor {
                 self.versions = Arc::new(versions);
                 let _ = self.events.send(DesignEvent::Committed(info));
                 Ok(Ack {
-                    created_icon: None,
                     version: Some(number),
+                    ..Ack::default()
                 })
             }
             Command::Revert | Command::Restore { .. } => {
@@ -1029,10 +1162,10 @@ impl Actor {
                 self.clear_drags();
                 self.changed();
                 self.broadcast_snapshot();
-                *geometry_dirty = true;
+                geometry_dirty.all = true;
                 Ok(Ack {
-                    created_icon: None,
                     version: Some(info.number),
+                    ..Ack::default()
                 })
             }
         }

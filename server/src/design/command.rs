@@ -12,11 +12,15 @@ pub enum Command {
     Edit(Edit),
     /// Grab an icon: it becomes driving and held by this client.
     Grab {
+        /// The part it is on.
+        part: u64,
         /// The icon.
         icon: u64,
     },
     /// Move a held icon to `xyz` (a drag frame; coalesced per client).
     Drag {
+        /// The part it is on.
+        part: u64,
         /// The dragged icon.
         icon: u64,
         /// Where the icon's handle is now.
@@ -24,6 +28,8 @@ pub enum Command {
     },
     /// End a drag: the icon keeps the shape it reached.
     Release {
+        /// The part it is on.
+        part: u64,
         /// The released icon.
         icon: u64,
     },
@@ -65,4 +71,8 @@ pub struct Ack {
     pub created_icon: Option<u64>,
     /// The version a commit created or a restore/revert loaded.
     pub version: Option<u64>,
+    /// The id of a part the command created.
+    pub created_part: Option<u64>,
+    /// The id of a relation the command created.
+    pub created_relation: Option<u64>,
 }

@@ -1,14 +1,20 @@
-//! Starter designs: the demo (a bicubic 16 × 12 mouse-shell-like dome with
-//! two position constraints, a load and a normal constraint) created on
-//! first start, and the flat plate new designs begin from.
+//! Starter designs: the demo product created on first start — a computer
+//! mouse: a bicubic 16 × 12 top shell (two position constraints, a load and
+//! a normal constraint), two side panels joined to it G1 along its long
+//! edges, and a feature curve on the top that the shell follows — and the
+//! flat plate new designs begin from.
 
 use super::doc::{
     AnchorDoc, DOC_FORMAT, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc,
 };
+use super::part::{
+    ContinuityDoc, CurveDoc, CurveMaterialDoc, CurvePart, EdgeDoc, IsoLineDoc, PALETTE, PartBody,
+    PartDoc, RelationDoc, RelationKind, SurfacePart,
+};
 use super::edit::SurfaceQuery;
 use super::engine::Engine;
 use super::error::{CommandError, ErrorKind};
-use vsculpt_kernel::bspline::{KnotVector, greville, interpolate_surface};
+use vsculpt_kernel::bspline::{KnotVector, basis_derivs, greville, interpolate_surface};
 
 fn kernel(e: impl std::fmt::Display) -> CommandError {
     CommandError::new(ErrorKind::InvalidValue, e.to_string())
@@ -62,18 +68,25 @@ pub fn check_name(name: &str) -> Result<(), CommandError> {
     Ok(())
 }
 
-/// A flat `nu × nv` bicubic plate, 100 × 100 (model units: mm), no icons.
-pub fn plate(name: &str, nu: usize, nv: usize) -> Result<DesignDoc, CommandError> {
+/// A flat `nu × nv` bicubic plate part, 100 × 100 (model units: mm), no icons.
+pub fn plate_part(nu: usize, nv: usize) -> Result<SurfacePart, CommandError> {
     let surface = surface_from(nu, nv, |s, t| [100.0 * s - 50.0, 100.0 * t - 50.0, 0.0])?;
-    Ok(DesignDoc {
-        format: DOC_FORMAT,
-        name: name.to_string(),
+    Ok(SurfacePart {
         surface,
         material: MaterialDoc::default(),
         icons: Vec::new(),
-        next_icon: 1,
         kappa: None,
     })
+}
+
+/// A design of one flat `nu × nv` bicubic plate (the part is called
+/// "plate").
+pub fn plate(name: &str, nu: usize, nv: usize) -> Result<DesignDoc, CommandError> {
+    Ok(DesignDoc::single(
+        name,
+        "plate",
+        PartBody::Surface(plate_part(nu, nv)?),
+    ))
 }
 
 /// The height of the mouse shell over the unit square: an elliptic dome,
@@ -86,11 +99,11 @@ fn shell_height(s: f64, t: f64) -> f64 {
     38.0 * dome * (0.8 + 0.25 * s)
 }
 
-/// The demo design: a 16 × 12 bicubic mouse shell, 120 × 70 mm, with two
-/// position constraints (front and back), a load on the palm rest and a
-/// normal constraint on the button area. The surface interpolates a
-/// 16 × 12 grid of points on the shell (kernel `interpolate_surface`).
-pub fn demo() -> Result<DesignDoc, CommandError> {
+/// The mouse's top shell: a 16 × 12 bicubic surface, 120 × 70 mm,
+/// interpolating a 16 × 12 grid of points on the shell (kernel
+/// `interpolate_surface`), with two position constraints (front and back),
+/// a load on the palm rest and a normal constraint on the button area.
+pub fn shell_part() -> Result<SurfacePart, CommandError> {
     let (m, n) = (16, 12);
     let mut grid = Vec::with_capacity(m * n);
     for k in 0..m {
@@ -113,26 +126,21 @@ pub fn demo() -> Result<DesignDoc, CommandError> {
         nv: fitted.nv(),
         points: fitted.points().iter().map(|p| p.to_array()).collect(),
     };
-    let mut doc = DesignDoc {
-        format: DOC_FORMAT,
-        name: "demo".into(),
+    let mut part = SurfacePart {
         surface,
         material: MaterialDoc::default(),
         icons: Vec::new(),
-        next_icon: 1,
         kappa: None,
     };
-    let engine = Engine::build_unsolved(&doc)?;
+    let engine = Engine::build_unsolved(&part)?;
     let icons = [
         (AnchorDoc::Point { u: 0.12, v: 0.5 }, IconRoleDoc::Position),
         (AnchorDoc::Point { u: 0.88, v: 0.5 }, IconRoleDoc::Position),
         (AnchorDoc::Point { u: 0.62, v: 0.5 }, IconRoleDoc::Load),
         (AnchorDoc::Point { u: 0.3, v: 0.35 }, IconRoleDoc::Normal),
     ];
-    for (anchor, role) in icons {
-        let id = doc.next_icon;
-        doc.next_icon += 1;
-        doc.icons.push(IconDoc {
+    for (id, (anchor, role)) in (1..).zip(icons) {
+        part.icons.push(IconDoc {
             id,
             xyz: engine.point_at(&anchor),
             target: engine.current_target(&anchor, role),
@@ -142,6 +150,139 @@ pub fn demo() -> Result<DesignDoc, CommandError> {
             sensors: Vec::new(),
         });
     }
+    Ok(part)
+}
+
+/// A side panel hanging from the shell's long edge `v_min` (true) or
+/// `v_max`: the same u knots and 16 control points along the edge, one
+/// cubic span across it. Its first row is the shell's edge row and its
+/// second continues the shell's last cross-edge leg (ratio 1), so it meets
+/// the shell G1 as built; then it rolls down 22 mm into the skirt.
+fn side_part(shell: &SurfaceDoc, v_min: bool) -> SurfacePart {
+    let nv = shell.nv;
+    let (edge, inner) = if v_min { (0, 1) } else { (nv - 1, nv - 2) };
+    let mut points = Vec::with_capacity(shell.nu * 4);
+    for i in 0..shell.nu {
+        let e = glam::DVec3::from(shell.points[i * nv + edge]);
+        let leg = e - glam::DVec3::from(shell.points[i * nv + inner]);
+        let out = glam::DVec3::new(0.0, leg.y.signum() * 4.0, 0.0);
+        points.push(e.to_array());
+        points.push((e + leg).to_array());
+        points.push((e + leg + out + glam::DVec3::new(0.0, 0.0, -10.0)).to_array());
+        points.push((e + leg + out * 1.5 + glam::DVec3::new(0.0, 0.0, -22.0)).to_array());
+    }
+    SurfacePart {
+        surface: SurfaceDoc {
+            u_degree: shell.u_degree,
+            v_degree: 3,
+            u_knots: shell.u_knots.clone(),
+            v_knots: vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0],
+            nu: shell.nu,
+            nv: 4,
+            points,
+        },
+        material: MaterialDoc::default(),
+        icons: Vec::new(),
+        kappa: None,
+    }
+}
+
+/// The shell's parameter line v = `v` as a B-spline curve on the shell's u
+/// knots (exact: its control points are Σ_j N_j(v) P_ij), so a curve part
+/// made from it starts on the surface.
+fn iso_v(shell: &SurfaceDoc, v: f64) -> Result<CurveDoc, CommandError> {
+    let kv = KnotVector::new(shell.v_degree, shell.v_knots.clone()).map_err(kernel)?;
+    let b = basis_derivs(&kv, v, 0);
+    let points = (0..shell.nu)
+        .map(|i| {
+            (0..=shell.v_degree)
+                .map(|k| glam::DVec3::from(shell.points[i * shell.nv + b.first + k]) * b.get(0, k))
+                .sum::<glam::DVec3>()
+                .to_array()
+        })
+        .collect();
+    Ok(CurveDoc {
+        degree: shell.u_degree,
+        knots: shell.u_knots.clone(),
+        points,
+    })
+}
+
+/// The demo product, a computer mouse: the top shell, a left and a right
+/// side panel joined G1 to its long edges, and a feature line along the
+/// shell's parameter line v = 0.75 that the shell follows (a binding). The
+/// parts and relations are all made the way a designer would make them.
+pub fn demo() -> Result<DesignDoc, CommandError> {
+    let shell = shell_part()?;
+    let left = side_part(&shell.surface, true);
+    let right = side_part(&shell.surface, false);
+    let line = iso_v(&shell.surface, 0.75)?;
+    let part = |id: u64, name: &str, colour: usize, body: PartBody| PartDoc {
+        id,
+        name: name.to_string(),
+        visible: true,
+        locked: false,
+        colour: PALETTE[colour].to_string(),
+        body,
+    };
+    let doc = DesignDoc {
+        format: DOC_FORMAT,
+        name: "demo".into(),
+        parts: vec![
+            part(1, "top shell", 0, PartBody::Surface(shell)),
+            part(2, "left side", 1, PartBody::Surface(left)),
+            part(3, "right side", 1, PartBody::Surface(right)),
+            part(
+                4,
+                "feature line",
+                2,
+                PartBody::Curve(CurvePart {
+                    curve: line,
+                    material: CurveMaterialDoc::default(),
+                    icons: Vec::new(),
+                    kappa: None,
+                }),
+            ),
+        ],
+        relations: vec![
+            RelationDoc {
+                id: 1,
+                kind: RelationKind::Join {
+                    a: 1,
+                    edge_a: EdgeDoc::VMin,
+                    b: 2,
+                    edge_b: EdgeDoc::VMin,
+                    continuity: ContinuityDoc::G1,
+                    reversed: false,
+                    ratio: 1.0,
+                },
+            },
+            RelationDoc {
+                id: 2,
+                kind: RelationKind::Join {
+                    a: 1,
+                    edge_a: EdgeDoc::VMax,
+                    b: 3,
+                    edge_b: EdgeDoc::VMin,
+                    continuity: ContinuityDoc::G1,
+                    reversed: false,
+                    ratio: 1.0,
+                },
+            },
+            RelationDoc {
+                id: 3,
+                kind: RelationKind::Binding {
+                    curve: 4,
+                    surface: 1,
+                    line: IsoLineDoc::V(0.75),
+                    reversed: false,
+                },
+            },
+        ],
+        next_icon: 5,
+        next_part: 5,
+        next_relation: 4,
+    };
     doc.validate()?;
     Ok(doc)
 }

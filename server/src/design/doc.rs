@@ -1,16 +1,18 @@
-//! The design document: everything that defines a design (name, surface,
-//! material, icons) as plain serde data. It is what the store persists (as
+//! The design document: everything that defines a design (name, parts with
+//! their shapes, materials and icons, relations) as plain serde data. It is what the store persists (as
 //! JSON: the working state and every version), what undo keeps and what a
 //! joining client receives. Validation of untrusted values (finite numbers,
 //! (u, v) inside the domain, sizes) happens here, before the kernel sees them.
 
 use super::error::{CommandError, ErrorKind};
+use super::part::{CurveDoc, PartBody, PartDoc, RelationDoc, RelationKind};
 use crate::cad::IgesSurface;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-/// Format version of the persisted document.
-pub const DOC_FORMAT: u32 = 1;
+/// Format version of the persisted document (1: one surface per design,
+/// read by [`super::legacy`]; 2: parts).
+pub const DOC_FORMAT: u32 = 2;
 
 fn invalid(msg: impl Into<String>) -> CommandError {
     CommandError::new(ErrorKind::InvalidValue, msg)
@@ -249,6 +251,18 @@ pub enum AnchorDoc {
         /// Deformation asked inside (true) or outside the region.
         inside: bool,
     },
+    /// A point of a curve part at parameter t.
+    Param {
+        /// t.
+        t: f64,
+    },
+    /// A stretch of a curve part.
+    Span {
+        /// Start.
+        t0: f64,
+        /// End.
+        t1: f64,
+    },
 }
 
 impl AnchorDoc {
@@ -259,7 +273,43 @@ impl AnchorDoc {
             AnchorDoc::Point { u, v } => [*u, *v],
             AnchorDoc::Curve { curve } => curve.mid_point(),
             AnchorDoc::Region { u0, v0, u1, v1, .. } => [(u0 + u1) / 2.0, (v0 + v1) / 2.0],
+            AnchorDoc::Param { t } => [*t, 0.0],
+            AnchorDoc::Span { t0, t1 } => [(t0 + t1) / 2.0, 0.0],
         }
+    }
+
+    /// Whether the anchor belongs on a curve part (`param`, `span`).
+    pub fn on_curve(&self) -> bool {
+        matches!(self, AnchorDoc::Param { .. } | AnchorDoc::Span { .. })
+    }
+
+    /// Checks the anchor is a curve anchor with parameters inside `curve`'s
+    /// domain.
+    pub fn validate_on_curve(&self, curve: &CurveDoc) -> Result<(), CommandError> {
+        let ts = match self {
+            AnchorDoc::Param { t } => vec![*t],
+            AnchorDoc::Span { t0, t1 } => {
+                if t0 == t1 {
+                    return Err(invalid("a span needs two different parameters"));
+                }
+                vec![*t0, *t1]
+            }
+            _ => {
+                return Err(invalid(
+                    "an icon on a curve part is anchored by `param` or `span`",
+                ));
+            }
+        };
+        for t in ts {
+            if !curve.contains(t) {
+                let (a, b) = curve.domain();
+                return Err(CommandError::new(
+                    ErrorKind::OutOfDomain,
+                    format!("t = {t} is outside the curve's domain [{a}, {b}]"),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// Every (u, v) the anchor uses (a curve's control points lie in the
@@ -269,11 +319,17 @@ impl AnchorDoc {
             AnchorDoc::Point { u, v } => vec![[*u, *v]],
             AnchorDoc::Curve { curve } => curve.points.clone(),
             AnchorDoc::Region { u0, v0, u1, v1, .. } => vec![[*u0, *v0], [*u1, *v1]],
+            AnchorDoc::Param { .. } | AnchorDoc::Span { .. } => Vec::new(),
         }
     }
 
     /// Checks every parameter is finite and inside `surface`'s domain.
     pub fn validate(&self, surface: &SurfaceDoc) -> Result<(), CommandError> {
+        if self.on_curve() {
+            return Err(invalid(
+                "an icon on a surface part is anchored by `point`, `curve` or `region`",
+            ));
+        }
         if let AnchorDoc::Curve { curve } = self {
             if !(2..=256).contains(&curve.points.len()) {
                 return Err(invalid("a curve icon needs 2 to 256 (u, v) control points"));
@@ -373,24 +429,24 @@ pub struct IconDoc {
     pub sensors: Vec<String>,
 }
 
-/// A whole design.
+/// A whole design: a product of parts.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DesignDoc {
-    /// Document format version.
+    /// Document format version ([`DOC_FORMAT`]).
     pub format: u32,
     /// Name.
     pub name: String,
-    /// The surface.
-    pub surface: SurfaceDoc,
-    /// Material.
-    pub material: MaterialDoc,
-    /// Icons.
-    pub icons: Vec<IconDoc>,
-    /// The id the next icon gets.
+    /// The parts, in the order clients list them.
+    pub parts: Vec<PartDoc>,
+    /// Relations between parts.
+    #[serde(default)]
+    pub relations: Vec<RelationDoc>,
+    /// The id the next icon gets (icon ids are unique across parts).
     pub next_icon: u64,
-    /// The spring coefficient κ the drags calibrated (kernel default when absent).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kappa: Option<f64>,
+    /// The id the next part gets.
+    pub next_part: u64,
+    /// The id the next relation gets.
+    pub next_relation: u64,
 }
 
 impl DesignDoc {
@@ -400,39 +456,138 @@ impl DesignDoc {
         serde_json::to_vec(self).unwrap_or_default()
     }
 
-    /// Parsed from the store.
+    /// Parsed from the store: this format, or format 1 (one surface per
+    /// design) read as a one-part design.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, CommandError> {
-        let doc: DesignDoc = serde_json::from_slice(bytes).map_err(|e| {
-            CommandError::new(ErrorKind::Storage, format!("stored design unreadable: {e}"))
-        })?;
-        if doc.format != DOC_FORMAT {
-            return Err(CommandError::new(
-                ErrorKind::Storage,
-                format!(
-                    "stored design has format {}, expected {DOC_FORMAT}",
-                    doc.format
-                ),
-            ));
+        #[derive(Deserialize)]
+        struct Format {
+            format: u32,
         }
-        Ok(doc)
+        let unreadable =
+            |e: serde_json::Error| CommandError::new(ErrorKind::Storage, format!("stored design unreadable: {e}"));
+        let f: Format = serde_json::from_slice(bytes).map_err(unreadable)?;
+        match f.format {
+            DOC_FORMAT => serde_json::from_slice(bytes).map_err(unreadable),
+            1 => Ok(super::legacy::upgrade(
+                serde_json::from_slice(bytes).map_err(unreadable)?,
+            )),
+            other => Err(CommandError::new(
+                ErrorKind::Storage,
+                format!("stored design has format {other}, expected {DOC_FORMAT}"),
+            )),
+        }
     }
 
-    /// The icon with `id`.
-    pub fn icon(&self, id: u64) -> Option<&IconDoc> {
-        self.icons.iter().find(|i| i.id == id)
+    /// The part with `id`.
+    pub fn part(&self, id: u64) -> Option<&PartDoc> {
+        self.parts.iter().find(|p| p.id == id)
     }
 
-    /// Full validation of untrusted content.
+    /// The part with `id`, mutable.
+    pub fn part_mut(&mut self, id: u64) -> Option<&mut PartDoc> {
+        self.parts.iter_mut().find(|p| p.id == id)
+    }
+
+    /// The icon with `id` and the part it is on.
+    pub fn icon(&self, id: u64) -> Option<(&PartDoc, &IconDoc)> {
+        self.parts
+            .iter()
+            .find_map(|p| p.body.icons().iter().find(|i| i.id == id).map(|i| (p, i)))
+    }
+
+    /// Every icon of every part.
+    pub fn icons(&self) -> impl Iterator<Item = &IconDoc> {
+        self.parts.iter().flat_map(|p| p.body.icons())
+    }
+
+    /// The relations that involve part `part`.
+    pub fn relations_of(&self, part: u64) -> impl Iterator<Item = &RelationDoc> {
+        self.relations
+            .iter()
+            .filter(move |r| r.kind.parts().contains(&part))
+    }
+
+    /// The parts solved together with `part`: itself and every part
+    /// reachable through joins and bindings, in id order.
+    pub fn group_of(&self, part: u64) -> Vec<u64> {
+        let mut group = vec![part];
+        let mut k = 0;
+        while k < group.len() {
+            let p = group[k];
+            for r in self.relations_of(p) {
+                for q in r.kind.parts() {
+                    if !group.contains(&q) {
+                        group.push(q);
+                    }
+                }
+            }
+            k += 1;
+        }
+        group.sort_unstable();
+        group
+    }
+
+    /// Full validation of untrusted content: every part, unique ids and
+    /// names, relations naming parts (and icons) that exist.
     pub fn validate(&self) -> Result<(), CommandError> {
-        self.surface.validate()?;
-        self.material.validate()?;
-        for i in &self.icons {
-            i.anchor.validate(&self.surface)?;
-            if i.xyz.iter().chain(&i.target).any(|x| !x.is_finite()) {
-                return Err(invalid("icon coordinates must be finite"));
+        if self.parts.len() > super::part::MAX_PARTS {
+            return Err(invalid(format!(
+                "a design holds at most {} parts",
+                super::part::MAX_PARTS
+            )));
+        }
+        let mut ids = std::collections::BTreeSet::new();
+        let mut names = std::collections::BTreeSet::new();
+        let mut icons = std::collections::BTreeSet::new();
+        for p in &self.parts {
+            if !ids.insert(p.id) || !names.insert(p.name.as_str()) {
+                return Err(invalid("part ids and names must be unique"));
+            }
+            if !super::part::is_colour(&p.colour) {
+                return Err(invalid("a part's colour is #rrggbb"));
+            }
+            p.body.validate()?;
+            for i in p.body.icons() {
+                if !icons.insert(i.id) {
+                    return Err(invalid("icon ids must be unique across parts"));
+                }
+            }
+        }
+        for r in &self.relations {
+            for q in r.kind.parts() {
+                if !ids.contains(&q) {
+                    return Err(invalid(format!("relation {} names no part {q}", r.id)));
+                }
+            }
+            if let RelationKind::Join { ratio, .. } = r.kind
+                && !(ratio.is_finite() && ratio > 0.0)
+            {
+                return Err(invalid(format!("relation {} has a bad ratio", r.id)));
             }
         }
         Ok(())
+    }
+
+    /// A one-part design holding `body`, named `name` (its part is called
+    /// `part_name`).
+    pub fn single(name: &str, part_name: &str, body: PartBody) -> Self {
+        let next_icon = body.icons().iter().map(|i| i.id + 1).max().unwrap_or(1);
+        Self {
+            format: DOC_FORMAT,
+            name: name.to_string(),
+            parts: vec![PartDoc {
+                id: 1,
+                name: part_name.to_string(),
+                visible: true,
+                locked: false,
+                colour: super::part::PALETTE[0].to_string(),
+                body,
+            }],
+            relations: Vec::new(),
+            next_icon,
+            next_part: 2,
+            next_relation: 1,
+        }
     }
 }
 

@@ -4,7 +4,8 @@
 //! document. Document icon ids map to kernel icon ids here; every kernel
 //! error becomes a [`CommandError`] with a stable kind.
 
-use super::doc::{AnchorDoc, DerivativeDoc, DesignDoc, IconRoleDoc, IconStateDoc, MaterialDoc};
+use super::doc::{AnchorDoc, DerivativeDoc, IconRoleDoc, IconStateDoc, MaterialDoc};
+use super::part::SurfacePart;
 use super::edit::SurfaceQuery;
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
@@ -29,7 +30,7 @@ pub const SPRING_ITERATIONS: usize = 12;
 /// The band paper 003 keeps the spring's Δy/Δx in.
 pub const SPRING_BAND: (f64, f64) = (0.8, 1.2);
 
-fn kernel_error(e: DesignError) -> CommandError {
+pub fn kernel_error(e: DesignError) -> CommandError {
     let kind = match &e {
         DesignError::UnknownIcon(_) => ErrorKind::UnknownIcon,
         DesignError::OutOfDomain(..) => ErrorKind::OutOfDomain,
@@ -86,6 +87,12 @@ fn anchor(a: &AnchorDoc) -> Result<Anchor, CommandError> {
             v1: *v1,
             inside: *inside,
         },
+        AnchorDoc::Param { .. } | AnchorDoc::Span { .. } => {
+            return Err(CommandError::new(
+                ErrorKind::InvalidValue,
+                "a curve anchor on a surface part",
+            ));
+        }
     })
 }
 
@@ -104,7 +111,7 @@ fn role(r: IconRoleDoc) -> Role {
     }
 }
 
-fn state(s: IconStateDoc) -> IconState {
+pub fn state(s: IconStateDoc) -> IconState {
     match s {
         IconStateDoc::Driving => IconState::Driving,
         IconStateDoc::Passive => IconState::Passive,
@@ -112,7 +119,7 @@ fn state(s: IconStateDoc) -> IconState {
     }
 }
 
-fn state_back(s: IconState) -> IconStateDoc {
+pub fn state_back(s: IconState) -> IconStateDoc {
     match s {
         IconState::Driving => IconStateDoc::Driving,
         IconState::Passive => IconStateDoc::Passive,
@@ -135,7 +142,7 @@ pub struct IconReadback {
 
 impl Engine {
     /// Builds the kernel design of `doc` and solves it.
-    pub fn build(doc: &DesignDoc) -> Result<Self, CommandError> {
+    pub fn build(doc: &SurfacePart) -> Result<Self, CommandError> {
         let mut e = Self::build_unsolved(doc)?;
         if !e.ids.is_empty() {
             e.design.solve().map_err(kernel_error)?;
@@ -144,7 +151,7 @@ impl Engine {
     }
 
     /// Builds the kernel design of `doc` without solving.
-    pub fn build_unsolved(doc: &DesignDoc) -> Result<Self, CommandError> {
+    pub fn build_unsolved(doc: &SurfacePart) -> Result<Self, CommandError> {
         let s = &doc.surface;
         let u = KnotVector::new(s.u_degree, s.u_knots.clone()).map_err(geometry)?;
         let v = KnotVector::new(s.v_degree, s.v_knots.clone()).map_err(geometry)?;

@@ -14,6 +14,14 @@ pub enum ErrorKind {
     UnknownIcon,
     /// No version with that number.
     UnknownVersion,
+    /// No part with that id (or the icon is not on that part).
+    UnknownPart,
+    /// No relation with that id.
+    UnknownRelation,
+    /// The part is locked.
+    Locked,
+    /// The parts cannot be related that way.
+    Incompatible,
     /// A value is out of its range or otherwise invalid.
     InvalidValue,
     /// A number is NaN or infinite.

@@ -5,17 +5,21 @@
 
 pub mod actor;
 pub mod command;
+pub mod curve_engine;
 pub mod demo;
 pub mod doc;
 pub mod edit;
 pub mod engine;
 pub mod error;
 pub mod hub;
+pub mod legacy;
 pub mod model;
+pub mod part;
+pub mod part_engine;
 pub mod undo;
 
 pub use actor::{ClientInfo, DesignEvent, DesignHandle, Joined, Presence};
 pub use command::{Ack, Command};
 pub use error::{CommandError, ErrorKind};
 pub use hub::Hub;
-pub use model::{DesignDoc, DesignModel, Edit};
+pub use model::{Created, DesignDoc, DesignModel, Edit, MaterialEdit, PartEdit};

@@ -206,13 +206,16 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     let welcome = socket
         .send(Message::Text(convert::welcome(client, design, role)))
         .await;
-    let shape = match (&welcome, compact) {
-        (Ok(()), true) => {
-            let frame = writer::snapshot_frame(&mut joined, &state.metrics);
-            socket.send(Message::Binary(frame)).await
+    let mut sent = std::collections::BTreeMap::new();
+    let mut shape = Ok(());
+    if welcome.is_ok() && compact {
+        for frame in writer::snapshot_frames(&mut joined, &mut sent, &state.metrics) {
+            shape = socket.send(Message::Binary(frame)).await;
+            if shape.is_err() {
+                break;
+            }
         }
-        _ => Ok(()),
-    };
+    }
     if welcome.is_err()
         || shape.is_err()
         || socket
@@ -241,7 +244,11 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         handle.clone(),
         client,
         state.metrics.clone(),
-        writer::Delivery { compact, frames },
+        writer::Delivery {
+            compact,
+            frames,
+            sent,
+        },
     ));
     let mut session = Session {
         state: state.clone(),
@@ -342,13 +349,13 @@ impl Session {
                     .await;
             }
             Inbound::Ping => self.reply(convert::pong(id)).await,
-            Inbound::Command(crate::design::Command::Drag { icon, xyz }) if id.is_none() => {
+            Inbound::Command(crate::design::Command::Drag { part, icon, xyz }) if id.is_none() => {
                 // Drag frames without a request number are fire-and-forget
                 // and coalesced by the actor; the role is checked here so a
                 // viewer still hears of its refusal.
                 if !self.role.can_edit() {
                     self.error(id, WireError::from(forbidden(self.role))).await;
-                } else if let Err(e) = self.handle.drag(self.client, icon, xyz).await {
+                } else if let Err(e) = self.handle.drag(self.client, part, icon, xyz).await {
                     self.error(id, WireError::from(e)).await;
                 }
             }

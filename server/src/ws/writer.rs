@@ -19,6 +19,7 @@ use axum::body::Bytes;
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::SinkExt;
 use futures_util::stream::SplitSink;
+use std::collections::BTreeMap;
 use std::sync::Arc;
 use tokio::sync::broadcast::error::RecvError;
 use tokio::sync::mpsc;
@@ -33,36 +34,59 @@ pub enum Out {
 
 type Sink = SplitSink<WebSocket, Message>;
 
+/// Sends the frames of the parts whose revision this client has not had
+/// (every part the first time), and forgets parts that are gone: latest
+/// wins per part, and a frame of one part never stands in for another's.
 async fn send_geometry(
     sink: &mut Sink,
     joined: &mut Joined,
+    sent: &mut BTreeMap<u64, u64>,
     metrics: &Metrics,
 ) -> Result<(), axum::Error> {
-    let g = joined.geometry.borrow_and_update().clone();
-    metrics.frame_sent(g.frame.len());
-    sink.send(Message::Binary(g.frame.clone())).await
+    let set = joined.geometry.borrow_and_update().clone();
+    sent.retain(|part, _| set.parts.contains_key(part));
+    for (part, g) in &set.parts {
+        if sent.get(part) == Some(&g.rev) {
+            continue;
+        }
+        metrics.frame_sent(g.frame.len());
+        sink.send(Message::Binary(g.frame.clone())).await?;
+        sent.insert(*part, g.rev);
+    }
+    Ok(())
 }
 
-/// The current geometry frame of a joining client's snapshot, flagged
-/// [`FLAG_SNAPSHOT`](vsculpt_protocol::frame::FLAG_SNAPSHOT) and marked
-/// seen, for the compact join (sent before the snapshot itself).
-pub fn snapshot_frame(joined: &mut Joined, metrics: &Metrics) -> Bytes {
-    let g = joined.geometry.borrow_and_update().clone();
-    metrics.frame_sent(g.frame.len());
-    Bytes::from(vsculpt_protocol::frame::with_flags(
-        &g.frame,
-        vsculpt_protocol::frame::FLAG_SNAPSHOT,
-    ))
+/// Every part's current frame flagged as the snapshot's shape (the compact
+/// join sends these before the snapshot); records them as sent.
+pub fn snapshot_frames(
+    joined: &mut Joined,
+    sent: &mut BTreeMap<u64, u64>,
+    metrics: &Metrics,
+) -> Vec<Bytes> {
+    let set = joined.geometry.borrow_and_update().clone();
+    set.parts
+        .iter()
+        .map(|(part, g)| {
+            metrics.frame_sent(g.frame.len());
+            sent.insert(*part, g.rev);
+            Bytes::from(vsculpt_protocol::frame::with_flags(
+                &g.frame,
+                vsculpt_protocol::frame::FLAG_SNAPSHOT,
+            ))
+        })
+        .collect()
 }
 
-/// What a connection's writer sends besides events and replies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Delivery {
     /// The compact join: the connection already sent the current frame, and
     /// snapshots go without their points.
     pub compact: bool,
     /// Geometry frames at all (a device link must ask for them).
     pub frames: bool,
+    /// The revision of each part's frame the connection already sent (the
+    /// compact join's frames); the writer sends the others first.
+    pub sent: BTreeMap<u64, u64>,
 }
 
 /// Runs until the reader drops its sender, a close is requested, the socket
@@ -77,12 +101,15 @@ pub async fn run(
     metrics: Arc<Metrics>,
     delivery: Delivery,
 ) {
-    let Delivery { compact, frames } = delivery;
+    let Delivery {
+        compact,
+        frames,
+        mut sent,
+    } = delivery;
     let mut geometry_live = true;
     let mut deleted = false;
     if frames
-        && !compact
-        && send_geometry(&mut sink, &mut joined, &metrics)
+        && send_geometry(&mut sink, &mut joined, &mut sent, &metrics)
             .await
             .is_err()
     {
@@ -127,7 +154,7 @@ pub async fn run(
                                 let snap = convert::snapshot(&j.view, !compact);
                                 joined = j;
                                 if sink.send(Message::Text(snap)).await.is_err()
-                                    || (frames && send_geometry(&mut sink, &mut joined, &metrics).await.is_err())
+                                    || (frames && send_geometry(&mut sink, &mut joined, &mut sent, &metrics).await.is_err())
                                 {
                                     break;
                                 }
@@ -202,7 +229,7 @@ pub async fn run(
                     geometry_live = false;
                     continue;
                 }
-                if send_geometry(&mut sink, &mut joined, &metrics).await.is_err() {
+                if send_geometry(&mut sink, &mut joined, &mut sent, &metrics).await.is_err() {
                     break;
                 }
             }

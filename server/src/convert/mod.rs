@@ -1,14 +1,17 @@
 //! The one place where protocol types (`vsculpt-protocol`, the stable wire)
 //! meet server types (design documents, commands, events): decoding client
 //! messages into commands, encoding events, snapshots and geometry frames.
-//! Neither the design actor nor the kernel sees a protocol type.
+//! Neither the design actor nor the kernel sees a protocol type. Parts and
+//! relations are in [`parts`].
+
+pub mod parts;
 
 use crate::design::actor::{Feedback, Presence, SnapshotView};
 use crate::design::doc::{
-    AnchorDoc, DerivativeDoc, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
-    UvCurveDoc,
+    AnchorDoc, DerivativeDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, UvCurveDoc,
 };
-use crate::design::{Ack, Command, CommandError, DesignEvent, Edit, ErrorKind};
+use crate::design::part::{PartBody, PartDoc};
+use crate::design::{Ack, Command, CommandError, DesignEvent, Edit, ErrorKind, PartEdit};
 use crate::store::{DesignId, DesignRecord, Role, VersionInfo};
 use axum::body::Bytes;
 use axum::extract::ws::Utf8Bytes;
@@ -80,6 +83,10 @@ impl From<CommandError> for WireError {
             ErrorKind::UnknownDesign => ErrorCode::UnknownDesign,
             ErrorKind::UnknownIcon => ErrorCode::UnknownIcon,
             ErrorKind::UnknownVersion => ErrorCode::UnknownVersion,
+            ErrorKind::UnknownPart => ErrorCode::UnknownPart,
+            ErrorKind::UnknownRelation => ErrorCode::UnknownRelation,
+            ErrorKind::Locked => ErrorCode::Locked,
+            ErrorKind::Incompatible => ErrorCode::Incompatible,
             ErrorKind::InvalidValue => ErrorCode::OutOfRange,
             ErrorKind::NotFinite => ErrorCode::NotFinite,
             ErrorKind::OutOfDomain => ErrorCode::OutOfDomain,
@@ -229,6 +236,8 @@ pub fn anchor_from_wire(a: &wire::Anchor) -> AnchorDoc {
             v1: *v1,
             inside: *inside,
         },
+        wire::Anchor::Param { t } => AnchorDoc::Param { t: *t },
+        wire::Anchor::Span { t0, t1 } => AnchorDoc::Span { t0: *t0, t1: *t1 },
     }
 }
 
@@ -257,6 +266,8 @@ fn anchor_to_wire(a: &AnchorDoc) -> wire::Anchor {
             v1: *v1,
             inside: *inside,
         },
+        AnchorDoc::Param { t } => wire::Anchor::Param { t: *t },
+        AnchorDoc::Span { t0, t1 } => wire::Anchor::Span { t0: *t0, t1: *t1 },
     }
 }
 
@@ -311,7 +322,7 @@ fn state_to_wire(s: IconStateDoc) -> wire::IconState {
     }
 }
 
-fn material_from_wire(m: &wire::Material) -> MaterialDoc {
+pub(crate) fn material_from_wire(m: &wire::Material) -> MaterialDoc {
     MaterialDoc {
         alpha11: m.alpha11,
         alpha12: m.alpha12,
@@ -322,7 +333,7 @@ fn material_from_wire(m: &wire::Material) -> MaterialDoc {
     }
 }
 
-fn material_to_wire(m: &MaterialDoc) -> wire::Material {
+pub(crate) fn material_to_wire(m: &MaterialDoc) -> wire::Material {
     wire::Material {
         alpha11: m.alpha11,
         alpha12: m.alpha12,
@@ -392,35 +403,80 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
         M::CreateDesign { name } => Inbound::CreateDesign { name },
         M::DeleteDesign { design } => Inbound::DeleteDesign { design },
         M::ListVersions => Inbound::ListVersions,
-        M::CreateIcon { spec } => edit(Edit::AddIcon {
-            anchor: anchor_from_wire(&spec.anchor),
-            role: role_from_wire(spec.role),
-            state: state_from_wire(spec.state),
-            target: spec.target,
+        M::CreateIcon { part, spec } => edit(Edit::Part {
+            part,
+            edit: PartEdit::AddIcon {
+                anchor: anchor_from_wire(&spec.anchor),
+                role: role_from_wire(spec.role),
+                state: state_from_wire(spec.state),
+                target: spec.target,
+            },
         }),
-        M::EditIcon { icon, anchor } => edit(Edit::SetAnchor {
-            id: icon,
-            anchor: anchor_from_wire(&anchor),
+        M::EditIcon { part, icon, anchor } => edit(Edit::Part {
+            part,
+            edit: PartEdit::SetAnchor {
+                id: icon,
+                anchor: anchor_from_wire(&anchor),
+            },
         }),
-        M::MoveIcon { icon, xyz } => edit(Edit::MoveIcon { id: icon, xyz }),
-        M::DeleteIcon { icon } => edit(Edit::DeleteIcon { id: icon }),
-        M::SetRole { icon, role } => edit(Edit::SetRole {
-            id: icon,
-            role: role_from_wire(role),
+        M::MoveIcon { part, icon, xyz } => edit(Edit::Part {
+            part,
+            edit: PartEdit::MoveIcon { id: icon, xyz },
         }),
-        M::SetState { icon, state } => edit(Edit::SetState {
-            id: icon,
-            state: state_from_wire(state),
+        M::DeleteIcon { part, icon } => edit(Edit::Part {
+            part,
+            edit: PartEdit::DeleteIcon { id: icon },
         }),
-        M::BindSensor { icon, sensor } => edit(Edit::BindSensor { id: icon, sensor }),
-        M::UnbindSensor { icon, sensor } => edit(Edit::UnbindSensor { id: icon, sensor }),
-        M::SetMaterial { material } => edit(Edit::SetMaterial(material_from_wire(&material))),
-        M::DragStart { icon } => Inbound::Command(Command::Grab { icon }),
-        M::Drag { icon, xyz } => Inbound::Command(Command::Drag {
+        M::SetRole { part, icon, role } => edit(Edit::Part {
+            part,
+            edit: PartEdit::SetRole {
+                id: icon,
+                role: role_from_wire(role),
+            },
+        }),
+        M::SetState { part, icon, state } => edit(Edit::Part {
+            part,
+            edit: PartEdit::SetState {
+                id: icon,
+                state: state_from_wire(state),
+            },
+        }),
+        M::BindSensor { part, icon, sensor } => edit(Edit::Part {
+            part,
+            edit: PartEdit::BindSensor { id: icon, sensor },
+        }),
+        M::UnbindSensor { part, icon, sensor } => edit(Edit::Part {
+            part,
+            edit: PartEdit::UnbindSensor { id: icon, sensor },
+        }),
+        M::SetMaterial { part, material } => edit(Edit::Part {
+            part,
+            edit: PartEdit::SetMaterial(parts::part_material_from_wire(&material)),
+        }),
+        M::CreatePart { spec } => edit(parts::create_part(&spec)),
+        M::DeletePart { part } => edit(Edit::DeletePart { part }),
+        M::SetPart {
+            part,
+            name,
+            visible,
+            locked,
+            colour,
+        } => edit(Edit::SetPart {
+            part,
+            name,
+            visible,
+            locked,
+            colour,
+        }),
+        M::Relate { relation } => edit(Edit::Relate(parts::relation_from_wire(&relation))),
+        M::Unrelate { relation } => edit(Edit::Unrelate { relation }),
+        M::DragStart { part, icon } => Inbound::Command(Command::Grab { part, icon }),
+        M::Drag { part, icon, xyz } => Inbound::Command(Command::Drag {
+            part,
             icon,
             xyz: DVec3::from(xyz),
         }),
-        M::DragEnd { icon } => Inbound::Command(Command::Release { icon }),
+        M::DragEnd { part, icon } => Inbound::Command(Command::Release { part, icon }),
         M::Commit { message } => Inbound::Command(Command::Commit { message }),
         M::Revert => Inbound::Command(Command::Revert),
         M::Undo => Inbound::Command(Command::Undo),
@@ -479,6 +535,8 @@ pub fn ack(req: Option<u64>, ack: &Ack) -> Option<Utf8Bytes> {
             req,
             icon: ack.created_icon,
             version: ack.version,
+            part: ack.created_part,
+            relation: ack.created_relation,
         })
     })
 }
@@ -528,24 +586,6 @@ pub fn versions(req: Option<u64>, v: &[VersionInfo]) -> Utf8Bytes {
     })
 }
 
-/// The wire surface of a document.
-pub fn surface_to_wire(doc: &DesignDoc) -> wire::SurfaceData {
-    let s = &doc.surface;
-    wire::SurfaceData {
-        u: wire::Knots {
-            degree: s.u_degree as u32,
-            knots: s.u_knots.clone(),
-        },
-        v: wire::Knots {
-            degree: s.v_degree as u32,
-            knots: s.v_knots.clone(),
-        },
-        nu: s.nu as u32,
-        nv: s.nv as u32,
-        points: s.points.clone(),
-    }
-}
-
 fn holders(presence: &[Presence]) -> BTreeMap<u64, u64> {
     presence
         .iter()
@@ -553,8 +593,9 @@ fn holders(presence: &[Presence]) -> BTreeMap<u64, u64> {
         .collect()
 }
 
-/// `snapshot`: the full state; with `points` false, `surface.points` is left
-/// empty for a client of the compact join, which has the shape from frames.
+/// `snapshot`: the full state; with `points` false, every part's control
+/// points are left empty for a client of the compact join, which has the
+/// shapes from frames.
 pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
     let holders = holders(&v.presence);
     text(&ServerMessage::Snapshot {
@@ -564,20 +605,13 @@ pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
             versions: v.versions.len() as u64,
         },
         revision: v.revision,
-        surface: {
-            let mut s = surface_to_wire(&v.doc);
-            if !points {
-                s.points = Vec::new();
-            }
-            s
-        },
-        material: material_to_wire(&v.doc.material),
-        icons: v
+        parts: v
             .doc
-            .icons
+            .parts
             .iter()
-            .map(|i| icon_to_wire(i, holders.get(&i.id).copied()))
+            .map(|p| parts::part_to_wire(p, &holders, points))
             .collect(),
+        relations: v.doc.relations.iter().map(parts::relation_to_wire).collect(),
         versions: v.versions.iter().map(version_to_wire).collect(),
         presence: presence_to_wire(&v.presence),
         can_undo: v.can_undo,
@@ -586,20 +620,42 @@ pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
 }
 
 /// The message of an event (`None` for events with no wire form); a
-/// snapshot carries its points unless `points` is false (the compact join).
+/// snapshot or a new part carries its points unless `points` is false (the
+/// compact join).
 pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
     Some(match e {
         DesignEvent::Snapshot(v) => snapshot(v, points),
-        DesignEvent::IconCreated(i, holder) => text(&ServerMessage::IconCreated {
+        DesignEvent::IconCreated(part, i, holder) => text(&ServerMessage::IconCreated {
+            part: *part,
             icon: icon_to_wire(i, *holder),
         }),
-        DesignEvent::IconUpdated(i, holder) => text(&ServerMessage::IconUpdated {
+        DesignEvent::IconUpdated(part, i, holder) => text(&ServerMessage::IconUpdated {
+            part: *part,
             icon: icon_to_wire(i, *holder),
         }),
-        DesignEvent::IconDeleted(id) => text(&ServerMessage::IconDeleted { icon: *id }),
-        DesignEvent::MaterialChanged(m) => text(&ServerMessage::MaterialChanged {
-            material: material_to_wire(m),
+        DesignEvent::IconDeleted(part, id) => text(&ServerMessage::IconDeleted {
+            part: *part,
+            icon: *id,
         }),
+        DesignEvent::MaterialChanged(part, m) => text(&ServerMessage::MaterialChanged {
+            part: *part,
+            material: parts::part_material_to_wire(m),
+        }),
+        DesignEvent::PartCreated(p, holders) => text(&ServerMessage::PartCreated {
+            part: parts::part_to_wire(p, holders, points),
+        }),
+        DesignEvent::PartDeleted(id) => text(&ServerMessage::PartDeleted { part: *id }),
+        DesignEvent::PartChanged(p) => text(&ServerMessage::PartChanged {
+            part: p.id,
+            name: p.name.clone(),
+            visible: p.visible,
+            locked: p.locked,
+            colour: p.colour.clone(),
+        }),
+        DesignEvent::RelationCreated(r) => text(&ServerMessage::RelationCreated {
+            relation: parts::relation_to_wire(r),
+        }),
+        DesignEvent::RelationDeleted(id) => text(&ServerMessage::RelationDeleted { relation: *id }),
         DesignEvent::Committed(v) => text(&ServerMessage::Committed {
             version: version_to_wire(v),
         }),
@@ -622,6 +678,7 @@ pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
 /// `icon_feedback` for the dragging client.
 pub fn feedback(f: &Feedback) -> Utf8Bytes {
     text(&ServerMessage::IconFeedback {
+        part: f.part,
         icon: f.icon,
         requested: f.requested.to_array(),
         actual: f.actual.to_array(),
@@ -629,27 +686,54 @@ pub fn feedback(f: &Feedback) -> Utf8Bytes {
     })
 }
 
-/// The binary geometry frame of a design: knots, control points (f32) and
-/// icon positions.
+/// The binary geometry frame of one part: knots, control points (f32) and
+/// the positions of its icons.
 pub fn geometry_frame(
     design: DesignId,
     revision: u64,
     drag: bool,
-    doc: &DesignDoc,
+    part: &PartDoc,
     points: &[DVec3],
     icons: &[(u64, DVec3)],
 ) -> Bytes {
-    let s = &doc.surface;
+    let (kind, degree_u, degree_v, nu, nv, knots_u, knots_v) = match &part.body {
+        PartBody::Surface(p) => {
+            let s = &p.surface;
+            (
+                wire::frame::KIND_SURFACE,
+                s.u_degree as u8,
+                s.v_degree as u8,
+                s.nu as u32,
+                s.nv as u32,
+                s.u_knots.clone(),
+                s.v_knots.clone(),
+            )
+        }
+        PartBody::Curve(c) => {
+            let c = &c.curve;
+            (
+                wire::frame::KIND_CURVE,
+                c.degree as u8,
+                0,
+                c.points.len() as u32,
+                1,
+                c.knots.clone(),
+                Vec::new(),
+            )
+        }
+    };
     let frame = wire::GeometryFrame {
+        kind,
         design,
+        part: part.id,
         revision,
         flags: if drag { wire::frame::FLAG_DRAG } else { 0 },
-        degree_u: s.u_degree as u8,
-        degree_v: s.v_degree as u8,
-        nu: s.nu as u32,
-        nv: s.nv as u32,
-        knots_u: s.u_knots.clone(),
-        knots_v: s.v_knots.clone(),
+        degree_u,
+        degree_v,
+        nu,
+        nv,
+        knots_u,
+        knots_v,
         points: points
             .iter()
             .map(|p| [p.x as f32, p.y as f32, p.z as f32])

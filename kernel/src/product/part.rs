@@ -1,0 +1,86 @@
+//! A part of a product: one shape of one kind, keyed by a [`PartId`].
+//!
+//! Each kind is one variant of [`Part`] holding that kind's own sculptable
+//! value (its shape, icons, material and solver). A new shape model (an
+//! implicit solid, a B-spline solid, an n-sided patch network) is one new
+//! variant here and one new arm in the few `match`es of this module.
+
+use glam::DVec3;
+
+use crate::curve_design::CurveDesign;
+use crate::design::Design;
+
+/// A part's key in its product. The product never reuses an id it handed
+/// out; ids given to [`super::Product::insert_part`] are the caller's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct PartId(pub u64);
+
+/// What kind of shape a part is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PartKind {
+    /// A deformable B-spline surface (paper 003).
+    Surface,
+    /// A deformable B-spline curve (paper 003, eq. 1).
+    Curve,
+}
+
+/// One part: a sculptable shape of one kind.
+// Parts live in the product's map, one each: the variants' size difference
+// costs nothing, and a box would add an indirection to every drag frame.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug)]
+pub enum Part {
+    /// A surface part.
+    Surface(Design),
+    /// A curve part.
+    Curve(CurveDesign),
+}
+
+impl Part {
+    /// Its kind.
+    pub fn kind(&self) -> PartKind {
+        match self {
+            Part::Surface(_) => PartKind::Surface,
+            Part::Curve(_) => PartKind::Curve,
+        }
+    }
+
+    /// The surface design, if it is a surface part.
+    pub fn as_surface(&self) -> Option<&Design> {
+        match self {
+            Part::Surface(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    /// The curve design, if it is a curve part.
+    pub fn as_curve(&self) -> Option<&CurveDesign> {
+        match self {
+            Part::Curve(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn as_surface_mut(&mut self) -> Option<&mut Design> {
+        match self {
+            Part::Surface(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn as_curve_mut(&mut self) -> Option<&mut CurveDesign> {
+        match self {
+            Part::Curve(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// Its current control points (row-major for a surface, as
+    /// [`crate::bspline::BSplineSurface::points`]).
+    pub fn control_points(&self) -> &[DVec3] {
+        match self {
+            Part::Surface(d) => d.surface().points(),
+            Part::Curve(c) => c.curve().points(),
+        }
+    }
+}

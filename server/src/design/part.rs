@@ -1,0 +1,318 @@
+//! The parts of a design document and the relations between them, as plain
+//! serde data (what the store persists and undo keeps). A part is one shape
+//! model with its own material and icons — today a B-spline surface or a
+//! deformable curve (paper 003); a new kind is one new [`PartBody`] variant.
+//! Validation of untrusted values happens here, before the kernel sees them.
+
+use super::doc::{IconDoc, MaterialDoc, SurfaceDoc};
+use super::error::{CommandError, ErrorKind};
+use serde::{Deserialize, Serialize};
+
+fn invalid(msg: impl Into<String>) -> CommandError {
+    CommandError::new(ErrorKind::InvalidValue, msg)
+}
+
+/// Most parts in one design.
+pub const MAX_PARTS: usize = 64;
+/// Most relations in one design.
+pub const MAX_RELATIONS: usize = 256;
+/// Most control points of a curve part.
+pub const MAX_CURVE_POINTS: usize = 1024;
+
+/// A clamped B-spline curve in model space.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurveDoc {
+    /// Degree.
+    pub degree: usize,
+    /// Knots (points + degree + 1).
+    pub knots: Vec<f64>,
+    /// Control points.
+    pub points: Vec<[f64; 3]>,
+}
+
+impl CurveDoc {
+    /// The parameter domain (t0, t1).
+    pub fn domain(&self) -> (f64, f64) {
+        (self.knots[self.degree], self.knots[self.points.len()])
+    }
+
+    /// Whether `t` lies in the domain.
+    pub fn contains(&self, t: f64) -> bool {
+        let (a, b) = self.domain();
+        t.is_finite() && t >= a && t <= b
+    }
+
+    /// Structural checks (sizes, finiteness); knot rules are the kernel's.
+    pub fn validate(&self) -> Result<(), CommandError> {
+        if self.degree == 0 || self.degree > 7 {
+            return Err(invalid("curve degree must be between 1 and 7"));
+        }
+        if self.points.len() <= self.degree {
+            return Err(invalid("too few control points for the curve's degree"));
+        }
+        if self.points.len() > MAX_CURVE_POINTS {
+            return Err(invalid(format!(
+                "a curve part has at most {MAX_CURVE_POINTS} control points"
+            )));
+        }
+        if self.knots.len() != self.points.len() + self.degree + 1 {
+            return Err(invalid("curve knot count does not match"));
+        }
+        let finite = self.knots.iter().all(|x| x.is_finite())
+            && self.points.iter().flatten().all(|x| x.is_finite());
+        if !finite {
+            return Err(invalid("non-finite knot or control point"));
+        }
+        Ok(())
+    }
+}
+
+/// A curve's material (paper 003, eq. 1): stretch α and bend β.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurveMaterialDoc {
+    /// Stretch.
+    pub alpha: f64,
+    /// Bend.
+    pub beta: f64,
+}
+
+impl Default for CurveMaterialDoc {
+    /// The kernel's default: α = 0.01, β = 1.
+    fn default() -> Self {
+        Self {
+            alpha: 0.01,
+            beta: 1.0,
+        }
+    }
+}
+
+impl CurveMaterialDoc {
+    /// Finite, non-negative weights.
+    pub fn validate(&self) -> Result<(), CommandError> {
+        if !self.alpha.is_finite() || !self.beta.is_finite() {
+            return Err(invalid("material weights must be finite"));
+        }
+        if self.alpha < 0.0 || self.beta < 0.0 {
+            return Err(invalid("material weights must not be negative"));
+        }
+        Ok(())
+    }
+}
+
+/// A surface part: the surface, its material and icons.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SurfacePart {
+    /// The surface.
+    pub surface: SurfaceDoc,
+    /// Material.
+    pub material: MaterialDoc,
+    /// Icons.
+    pub icons: Vec<IconDoc>,
+    /// The spring coefficient κ the drags calibrated (kernel default when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
+}
+
+/// A curve part: the curve, its material and icons (anchored `param` or
+/// `span`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurvePart {
+    /// The curve.
+    pub curve: CurveDoc,
+    /// Material.
+    pub material: CurveMaterialDoc,
+    /// Icons.
+    pub icons: Vec<IconDoc>,
+    /// The spring coefficient κ the drags calibrated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kappa: Option<f64>,
+}
+
+/// A part's shape model, by kind.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum PartBody {
+    /// A B-spline surface (paper 003, eq. 2).
+    Surface(SurfacePart),
+    /// A deformable curve (paper 003, eq. 1).
+    Curve(CurvePart),
+}
+
+impl PartBody {
+    /// The part's icons.
+    pub fn icons(&self) -> &[IconDoc] {
+        match self {
+            PartBody::Surface(s) => &s.icons,
+            PartBody::Curve(c) => &c.icons,
+        }
+    }
+
+    /// The part's icons, mutable.
+    pub fn icons_mut(&mut self) -> &mut Vec<IconDoc> {
+        match self {
+            PartBody::Surface(s) => &mut s.icons,
+            PartBody::Curve(c) => &mut c.icons,
+        }
+    }
+
+    /// The kind's name (`"surface"`, `"curve"`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            PartBody::Surface(_) => "surface",
+            PartBody::Curve(_) => "curve",
+        }
+    }
+
+    /// Every control point.
+    pub fn points(&self) -> &[[f64; 3]] {
+        match self {
+            PartBody::Surface(s) => &s.surface.points,
+            PartBody::Curve(c) => &c.curve.points,
+        }
+    }
+
+    /// Full validation of untrusted content: geometry, material, every
+    /// icon's anchor inside the part's domain.
+    pub fn validate(&self) -> Result<(), CommandError> {
+        match self {
+            PartBody::Surface(s) => {
+                s.surface.validate()?;
+                s.material.validate()?;
+                for i in &s.icons {
+                    i.anchor.validate(&s.surface)?;
+                }
+            }
+            PartBody::Curve(c) => {
+                c.curve.validate()?;
+                c.material.validate()?;
+                for i in &c.icons {
+                    i.anchor.validate_on_curve(&c.curve)?;
+                }
+            }
+        }
+        if self
+            .icons()
+            .iter()
+            .any(|i| i.xyz.iter().chain(&i.target).any(|x| !x.is_finite()))
+        {
+            return Err(invalid("icon coordinates must be finite"));
+        }
+        Ok(())
+    }
+}
+
+/// One part of a design.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PartDoc {
+    /// Id, unique within the design.
+    pub id: u64,
+    /// Name, unique within the design.
+    pub name: String,
+    /// Drawn or hidden.
+    pub visible: bool,
+    /// A locked part refuses edits and drags.
+    pub locked: bool,
+    /// Display colour `#rrggbb`.
+    pub colour: String,
+    /// Its shape model.
+    pub body: PartBody,
+}
+
+/// A boundary edge of a surface part (the parameter held fixed along it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeDoc {
+    /// u = u0.
+    UMin,
+    /// u = u1.
+    UMax,
+    /// v = v0.
+    VMin,
+    /// v = v1.
+    VMax,
+}
+
+/// How joined edges meet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ContinuityDoc {
+    /// Position.
+    G0,
+    /// Position and tangent plane.
+    G1,
+}
+
+/// What a relation ties together.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RelationKind {
+    /// Two surface edges held together by the solver.
+    Join {
+        /// First part.
+        a: u64,
+        /// Its edge.
+        edge_a: EdgeDoc,
+        /// Second part.
+        b: u64,
+        /// Its edge.
+        edge_b: EdgeDoc,
+        /// G0 or G1.
+        continuity: ContinuityDoc,
+        /// `b` runs against `a`.
+        reversed: bool,
+        /// The G1 ratio fixed when the join was made (the kernel's
+        /// `Join::ratio`), so a rebuild is exact; 1 for G0.
+        ratio: f64,
+    },
+    /// A surface follows a curve part along one of its parameter lines.
+    Binding {
+        /// The curve part.
+        curve: u64,
+        /// The surface part.
+        surface: u64,
+        /// The line.
+        line: IsoLineDoc,
+        /// The curve runs against the line.
+        reversed: bool,
+    },
+}
+
+/// A parameter line of a surface.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IsoLineDoc {
+    /// u = value, along v.
+    U(f64),
+    /// v = value, along u.
+    V(f64),
+}
+
+impl RelationKind {
+    /// The parts it ties.
+    pub fn parts(&self) -> [u64; 2] {
+        match self {
+            RelationKind::Join { a, b, .. } => [*a, *b],
+            RelationKind::Binding { curve, surface, .. } => [*curve, *surface],
+        }
+    }
+}
+
+/// A relation between parts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RelationDoc {
+    /// Id, unique within the design.
+    pub id: u64,
+    /// What it ties.
+    pub kind: RelationKind,
+}
+
+/// The colours new parts get, in turn (distinguishable on the studio's
+/// grey background and for the common colour-vision deficiencies).
+pub const PALETTE: [&str; 8] = [
+    "#c8ccd4", "#5b8bd9", "#e0914a", "#5fb37c", "#c46fc0", "#d9c24a", "#4ab8c4", "#d96a6a",
+];
+
+/// Whether `s` is `#rrggbb`.
+pub fn is_colour(s: &str) -> bool {
+    s.len() == 7 && s.starts_with('#') && s[1..].bytes().all(|b| b.is_ascii_hexdigit())
+}
