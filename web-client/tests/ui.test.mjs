@@ -55,7 +55,7 @@ test('on a phone (390 × 844) the view takes the width, the status shows, the pa
 test('a server error is a toast; the connection badge still says connected', async () => {
   const page = await openClient(browser, server.editor);
   await connected(page);
-  await page.evaluate(() => window.vsculpt.send({ type: 'delete_icon', icon: 987654 }));
+  await page.evaluate(() => window.vsculpt.send({ type: 'delete_icon', part: window.vsculpt.state.selectedPart, icon: 987654 }));
   await page.waitForFunction(() => document.querySelector('#toasts .toast'), null, { timeout: 10000 });
   const toast = await page.textContent('#toasts .toast');
   assert.match(toast, /unknown/i, toast);
