@@ -131,6 +131,11 @@ export class PartsPanel {
     if (!force && signature === this.signature) return;
     this.signature = signature;
     const off = online ? '' : ' disabled';
+    // A re-render keeps the keyboard where it was: the same control of the same part.
+    const active = document.activeElement;
+    const focus = active && this.list.contains(active) && active.closest('[data-part]')
+      ? { part: active.closest('[data-part]').dataset.part, act: active.dataset.act, colour: active.type === 'color' }
+      : null;
     this.list.innerHTML = parts
       .map((p) => {
         const shown = p.visible && !hidden.has(p.id);
@@ -153,6 +158,11 @@ export class PartsPanel {
         </li>`;
       })
       .join('');
+    if (focus) {
+      const row = this.list.querySelector(`[data-part="${focus.part}"]`);
+      const el = row && (focus.colour ? row.querySelector('input[type=color]') : focus.act ? row.querySelector(`[data-act="${focus.act}"]`) : null);
+      if (el) el.focus();
+    }
     const nameOf = (id) => escape(design.parts.get(id)?.name ?? `part ${id}`);
     this.relations.innerHTML = [...design.relations.values()]
       .map((r) => {

@@ -97,8 +97,8 @@ function snapshotWithoutPoints() {
  * answers icon creation; resolves { page, sent (every JSON message the
  * page sent), server (to push more) }.
  */
-async function openScripted(access = 'editor') {
-  const page = await browser.newPage({ viewport: { width: 1100, height: 700 } });
+async function openScripted(access = 'editor', pageOptions = { viewport: { width: 1100, height: 700 } }) {
+  const page = await browser.newPage(pageOptions);
   const errors = [];
   page.on('pageerror', (e) => errors.push(String(e)));
   page.errors = errors;
@@ -315,6 +315,27 @@ test('frames of one part leave the others alone; part events add and remove draw
   server.ws.send(JSON.stringify({ type: 'part_deleted', part: 2 }));
   await page.waitForFunction(() => !window.vsculpt.partsView.drawings.has(2) && !document.querySelector('#parts li[data-part="2"]'), null, { timeout: 5000 });
   assert.equal(await page.evaluate(() => window.vsculpt.partsView.seams.children.length), 0);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('the keyboard reaches the parts: Tab to a part\'s name and Enter selects it; on a phone the panel is a bottom sheet with finger-sized part buttons', async () => {
+  const { page } = await openScripted('editor', { viewport: { width: 390, height: 844 }, isMobile: true, hasTouch: true });
+  await page.focus('#parts li[data-part="3"] .part-name');
+  await page.keyboard.press('Enter');
+  assert.equal(await page.evaluate(() => window.vsculpt.state.selectedPart), 3);
+  await page.keyboard.press('Tab');
+  assert.equal(await page.evaluate(() => document.activeElement.dataset.act), 'visible', 'Tab goes on to the part\'s tools');
+  await page.click('#panel-toggle');
+  await page.waitForFunction(() => document.getElementById('panel').getBoundingClientRect().top < innerHeight / 2 + 20);
+  const button = await page.evaluate(() => {
+    const r = document.querySelector('#parts li[data-part="1"] button[data-act="visible"]').getBoundingClientRect();
+    const panel = document.getElementById('panel').getBoundingClientRect();
+    return { height: r.height, inside: r.top >= panel.top && r.bottom <= panel.bottom, top: document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2)?.dataset.act };
+  });
+  assert.ok(button.height >= 36, `hide button ${button.height} px tall`);
+  assert.equal(button.inside, true, 'in the sheet');
+  assert.equal(button.top, 'visible', 'not covered');
   assert.deepEqual(page.errors, []);
   await page.close();
 });
