@@ -271,3 +271,78 @@ test('two plates joined G1 from the join tool: a second page lists the join and 
   await editor.close();
   await viewer.close();
 });
+
+test('dragging a param icon on a curve part: the curve\'s frames (kind 2) reach a second page and its tube follows', async () => {
+  const d = await freshDesign('curve-drag');
+  const editor = await openClient(browser, d.editor);
+  const curve = await addPart(editor, '#add-curve');
+  const viewer = await openClient(browser, d.viewer);
+  await editor.evaluate((c) => window.vsculpt.selectPart(c), curve);
+  const n = await editor.evaluate(() => window.vsculpt.state.icons.size);
+  await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'param', t: 0.5 }, { kind: 'position' }));
+  await editor.waitForFunction((k) => window.vsculpt.state.icons.size === k + 1, n, { timeout: 10000 });
+  const icon = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  await viewer.waitForFunction((i) => window.vsculpt.icons.objects.has(i), icon, { timeout: 10000 });
+  const tubeTop = (page) => page.evaluate((c) => {
+    const g = window.vsculpt.partsView.drawings.get(c).mesh.geometry;
+    g.computeBoundingBox();
+    return g.boundingBox.max.z;
+  }, curve);
+  const [z0, frames0] = [await tubeTop(viewer), await viewer.evaluate(() => window.vsculpt.state.frames)];
+  // Lift the icon by half the design's size, in four drag frames.
+  const z = await editor.evaluate((i) => {
+    const { send, state, partsView } = window.vsculpt;
+    const p = state.icons.get(i).target;
+    const h = 0.5 * partsView.scale;
+    send({ type: 'drag_start', icon: i });
+    for (let k = 1; k <= 4; k++) send({ type: 'drag', icon: i, xyz: [p[0], p[1], p[2] + (h * k) / 4] });
+    send({ type: 'drag_end', icon: i });
+    return p[2];
+  }, icon);
+  await viewer.waitForFunction(([i, z0]) => window.vsculpt.state.icons.get(i).target[2] > z0 + 0.9 * 0.5 * window.vsculpt.partsView.scale, [icon, z], { timeout: 15000 });
+  await viewer.waitForFunction(([c, z]) => {
+    const g = window.vsculpt.partsView.drawings.get(c).mesh.geometry;
+    g.computeBoundingBox();
+    return g.boundingBox.max.z > z + 0.5 * window.vsculpt.partsView.scale * 0.5;
+  }, [curve, z0], { timeout: 15000 });
+  assert.ok((await viewer.evaluate(() => window.vsculpt.state.frames)) > frames0, 'frames arrived');
+  // The curve the page draws passes through the position constraint: its point at t = 0.5 is the icon's target.
+  const at = await viewer.evaluate(async ([i, c]) => {
+    const { curveDerivs } = await import('/src/bspline.js');
+    const { design, partsView } = window.vsculpt;
+    const g = design.parts.get(c).geometry;
+    const p = curveDerivs(g, 0.5).p;
+    const t = design.icons.get(i).target;
+    return { kind: g.kind, miss: Math.hypot(p[0] - t[0], p[1] - t[1], p[2] - t[2]), size: partsView.scale };
+  }, [icon, curve]);
+  assert.equal(at.kind, 'curve');
+  assert.ok(at.miss < 1e-3 * at.size, `the curve meets its constraint: misses by ${at.miss}`);
+  const rest = (await documentOf(d)).parts.find((p) => p.id === curve).body.curve;
+  const shown = await viewer.evaluate((c) => Array.from(window.vsculpt.design.parts.get(c).geometry.points), curve);
+  rest.points.flat().forEach((x, k) => assert.ok(Math.abs(shown[k] - x) <= 1e-5 * (1 + Math.abs(x)), `curve point ${k}: ${shown[k]} vs ${x}`));
+  await viewer.screenshot({ path: join(artifacts, 'curve-drag.png') });
+  assert.deepEqual([...editor.errors, ...viewer.errors], []);
+  await editor.close();
+  await viewer.close();
+});
+
+test('undo takes an added part away on every page, redo brings it back drawn', async () => {
+  const d = await freshDesign('undo');
+  const editor = await openClient(browser, d.editor);
+  const viewer = await openClient(browser, d.viewer);
+  const plate = await addPart(editor, '#add-plane');
+  await viewer.waitForFunction((p) => window.vsculpt.partsView.drawings.has(p), plate, { timeout: 10000 });
+  const points = await viewer.evaluate((p) => Array.from(window.vsculpt.design.parts.get(p).geometry.points), plate);
+  await editor.keyboard.press('Control+z');
+  for (const page of [editor, viewer]) {
+    await page.waitForFunction((p) => !window.vsculpt.design.parts.has(p) && !window.vsculpt.partsView.drawings.has(p) && !document.querySelector(`#parts li[data-part="${p}"]`), plate, { timeout: 10000 });
+  }
+  await editor.keyboard.press('Control+Shift+z');
+  for (const page of [editor, viewer]) {
+    await page.waitForFunction((p) => window.vsculpt.partsView.drawings.has(p) && document.querySelector(`#parts li[data-part="${p}"]`), plate, { timeout: 10000 });
+  }
+  assert.deepEqual(await viewer.evaluate((p) => Array.from(window.vsculpt.design.parts.get(p).geometry.points), plate), points, 'the same plate, drawn');
+  assert.deepEqual([...editor.errors, ...viewer.errors], []);
+  await editor.close();
+  await viewer.close();
+});
