@@ -172,27 +172,27 @@ async function viewerScenario(browser, server, design, viewerPage, icon) {
   await driver.goto(`${server.base}/healthz`);
   const start = await viewerPage.evaluate((id) => window.vsculpt.state.icons.get(id).xyz, icon);
   await driver.evaluate(
-    ({ design: d, token, id, xyz, ms }) =>
+    ({ design: d, token, id, part, xyz, ms }) =>
       new Promise((resolve, reject) => {
         const ws = new WebSocket(`ws://${location.host}/ws`);
         window.__ws = ws;
         ws.onerror = () => reject(new Error('driver socket failed'));
         ws.onopen = () => {
-          ws.send(JSON.stringify({ type: 'hello', protocol: 1, token, design: d, client_name: 'fps-driver', client_kind: 'tool' }));
-          ws.send(JSON.stringify({ type: 'drag_start', icon: id, req: 1 }));
+          ws.send(JSON.stringify({ type: 'hello', protocol: 2, token, design: d, client_name: 'fps-driver', client_kind: 'tool' }));
+          ws.send(JSON.stringify({ type: 'drag_start', part, icon: id, req: 1 }));
           let k = 0;
           const timer = setInterval(() => {
             k++;
-            ws.send(JSON.stringify({ type: 'drag', icon: id, xyz: [xyz[0], xyz[1], xyz[2] + 3 * Math.abs(Math.sin(k / 30))], req: k + 1 }));
+            ws.send(JSON.stringify({ type: 'drag', part, icon: id, xyz: [xyz[0], xyz[1], xyz[2] + 3 * Math.abs(Math.sin(k / 30))], req: k + 1 }));
           }, 1000 / 60);
           setTimeout(() => {
             clearInterval(timer);
-            ws.send(JSON.stringify({ type: 'drag_end', icon: id }));
+            ws.send(JSON.stringify({ type: 'drag_end', part, icon: id }));
           }, ms);
           resolve();
         };
       }),
-    { design: design.id, token: design.tokens.editor, id: icon, xyz: start, ms: (seconds + 2) * 1000 },
+    { design: design.id, token: design.tokens.editor, id: icon, part: await viewerPage.evaluate((i) => window.vsculpt.state.icons.get(i).part, icon), xyz: start, ms: (seconds + 2) * 1000 },
   );
   await sleep(700);
   const a = await sample(viewerPage);
