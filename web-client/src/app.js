@@ -18,6 +18,7 @@ import { XRSculpt } from './xr.js';
 import { Design, domainOf } from './design.js';
 import { PartsView } from './parts-view.js';
 import { PartsPanel } from './parts-panel.js';
+import { deviation, sameDomain, versionSurface } from './compare.js';
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -780,27 +781,6 @@ $('compare-stop').addEventListener('click', () => stopCompare());
 
 // --- version compare ------------------------------------------------------------------
 
-/**
- * A surface part's control net in a version as the REST API returns it
- * (`design.parts[].body.surface`, the store's document), in the page's
- * layout; null when that version has no such surface part.
- */
-function versionSurface(doc, partId) {
-  const part = (doc.parts || []).find((p) => p.id === partId);
-  const body = part && (part.body || part);
-  const s = body && body.kind === 'surface' ? body.surface : null;
-  if (!s) return null;
-  return {
-    degreeU: s.u_degree,
-    degreeV: s.v_degree,
-    knotsU: Float64Array.from(s.u_knots),
-    knotsV: Float64Array.from(s.v_knots),
-    nu: s.nu,
-    nv: s.nv,
-    points: Float64Array.from(s.points.flat()),
-  };
-}
-
 /** The surface part a comparison is about: the selected part when it is a surface, else the first surface part drawn. */
 function comparedPart() {
   const sel = selectedPart();
@@ -845,11 +825,7 @@ function updateCompare() {
   const d = c && partsView.drawings.get(c.part);
   const t = d && d.tess;
   if (!c || !t) return;
-  const same = (a, b) => Math.abs(a - b) <= 1e-12 * Math.max(1, Math.abs(a));
-  const o = c.other;
-  const domain = [o.knotsU[o.degreeU], o.knotsU[o.nu], o.knotsV[o.degreeV], o.knotsV[o.nv]];
-  const shown = [t.us[0], t.us[t.su - 1], t.vs[0], t.vs[t.sv - 1]];
-  if (!domain.every((x, i) => same(x, shown[i]))) {
+  if (!sameDomain(t, c.other)) {
     toast(`v${c.version} has another parameter domain: it cannot be compared point by point`);
     stopCompare();
     return;
@@ -859,18 +835,7 @@ function updateCompare() {
     c.tess.fill(c.other);
     partsView.setGhost(c.tess);
   }
-  const n = t.su * t.sv;
-  const dev = c.deviation && c.deviation.length === n ? c.deviation : new Float32Array(n);
-  let max = 0;
-  for (let i = 0; i < n; i++) {
-    const o3 = 3 * i;
-    const x =
-      (t.positions[o3] - c.tess.positions[o3]) * t.normals[o3] +
-      (t.positions[o3 + 1] - c.tess.positions[o3 + 1]) * t.normals[o3 + 1] +
-      (t.positions[o3 + 2] - c.tess.positions[o3 + 2]) * t.normals[o3 + 2];
-    dev[i] = x;
-    max = Math.max(max, Math.abs(x));
-  }
+  const { deviation: dev, max } = deviation(t, c.tess, c.deviation);
   c.deviation = dev;
   c.max = max;
   d.deviation = dev;
