@@ -393,7 +393,7 @@ function showNewestFrames() {
       perf.submitted++;
       if (!tessWorker || !tessWorker.submit(id, seq, part.geometry, tess)) {
         tess.fill(part.geometry);
-        partShown(id, seq, tess);
+        partShown(id, seq, tess, part.geometry);
       }
     }
   }
@@ -401,14 +401,14 @@ function showNewestFrames() {
   if (full) redraw();
 }
 
-/** Part `id`'s drawing now shows shape number `seq` (`tess` holds it for a surface): the mesh, seams and handles in place. */
-function partShown(id, seq, tess) {
+/** Part `id`'s drawing now shows shape number `seq` (`tess` holds it for a surface: `g`): the mesh, seams and handles in place. */
+function partShown(id, seq, tess, g) {
   if (seq <= (partShownSeq.get(id) || 0)) return;
   partShownSeq.set(id, seq);
   perf.shown++;
   pictured = true;
   const part = design.parts.get(id);
-  if (tess && part) partsView.surfaceFilled(id, tess, part.geometry);
+  if (tess && part) partsView.surfaceFilled(id, tess, g);
   if ([...design.relations.values()].some((r) => r.kind === 'join' && (r.a.part === id || r.b.part === id))) partsView.drawSeams(design);
   if (state.compare && state.compare.part === id) updateCompare();
   if (part) icons.move([...part.icons].map((i) => design.icons.get(i)).filter(Boolean).map((i) => ({ id: i.id, xyz: i.xyz })));
@@ -416,7 +416,7 @@ function partShown(id, seq, tess) {
 
 // `?worker=0` keeps the same fill on the main thread (compared in bench/browser-fps.mjs).
 const tessWorker = params.get('worker') === '0' ? null : new TessellationWorker({
-  onFilled: (id, seq, tess) => partShown(id, seq, tess),
+  onFilled: (id, seq, tess, g) => partShown(id, seq, tess, g),
   onFailure: (reason) => {
     perf.workerFailed = reason;
     for (const id of design.parts.keys()) dirtyParts.add(id);

@@ -96,6 +96,8 @@ export class PartsView {
     this.scale = 1;
     /** The part whose surface is coloured by its deviation in compare mode. */
     this.compared = null;
+    /** How many shapes were filled on the main thread (counted for the tests and benches). */
+    this.fills = 0;
     view.colored.shared = true;
     view.zebra.shared = true;
     view.bounds = () => this.box();
@@ -124,7 +126,9 @@ export class PartsView {
       d.part = part;
       d.visible = part.visible && !hidden.has(part.id);
       d.selected = part.id === selected;
-      this.fill(part.id, part.geometry);
+      // Only a shape not drawn yet is filled (an icon or part event leaves the other parts' meshes alone); a
+      // curve also when the design's size, and so its tube's radius, changed.
+      if (d.filled !== part.geometry || (d.kind === 'curve' && d.filledScale !== this.scale)) this.fill(part.id, part.geometry);
       this.style(d);
     }
     this.drawSeams(design);
@@ -222,6 +226,7 @@ export class PartsView {
   fill(id, g) {
     const d = this.drawings.get(id);
     if (!d) return false;
+    this.fills++;
     if (d.kind === 'surface') {
       if (!d.tess || !d.tess.fits(g)) d.tess = new Tessellator(g, ...density(g));
       d.tess.fill(g);
@@ -232,7 +237,7 @@ export class PartsView {
     return true;
   }
 
-  /** `tess` now holds surface part `id`'s newest shape `g`: the mesh (buffers reused), its bounds, colours and net. */
+  /** `tess` now holds surface part `id`'s shape `g`: the mesh (buffers reused), its bounds, colours and net. */
   surfaceFilled(id, tess, g) {
     const d = this.drawings.get(id);
     if (!d || d.tess !== tess) return;
@@ -255,6 +260,7 @@ export class PartsView {
     geo.boundingBox.getBoundingSphere(geo.boundingSphere);
     this.updateColors(d);
     this.setNet(d, g);
+    d.filled = g;
   }
 
   /** A curve part's tube (rebuilt: a few thousand vertices) and curvature comb. */
@@ -271,6 +277,8 @@ export class PartsView {
     outline.geometry.setAttribute('position', new THREE.Float32BufferAttribute(comb.outline, 3));
     teeth.geometry.computeBoundingSphere();
     outline.geometry.computeBoundingSphere();
+    d.filled = g;
+    d.filledScale = this.scale;
   }
 
   /** A surface drawing's control net (copied into a reused buffer; skipped while nets are hidden). */

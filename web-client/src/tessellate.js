@@ -10,8 +10,8 @@
 export class TessellationWorker {
   /**
    * @param {object} o
-   * @param {(key: number, seq: number, tess: import('./bspline.js').Tessellator) => void} o.onFilled
-   *   called when `tess` (the page's tessellator of part `key`) holds the answer to request `seq`
+   * @param {(key: number, seq: number, tess: import('./bspline.js').Tessellator, surface: object) => void} o.onFilled
+   *   called when `tess` (the page's tessellator of part `key`) holds the answer to request `seq`, the shape `surface` submitted
    * @param {(reason: string) => void} o.onFailure called once if the worker cannot run; later submits return false
    */
   constructor({ onFilled, onFailure }) {
@@ -65,7 +65,7 @@ export class TessellationWorker {
     }
     const points = surface.points.slice();
     const s = { degreeU: surface.degreeU, degreeV: surface.degreeV, knotsU: surface.knotsU, knotsV: surface.knotsV, nu: surface.nu, nv: surface.nv, points };
-    this.inFlight = { key, seq, tess };
+    this.inFlight = { key, seq, tess, surface };
     this.worker.postMessage({ key, seq, surface: s, su: tess.su, sv: tess.sv, out }, [out.positions, out.normals, out.mean, out.gauss, points.buffer]);
   }
 
@@ -86,7 +86,7 @@ export class TessellationWorker {
       t.mean.set(new Float32Array(out.mean));
       t.gauss.set(new Float32Array(out.gauss));
       t.box.set(box);
-      this.onFilled(key, seq, t);
+      this.onFilled(key, seq, t, job.surface);
     }
     this.spare.set(key, out);
     if (this.waiting.size && this.worker) this.post();

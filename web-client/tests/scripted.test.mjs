@@ -309,8 +309,14 @@ test('frames of one part leave the others alone; part events add and remove draw
   server.ws.send(frame({ part: 1, revision: 12, shape: bilinear(TOP) }));
   await page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
   assert.ok((await positions(1))[2] > 0.4);
-  server.ws.send(JSON.stringify({ type: 'part_created', part: { id: 9, name: 'lid', visible: true, locked: false, colour: '#88aa66', material: MAT, icons: [], shape: surfaceJson([[0, 0, 1], [0, 1, 1], [1, 0, 1], [1, 1, 1]]) } }));
+  // An icon event redraws the icons, not the parts' meshes; a new part (inside the design's bounds) is the one shape filled.
+  const fills = await page.evaluate(() => window.vsculpt.partsView.fills);
+  server.ws.send(JSON.stringify({ type: 'icon_created', part: 3, icon: { id: 8, anchor: { kind: 'span', t0: 0.2, t1: 0.4 }, role: { kind: 'load' }, state: 'passive', xyz: [0.3, 0.6, 0.4], target: [0.3, 0.6, 0.4], sensors: [] } }));
+  await page.waitForFunction(() => window.vsculpt.icons.objects.has(8) && window.vsculpt.icons.group.getObjectByName('span-8'), null, { timeout: 5000 });
+  assert.equal(await page.evaluate(() => window.vsculpt.partsView.fills), fills, 'no part refilled for an icon event');
+  server.ws.send(JSON.stringify({ type: 'part_created', part: { id: 9, name: 'lid', visible: true, locked: false, colour: '#88aa66', material: MAT, icons: [], shape: surfaceJson([[0, 0, 0.5], [0, 1, 0.5], [1, 0, 0.5], [1, 1, 0.5]]) } }));
   await page.waitForFunction(() => window.vsculpt.partsView.drawings.has(9) && document.querySelector('#parts li[data-part="9"]'), null, { timeout: 5000 });
+  assert.equal(await page.evaluate(() => window.vsculpt.partsView.fills), fills + 1, 'only the new part was filled');
   server.ws.send(JSON.stringify({ type: 'relation_deleted', relation: 5 }));
   server.ws.send(JSON.stringify({ type: 'part_deleted', part: 2 }));
   await page.waitForFunction(() => !window.vsculpt.partsView.drawings.has(2) && !document.querySelector('#parts li[data-part="2"]'), null, { timeout: 5000 });
