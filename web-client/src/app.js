@@ -15,7 +15,7 @@ import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
 import { XRSculpt } from './xr.js';
-import { Design, domainOf } from './design.js';
+import { Design, domainOf, relationParts } from './design.js';
 import { PartsView } from './parts-view.js';
 import { PartsPanel } from './parts-panel.js';
 import { deviation, sameDomain, versionSurface } from './compare.js';
@@ -193,6 +193,7 @@ const partsPanel = new PartsPanel({
   list: $('parts'),
   relations: $('relations'),
   joinForm: $('join'),
+  bindForm: $('bind'),
   onSelect: (id) => selectPart(id),
   onVisible: (id, visible) => setVisible(id, visible),
   onLock: (id, locked) => send({ type: 'set_part', part: id, locked }),
@@ -200,6 +201,7 @@ const partsPanel = new PartsPanel({
   onColour: (id, colour) => send({ type: 'set_part', part: id, colour }),
   onDelete: (id) => send({ type: 'delete_part', part: id }),
   onJoin: (relation) => send({ type: 'relate', relation }),
+  onBind: (relation) => send({ type: 'relate', relation }),
   onUnrelate: (id) => send({ type: 'unrelate', relation: id }),
 });
 
@@ -409,7 +411,7 @@ function partShown(id, seq, tess, g) {
   pictured = true;
   const part = design.parts.get(id);
   if (tess && part) partsView.surfaceFilled(id, tess, g);
-  if ([...design.relations.values()].some((r) => r.kind === 'join' && (r.a.part === id || r.b.part === id))) partsView.drawSeams(design);
+  if ([...design.relations.values()].some((r) => relationParts(r).includes(id))) partsView.drawSeams(design);
   if (state.compare && state.compare.part === id) updateCompare();
   if (part) icons.move([...part.icons].map((i) => design.icons.get(i)).filter(Boolean).map((i) => ({ id: i.id, xyz: i.xyz })));
 }

@@ -1,7 +1,8 @@
 // The parts panel: the list of a design's parts (colour swatch, name, kind,
 // shown or hidden, locked or not) where a part is selected, shown or hidden,
-// locked, renamed, recoloured and deleted; the joins between parts, each
-// with a button to undo it; and the join tool (two edges, G0 or G1). It
+// locked, renamed, recoloured and deleted; the joins and bindings between
+// parts, each with a button to undo it; the join tool (two edges, G0 or G1)
+// and the binding tool (a surface's parameter line follows a curve part). It
 // draws from the design model and says what the person asked through
 // callbacks; app.js turns those into protocol messages. Every control is a
 // real button, input or select, so the keyboard reaches all of them; the
@@ -20,6 +21,7 @@ export class PartsPanel {
    * @param {HTMLElement} o.list the <ul> of parts
    * @param {HTMLElement} o.relations the <ul> of joins and bindings
    * @param {HTMLFormElement} o.joinForm the join tool's form
+   * @param {HTMLFormElement} o.bindForm the binding tool's form
    * @param {(id: number) => void} o.onSelect
    * @param {(id: number, visible: boolean) => void} o.onVisible
    * @param {(id: number, locked: boolean) => void} o.onLock
@@ -27,6 +29,7 @@ export class PartsPanel {
    * @param {(id: number, colour: string) => void} o.onColour
    * @param {(id: number) => void} o.onDelete
    * @param {(relation: object) => void} o.onJoin
+   * @param {(relation: object) => void} o.onBind
    * @param {(id: number) => void} o.onUnrelate
    */
   constructor(o) {
@@ -74,6 +77,18 @@ export class PartsPanel {
         b: { part: Number(f['join-b'].value), edge: f['join-b-edge'].value },
         continuity: f['join-continuity'].value,
         reversed: f['join-reversed'].checked,
+      });
+    });
+    this.bindForm.addEventListener('submit', (e) => {
+      e.preventDefault();
+      const f = this.bindForm.elements;
+      const at = Number(f['bind-at'].value);
+      this.onBind({
+        kind: 'binding',
+        curve: Number(f['bind-curve'].value),
+        surface: Number(f['bind-surface'].value),
+        line: f['bind-along'].value === 'u' ? { u: at } : { v: at },
+        reversed: f['bind-reversed'].checked,
       });
     });
     for (const name of ['join-a-edge', 'join-b-edge']) {
@@ -169,18 +184,24 @@ export class PartsPanel {
         const what =
           r.kind === 'join'
             ? `join ${nameOf(r.a.part)} ${r.a.edge} ↔ ${nameOf(r.b.part)} ${r.b.edge} (${String(r.continuity).toUpperCase()}${r.reversed ? ', reversed' : ''})`
-            : `binding: ${nameOf(r.surface)} follows ${nameOf(r.curve)}`;
+            : `binding: ${nameOf(r.surface)} along ${r.line ? Object.entries(r.line).map(([k, x]) => `${k} = ${x}`).join('') : 'a line'} follows ${nameOf(r.curve)}${r.reversed ? ' (reversed)' : ''}`;
         return `<li data-relation="${r.id}">${what} <button class="edit" data-unrelate="${r.id}"${off}>remove</button></li>`;
       })
       .join('');
-    // The join tool offers the surface parts.
+    // The join tool offers the surface parts; the binding tool surfaces and curves.
     const surfaces = parts.filter((p) => p.kind === 'surface');
-    for (const [k, name] of [['join-a', 0], ['join-b', 1]]) {
-      const sel = this.joinForm.elements[k];
+    const curves = parts.filter((p) => p.kind === 'curve');
+    const choices = [
+      [this.joinForm.elements['join-a'], surfaces, 0],
+      [this.joinForm.elements['join-b'], surfaces, 1],
+      [this.bindForm.elements['bind-surface'], surfaces, 0],
+      [this.bindForm.elements['bind-curve'], curves, 0],
+    ];
+    for (const [sel, list, name] of choices) {
       const keep = sel.value;
-      sel.innerHTML = surfaces.map((p) => `<option value="${p.id}">${escape(p.name)}</option>`).join('');
-      if (surfaces.some((p) => String(p.id) === keep)) sel.value = keep;
-      else if (surfaces[name]) sel.value = String(surfaces[name].id);
+      sel.innerHTML = list.map((p) => `<option value="${p.id}">${escape(p.name)}</option>`).join('');
+      if (list.some((p) => String(p.id) === keep)) sel.value = keep;
+      else if (list[name]) sel.value = String(list[name].id);
     }
   }
 }

@@ -16,6 +16,8 @@ import { curvatureColor } from './view.js';
 const VERTEX_BUDGET = 50000;
 /** The colour of a seam (a joined edge). */
 export const SEAM_COLOUR = 0xffd54f;
+/** The colour of a bound line (a surface's parameter line following a curve part). */
+export const BINDING_COLOUR = 0x4dd0e1;
 
 /** Samples of a surface tessellation: about 4 vertices per control point along each direction, within a budget of 50 000 vertices (81×159 gets 162×318; BENCHMARKS.md, web client). */
 export function density(s) {
@@ -40,22 +42,24 @@ class PartCurve extends THREE.Curve {
   }
 }
 
-/** Points along edge `edge` (u_min, u_max, v_min, v_max: the parameter held fixed) of surface geometry `g`. */
-export function edgePoints(g, edge, n = 48) {
+/** Points along the parameter line of surface geometry `g` where `line` ({ u } or { v }) is held fixed. */
+export function linePoints(g, line, n = 48) {
   const [[u0, u1], [v0, v1]] = domainOf(g);
   const out = [];
   for (let k = 0; k < n; k++) {
     const s = k / (n - 1);
-    const uv = {
-      u_min: [u0, v0 + (v1 - v0) * s],
-      u_max: [u1, v0 + (v1 - v0) * s],
-      v_min: [u0 + (u1 - u0) * s, v0],
-      v_max: [u0 + (u1 - u0) * s, v1],
-    }[edge];
-    if (!uv) throw new Error(`unknown edge ${edge}`);
+    const uv = line.u !== undefined ? [line.u, v0 + (v1 - v0) * s] : [u0 + (u1 - u0) * s, line.v];
     out.push(surfaceDerivs(g, uv[0], uv[1]).p);
   }
   return out;
+}
+
+/** Points along edge `edge` (u_min, u_max, v_min, v_max: the parameter held fixed) of surface geometry `g`. */
+export function edgePoints(g, edge, n = 48) {
+  const [[u0, u1], [v0, v1]] = domainOf(g);
+  const line = { u_min: { u: u0 }, u_max: { u: u1 }, v_min: { v: v0 }, v_max: { v: v1 } }[edge];
+  if (!line) throw new Error(`unknown edge ${edge}`);
+  return linePoints(g, line, n);
 }
 
 /** Half the diagonal of the box around every part's control points (the design's size), at least 1e-6. */
@@ -311,13 +315,32 @@ export class PartsView {
     for (const d of this.drawings.values()) if (d.kind === 'surface' && d.netSurface) this.setNet(d, d.netSurface);
   }
 
-  /** The seams: along edge `a` of every join, a tube in the seam colour (drawn when either part is). */
+  /**
+   * The seams: along edge `a` of every join, a tube in the seam colour
+   * (drawn when either part is); along the bound line of every binding, a
+   * thinner tube in the binding colour (drawn with its surface).
+   */
   drawSeams(design) {
     for (const s of [...this.seams.children]) {
       this.seams.remove(s);
       disposeTree(s);
     }
     for (const r of design.relations.values()) {
+      if (r.kind === 'binding') {
+        const surface = design.parts.get(r.surface);
+        const ds = this.drawings.get(r.surface);
+        if (!surface || !surface.geometry || surface.kind !== 'surface' || !ds || !ds.visible || !r.line) continue;
+        const pts = linePoints(surface.geometry, r.line).map((p) => new THREE.Vector3(...p));
+        const bound = new THREE.Mesh(
+          new THREE.TubeGeometry(new THREE.CatmullRomCurve3(pts), 96, 0.006 * this.scale, 8, false),
+          new THREE.MeshBasicMaterial({ color: BINDING_COLOUR }),
+        );
+        bound.name = `binding-${r.id}`;
+        bound.userData.relation = r.id;
+        bound.userData.parts = [r.curve, r.surface];
+        this.seams.add(bound);
+        continue;
+      }
       if (r.kind !== 'join') continue;
       const a = design.parts.get(r.a.part);
       const b = design.parts.get(r.b.part);

@@ -134,6 +134,9 @@ async function openScripted(access = 'editor', pageOptions = { viewport: { width
         for (const k of ['name', 'visible', 'locked', 'colour']) if (msg[k] !== undefined) part[k] = msg[k];
         ws.send(JSON.stringify({ type: 'ack', req: msg.req }));
         ws.send(JSON.stringify({ type: 'part_changed', part: part.id, name: part.name, visible: part.visible, locked: part.locked, colour: part.colour }));
+      } else if (msg.type === 'relate') {
+        ws.send(JSON.stringify({ type: 'ack', req: msg.req, relation: 6 }));
+        ws.send(JSON.stringify({ type: 'relation_created', relation: { id: 6, ...msg.relation } }));
       } else if (msg.req !== undefined) {
         ws.send(JSON.stringify({ type: 'ack', req: msg.req }));
       }
@@ -342,6 +345,30 @@ test('the keyboard reaches the parts: Tab to a part\'s name and Enter selects it
   assert.ok(button.height >= 36, `hide button ${button.height} px tall`);
   assert.equal(button.inside, true, 'in the sheet');
   assert.equal(button.top, 'visible', 'not covered');
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('the binding tool: a surface line bound to a curve goes out as relate and is drawn along that line', async () => {
+  const { page, sent } = await openScripted();
+  await page.click('#bind-tool summary');
+  await page.selectOption('select[name="bind-surface"]', '1');
+  await page.selectOption('select[name="bind-along"]', 'v');
+  await page.fill('input[name="bind-at"]', '0.25');
+  await page.selectOption('select[name="bind-curve"]', '3');
+  await page.check('input[name="bind-reversed"]');
+  await page.click('#bind button');
+  const relate = sent.filter((m) => m.type === 'relate').at(-1);
+  assert.deepEqual(relate.relation, { kind: 'binding', curve: 3, surface: 1, line: { v: 0.25 }, reversed: true });
+  await page.waitForFunction(() => window.vsculpt.partsView.seams.getObjectByName('binding-6'), null, { timeout: 5000 });
+  // On the top shell (x = u, y = v, z = 0) the line v = 0.25 runs along x from 0 to 1 at y = 0.25.
+  const box = await page.evaluate(() => {
+    const g = window.vsculpt.partsView.seams.getObjectByName('binding-6').geometry;
+    g.computeBoundingBox();
+    return [g.boundingBox.min.toArray(), g.boundingBox.max.toArray()];
+  });
+  assert.ok(box[0][0] < 0.01 && box[1][0] > 0.99 && Math.abs(box[0][1] - 0.25) < 0.05 && Math.abs(box[1][1] - 0.25) < 0.05, JSON.stringify(box));
+  assert.match(await page.textContent('#relations'), /binding: top shell along v = 0.25 follows feature line \(reversed\)/);
   assert.deepEqual(page.errors, []);
   await page.close();
 });
