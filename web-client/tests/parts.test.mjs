@@ -346,3 +346,26 @@ test('undo takes an added part away on every page, redo brings it back drawn', a
   await editor.close();
   await viewer.close();
 });
+
+test('a plate\'s line bound to a curve from the binding tool: listed on a second page and drawn along the line', async () => {
+  const d = await freshDesign('bind');
+  const editor = await openClient(browser, d.editor);
+  const plate = await addPart(editor, '#add-plane');
+  const curve = await addPart(editor, '#add-curve');
+  const viewer = await openClient(browser, d.viewer);
+  // The added plate (6 × 6 bicubic) and curve (6 points, cubic) share their knots: compatible.
+  await editor.click('#bind-tool summary');
+  await editor.selectOption('select[name="bind-surface"]', String(plate));
+  await editor.selectOption('select[name="bind-along"]', 'v');
+  await editor.fill('input[name="bind-at"]', '0.5');
+  await editor.selectOption('select[name="bind-curve"]', String(curve));
+  await editor.click('#bind button');
+  await viewer.waitForFunction(() => [...window.vsculpt.design.relations.values()].some((r) => r.kind === 'binding'), null, { timeout: 15000 });
+  const r = await viewer.evaluate(() => [...window.vsculpt.design.relations.values()].find((x) => x.kind === 'binding'));
+  assert.deepEqual([r.curve, r.surface, r.line], [curve, plate, { v: 0.5 }]);
+  await viewer.waitForFunction((id) => window.vsculpt.partsView.seams.getObjectByName(`binding-${id}`), r.id, { timeout: 10000 });
+  assert.match(await viewer.textContent('#relations'), /binding: plane 1 along v = 0.5 follows curve 1/);
+  assert.deepEqual([...editor.errors, ...viewer.errors], []);
+  await editor.close();
+  await viewer.close();
+});
