@@ -369,3 +369,44 @@ test('a plate\'s line bound to a curve from the binding tool: listed on a second
   await editor.close();
   await viewer.close();
 });
+
+test('a drag on one part: a second page gets frames of that part only, and the other part\'s mesh is not touched', async () => {
+  const d = await freshDesign('one-part');
+  const editor = await openClient(browser, d.editor);
+  const plate = await addPart(editor, '#add-plane');
+  const first = await editor.evaluate((p) => [...window.vsculpt.design.parts.keys()].find((k) => k !== p), plate);
+  const viewer = await openClient(browser, d.viewer);
+  // Count the frames the viewer receives, by part, and the uploads of the first part's mesh.
+  await viewer.evaluate(() => {
+    const link = window.vsculpt.link;
+    const onFrame = link.onFrame;
+    window.__framesOf = {};
+    link.onFrame = (f) => {
+      window.__framesOf[f.part] = (window.__framesOf[f.part] || 0) + 1;
+      onFrame(f);
+    };
+  });
+  const uploads = (id) => viewer.evaluate((p) => window.vsculpt.partsView.drawings.get(p).mesh.geometry.attributes.position.version, id);
+  const firstBefore = await uploads(first);
+  await editor.evaluate((p) => window.vsculpt.selectPart(p), plate);
+  const n = await editor.evaluate(() => window.vsculpt.state.icons.size);
+  await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.5, v: 0.5 }, { kind: 'load' }));
+  await editor.waitForFunction((k) => window.vsculpt.state.icons.size === k + 1, n, { timeout: 10000 });
+  const icon = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
+  await editor.evaluate((i) => {
+    const { send, state, partsView } = window.vsculpt;
+    const p = state.icons.get(i).xyz;
+    send({ type: 'drag_start', icon: i });
+    for (let k = 1; k <= 6; k++) send({ type: 'drag', icon: i, xyz: [p[0], p[1], p[2] + 0.05 * k * partsView.scale] });
+    send({ type: 'drag_end', icon: i });
+  }, icon);
+  await viewer.waitForFunction((p) => (window.__framesOf[p] || 0) >= 1, plate, { timeout: 15000 });
+  await new Promise((r) => setTimeout(r, 800));
+  const frames = await viewer.evaluate(() => window.__framesOf);
+  assert.ok(frames[plate] >= 1, JSON.stringify(frames));
+  assert.equal(frames[first] || 0, 0, `no frame of the part not dragged: ${JSON.stringify(frames)}`);
+  assert.equal(await uploads(first), firstBefore, 'its mesh was not uploaded again');
+  assert.deepEqual([...editor.errors, ...viewer.errors], []);
+  await editor.close();
+  await viewer.close();
+});
