@@ -373,12 +373,13 @@ function settle() {
   else redraw();
 }
 
-/** The per-frame path: each changed part's newest shape to the worker (or filled here: curves, or when there is no worker); a new layout or a new part takes a full redraw. */
+/** The per-frame path: each changed part's newest shape to the worker (or filled here: curves, or when there is no worker); a new layout or a new part takes a full redraw; hidden parts wait. */
 function showNewestFrames() {
   let full = false;
   for (const id of dirtyParts) {
     const part = design.parts.get(id);
-    if (!part || !part.geometry) continue;
+    // A hidden part's newest shape waits: showing it again redraws it (its drawing then lags its shape).
+    if (!part || !part.geometry || !partShownHere(id)) continue;
     const seq = partSeq.get(id) || 0;
     if (!partsView.drawings.has(id)) {
       full = true;

@@ -111,8 +111,8 @@ export class PartsView {
   /**
    * Brings the drawings in line with `design`: adds and removes drawings,
    * sets colour, visibility (a part is drawn when it is visible and not in
-   * `hidden`), lock label and selection, and fills every part's geometry
-   * here on the main thread; then the seams.
+   * `hidden`), lock label and selection, and fills here on the main thread
+   * every drawn part whose shape changed; then the seams.
    */
   sync(design, { hidden = new Set(), selected = null } = {}) {
     for (const [id, d] of this.drawings) {
@@ -131,8 +131,9 @@ export class PartsView {
       d.visible = part.visible && !hidden.has(part.id);
       d.selected = part.id === selected;
       // Only a shape not drawn yet is filled (an icon or part event leaves the other parts' meshes alone); a
-      // curve also when the design's size, and so its tube's radius, changed.
-      if (d.filled !== part.geometry || (d.kind === 'curve' && d.filledScale !== this.scale)) this.fill(part.id, part.geometry);
+      // curve also when the design's size, and so its tube's radius, changed; a hidden part when it is shown.
+      const stale = d.filled !== part.geometry || (d.kind === 'curve' && d.filledScale !== this.scale);
+      if (d.visible && stale) this.fill(part.id, part.geometry);
       this.style(d);
     }
     this.drawSeams(design);

@@ -256,7 +256,7 @@ test('selecting a part makes the icon tools act on it; every icon message names 
 });
 
 test('hide, lock, rename and colour from the panel go out as set_part; the answers change the picture', async () => {
-  const { page, sent } = await openScripted();
+  const { page, sent, server } = await openScripted();
   const pickable = () => page.evaluate(() => window.vsculpt.partsView.pickables().map((m) => m.userData.partId).sort());
   assert.deepEqual(await pickable(), [1, 2, 3]);
   await page.click('#parts li[data-part="1"] button[data-act="visible"]');
@@ -265,6 +265,17 @@ test('hide, lock, rename and colour from the panel go out as set_part; the answe
   assert.deepEqual(await pickable(), [2, 3], 'a hidden part cannot be picked');
   assert.equal(await page.evaluate(() => window.vsculpt.icons.objects.has(3)), false, 'its icons are not drawn');
   assert.equal(await page.evaluate(() => window.vsculpt.partsView.seams.children.length), 1, 'the seam stays while the side is drawn');
+  // A frame of the hidden part is kept, not drawn; shown again, the part is drawn in its newest shape.
+  const uploads = () => page.evaluate(() => window.vsculpt.partsView.drawings.get(1).mesh.geometry.attributes.position.version);
+  const before = await uploads();
+  server.ws.send(frame({ part: 1, revision: 20, shape: bilinear(TOP.map(([x, y, z]) => [x, y, z + 0.7])) }));
+  await page.waitForFunction(() => window.vsculpt.design.parts.get(1).revision === 20, null, { timeout: 5000 });
+  await page.evaluate(() => new Promise((r) => setTimeout(r, 400)));
+  assert.equal(await uploads(), before, 'the hidden part\'s mesh is not filled');
+  await page.click('#parts li[data-part="1"] button[data-act="visible"]');
+  await page.waitForFunction(() => window.vsculpt.partsView.drawings.get(1).group.visible && window.vsculpt.partsView.drawings.get(1).mesh.geometry.attributes.position.array[2] > 0.6, null, { timeout: 5000 });
+  await page.click('#parts li[data-part="1"] button[data-act="visible"]');
+  await page.waitForFunction(() => !window.vsculpt.partsView.drawings.get(1).group.visible, null, { timeout: 5000 });
   // Lock the curve, rename it, recolour it.
   await page.click('#parts li[data-part="3"] button[data-act="lock"]');
   await page.waitForFunction(() => window.vsculpt.design.parts.get(3).locked, null, { timeout: 5000 });
@@ -279,7 +290,7 @@ test('hide, lock, rename and colour from the panel go out as set_part; the answe
   });
   await page.waitForFunction(() => window.vsculpt.partsView.drawings.get(3).shaded.color.getHexString() === '3366cc', null, { timeout: 5000 });
   const parts = sent.filter((m) => m.type === 'set_part').map(({ req, ...m }) => m);
-  assert.deepEqual(parts.slice(1), [{ type: 'set_part', part: 3, locked: true }, { type: 'set_part', part: 3, name: 'spine' }, { type: 'set_part', part: 3, colour: '#3366cc' }]);
+  assert.deepEqual(parts.slice(3), [{ type: 'set_part', part: 3, locked: true }, { type: 'set_part', part: 3, name: 'spine' }, { type: 'set_part', part: 3, colour: '#3366cc' }]);
   // The keyboard: ] selects the next part, H hides it.
   await page.evaluate(() => window.vsculpt.selectPart(2));
   await page.locator('body').press(']');
