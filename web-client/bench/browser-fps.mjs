@@ -19,7 +19,10 @@
 // baseline git revision (default: the last commit before the fast path),
 // alternating.
 //
-//   node bench/browser-fps.mjs [--before REV|none] [--seconds 5] [--rounds 2]
+//   node bench/browser-fps.mjs [--before REV|none] [--seconds 5] [--rounds 2] [--parts N]
+//
+// With --parts N the run also measures the 81×159 part among N parts (N − 1
+// small plates beside it, the drags on the big part).
 //
 // Frame pacing is Chromium's own: headless on this machine it hands a page
 // anywhere from ~3 (idle) to ~30 animation frames per second depending on
@@ -210,6 +213,13 @@ async function measure(browser, variant) {
     const url = (token) => `${server.base}/?design=${design.id}&token=${token}${variant.query || ''}`;
     const editor = await openClient(browser, url(design.tokens.editor), (p) => p.addInitScript(instrument));
     await timeRender(editor);
+    // A product: the 81×159 part and (parts − 1) small plates beside it; the drags stay on the big part.
+    for (let k = 1; k < (variant.parts || 1); k++) {
+      const count = await editor.evaluate(() => window.vsculpt.partsView.drawings.size);
+      await editor.evaluate(() => window.vsculpt.addPlane());
+      await editor.waitForFunction((c) => window.vsculpt.partsView.drawings.size > c, count, { timeout: 20000 });
+    }
+    await editor.evaluate(() => window.vsculpt.selectPart([...window.vsculpt.design.parts.keys()][0]));
     const n = await editor.evaluate(() => window.vsculpt.state.icons.size);
     await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.5, v: 0.5 }, { kind: 'load' }));
     await editor.waitForFunction((k) => window.vsculpt.state.icons.size > k, n, { timeout: 20000 });
@@ -239,6 +249,9 @@ const variants = [
   { name: 'this tree', dir: webDir },
   { name: 'this tree, ?worker=0', dir: webDir, query: '&worker=0' },
 ];
+// --parts N: the same with the 81×159 part among N parts (issue 11: a frame of one part costs what it costs alone).
+const parts = Number(arg('parts', 1));
+if (parts > 1) variants.push({ name: `this tree, ${parts} parts`, dir: webDir, parts });
 let baseline = null;
 if (before !== 'none') {
   baseline = clientAt(before);
