@@ -1180,6 +1180,7 @@ mod tests {
         Request::Command {
             client,
             command: Command::Drag {
+                part: 1,
                 icon,
                 xyz: DVec3::new(0.0, 0.0, z),
             },
@@ -1197,7 +1198,7 @@ mod tests {
             drag(1, 8, 2.0),
             Request::Command {
                 client: 2,
-                command: Command::Release { icon: 7 },
+                command: Command::Release { part: 1, icon: 7 },
                 reply: None,
             },
             drag(2, 7, 3.0),

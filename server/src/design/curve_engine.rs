@@ -135,13 +135,13 @@ impl CurveEngine {
 
     /// Icon `id` as the kernel holds it.
     pub fn readback(&self, id: u64) -> Option<IconReadback> {
-        let i = self.design.icon(*self.ids.get(&id)?)?;
-        Some(IconReadback {
-            xyz: i.xyz,
-            target: i.target,
-            state: state_back(i.state),
-            sensors: i.sensors.iter().map(|s| s.0.clone()).collect(),
-        })
+        curve_readback(&self.design, *self.ids.get(&id)?)
+    }
+
+    /// The kernel design and the map from document icon ids, to hand to a
+    /// product.
+    pub fn into_parts(self) -> (CurveDesign, BTreeMap<u64, IconId>) {
+        (self.design, self.ids)
     }
 
     /// The calibrated spring coefficient.
@@ -194,32 +194,61 @@ impl CurveEngine {
     /// A polyline of the curve with `density` samples per knot span, for
     /// mesh export (positions only; a curve has no faces).
     pub fn mesh(&self, density: usize) -> Result<MeshData, CommandError> {
-        let c = self.design.curve();
-        let (a, b) = c.domain();
-        let n = c.knots().spans().len() * density + 1;
-        let positions = (0..n)
-            .map(|k| {
-                let t = a + (b - a) * k as f64 / (n - 1) as f64;
-                c.point(t).as_vec3().to_array()
-            })
-            .collect();
-        Ok(MeshData {
-            positions,
-            normals: Vec::new(),
-            indices: Vec::new(),
+        Ok(curve_mesh(self.design.curve(), density))
+    }
+}
+
+/// Kernel icon `kid` of a curve design as the document keeps it.
+pub fn curve_readback(design: &CurveDesign, kid: IconId) -> Option<IconReadback> {
+    let i = design.icon(kid)?;
+    Some(IconReadback {
+        xyz: i.xyz,
+        target: i.target,
+        state: state_back(i.state),
+        sensors: i.sensors.iter().map(|s| s.0.clone()).collect(),
+    })
+}
+
+/// A polyline of `c` with `density` samples per knot span (a curve has no
+/// faces: positions only).
+pub fn curve_mesh(c: &BSplineCurve, density: usize) -> MeshData {
+    let (a, b) = c.domain();
+    let n = c.knots().spans().len() * density + 1;
+    let positions = (0..n)
+        .map(|k| {
+            let t = a + (b - a) * k as f64 / (n - 1) as f64;
+            c.point(t).as_vec3().to_array()
         })
+        .collect();
+    MeshData {
+        positions,
+        normals: Vec::new(),
+        indices: Vec::new(),
     }
 }
 
 impl SurfaceQuery for CurveEngine {
     fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3] {
+        CurveQuery(self.design.curve()).point_at(anchor)
+    }
+
+    fn current_target(&self, anchor: &AnchorDoc, role: IconRoleDoc) -> [f64; 3] {
+        CurveQuery(self.design.curve()).current_target(anchor, role)
+    }
+}
+
+/// A curve as a query for icon placement.
+pub struct CurveQuery<'a>(pub &'a BSplineCurve);
+
+impl SurfaceQuery for CurveQuery<'_> {
+    fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3] {
         let [t, _] = anchor.centre();
-        self.design.curve().point(t).to_array()
+        self.0.point(t).to_array()
     }
 
     fn current_target(&self, anchor: &AnchorDoc, role: IconRoleDoc) -> [f64; 3] {
         let [t, _] = anchor.centre();
-        let d = self.design.curve().derivs(t);
+        let d = self.0.derivs(t);
         match role {
             IconRoleDoc::Derivative {
                 which: DerivativeDoc::R,

@@ -215,7 +215,7 @@ fn check_colour(c: &str) -> Result<(), CommandError> {
 pub fn apply<'q>(
     doc: &DesignDoc,
     edit: &Edit,
-    query: &dyn Fn(u64) -> Option<&'q dyn SurfaceQuery>,
+    query: &dyn Fn(u64) -> Option<Box<dyn SurfaceQuery + 'q>>,
 ) -> Result<(DesignDoc, Created), CommandError> {
     let mut doc = doc.clone();
     let mut created = Created::default();
@@ -228,7 +228,7 @@ pub fn apply<'q>(
             if p.locked {
                 return Err(locked(p));
             }
-            created.icon = apply_part(&mut p.body, edit, q, &mut next_icon, total_icons)?;
+            created.icon = apply_part(&mut p.body, edit, &*q, &mut next_icon, total_icons)?;
             doc.next_icon = next_icon;
         }
         Edit::CreatePart { name, body, colour } => {

@@ -128,6 +128,30 @@ pub fn state_back(s: IconState) -> IconStateDoc {
 }
 
 /// What the kernel says of one icon after a solve.
+/// Kernel icon `kid` of `design` as the document keeps it.
+pub fn readback(design: &Design, kid: IconId) -> Option<IconReadback> {
+    let i = design.icon(kid)?;
+    Some(IconReadback {
+        xyz: i.xyz,
+        target: i.target,
+        state: state_back(i.state),
+        sensors: i.sensors.iter().map(|s| s.0.clone()).collect(),
+    })
+}
+
+/// A tessellation of `s` with `density` samples per knot span.
+pub fn surface_mesh(s: &BSplineSurface, density: usize) -> MeshData {
+    let spans = |kv: &KnotVector| kv.spans().len();
+    let su = spans(s.u_knots()) * density + 1;
+    let sv = spans(s.v_knots()) * density + 1;
+    let t = vsculpt_kernel::analysis::tessellate(s, su, sv);
+    MeshData {
+        positions: t.positions,
+        normals: t.normals,
+        indices: t.indices,
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct IconReadback {
     /// Position on the surface.
@@ -209,13 +233,13 @@ impl Engine {
 
     /// The kernel's view of icon `id`.
     pub fn readback(&self, id: u64) -> Option<IconReadback> {
-        let i = self.design.icon(*self.ids.get(&id)?)?;
-        Some(IconReadback {
-            xyz: i.xyz,
-            target: i.target,
-            state: state_back(i.state),
-            sensors: i.sensors.iter().map(|s| s.0.clone()).collect(),
-        })
+        readback(&self.design, *self.ids.get(&id)?)
+    }
+
+    /// The kernel design and the map from document icon ids, to hand to a
+    /// product.
+    pub fn into_parts(self) -> (Design, BTreeMap<u64, IconId>) {
+        (self.design, self.ids)
     }
 
     /// The spring coefficient κ (calibrated by drags, kept across rebuilds).
@@ -274,28 +298,32 @@ impl Engine {
     /// A tessellation with `density` samples per knot span (kernel
     /// `analysis::tessellate`).
     pub fn mesh(&self, density: usize) -> Result<MeshData, CommandError> {
-        let s = self.design.surface();
-        let spans = |kv: &KnotVector| kv.spans().len();
-        let su = spans(s.u_knots()) * density + 1;
-        let sv = spans(s.v_knots()) * density + 1;
-        let t = vsculpt_kernel::analysis::tessellate(s, su, sv);
-        Ok(MeshData {
-            positions: t.positions,
-            normals: t.normals,
-            indices: t.indices,
-        })
+        Ok(surface_mesh(self.design.surface(), density))
     }
 }
 
 impl SurfaceQuery for Engine {
     fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3] {
+        DesignQuery(&self.design).point_at(anchor)
+    }
+
+    fn current_target(&self, anchor: &AnchorDoc, role: IconRoleDoc) -> [f64; 3] {
+        DesignQuery(&self.design).current_target(anchor, role)
+    }
+}
+
+/// A surface design as a query for icon placement.
+pub struct DesignQuery<'a>(pub &'a Design);
+
+impl SurfaceQuery for DesignQuery<'_> {
+    fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3] {
         let [u, v] = anchor.centre();
-        self.design.surface().point(u, v).to_array()
+        self.0.surface().point(u, v).to_array()
     }
 
     fn current_target(&self, anchor: &AnchorDoc, role: IconRoleDoc) -> [f64; 3] {
         let [u, v] = anchor.centre();
-        let s = self.design.surface();
+        let s = self.0.surface();
         let d = s.derivs(u, v);
         match role {
             IconRoleDoc::Load | IconRoleDoc::Position => d.p,
@@ -331,7 +359,7 @@ mod tests {
 
     #[test]
     fn a_dragged_constraint_reaches_its_target_and_pins_hold() {
-        let mut doc = crate::design::demo::plate("t", 16, 12).unwrap();
+        let mut doc = crate::design::demo::plate_part(16, 12).unwrap();
         let probe = Engine::build_unsolved(&doc).unwrap();
         let at = |u: f64, v: f64| DVec3::from(probe.point_at(&AnchorDoc::Point { u, v }));
         doc.icons = vec![
@@ -357,7 +385,7 @@ mod tests {
 
     #[test]
     fn unknown_icons_and_bad_values_are_refused() {
-        let doc = crate::design::demo::demo().unwrap();
+        let doc = crate::design::demo::shell_part().unwrap();
         let mut e = Engine::build(&doc).unwrap();
         let before = e.points().to_vec();
         assert_eq!(e.grab(99).unwrap_err().kind, ErrorKind::UnknownIcon);
@@ -375,7 +403,7 @@ mod spring_tests {
 
     #[test]
     fn a_load_drag_lands_within_the_spring_band_from_the_first_frame() {
-        let doc = crate::design::demo::demo().unwrap();
+        let doc = crate::design::demo::shell_part().unwrap();
         let mut e = Engine::build(&doc).unwrap();
         let load = doc
             .icons

@@ -15,7 +15,7 @@ pub mod hub;
 pub mod legacy;
 pub mod model;
 pub mod part;
-pub mod part_engine;
+pub mod product_engine;
 pub mod undo;
 
 pub use actor::{ClientInfo, DesignEvent, DesignHandle, Joined, Presence};

@@ -10,8 +10,8 @@ pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
 pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
 use super::engine::Engine;
 use super::part::{PartBody, SurfacePart};
-use super::part_engine::PartEngine;
-use std::collections::{BTreeMap, BTreeSet};
+use super::product_engine::ProductEngine;
+use std::collections::BTreeMap;
 use super::error::{CommandError, ErrorKind};
 use crate::cad::IgesSurface;
 use glam::DVec3;
@@ -45,10 +45,10 @@ pub struct GeometrySet {
     pub parts: BTreeMap<u64, Arc<Geometry>>,
 }
 
-/// Document + one kernel engine per part.
+/// Document + the kernel product of its parts.
 pub struct DesignModel {
     doc: DesignDoc,
-    engines: BTreeMap<u64, PartEngine>,
+    engine: ProductEngine,
 }
 
 fn unknown_part(part: u64) -> CommandError {
@@ -61,13 +61,10 @@ impl DesignModel {
     /// undo or restore gives back exactly the same control points.
     pub fn load(doc: &DesignDoc) -> Result<Self, CommandError> {
         doc.validate()?;
-        let mut engines = BTreeMap::new();
-        for p in &doc.parts {
-            engines.insert(p.id, PartEngine::build_unsolved(&p.body)?);
-        }
+        let engine = ProductEngine::build_unsolved(doc)?;
         let mut m = Self {
             doc: doc.clone(),
-            engines,
+            engine,
         };
         m.sync();
         Ok(m)
@@ -85,13 +82,13 @@ impl DesignModel {
     /// shape.
     pub fn to_doc(&self) -> DesignDoc {
         let mut d = self.doc.clone();
+        let engine = &self.engine;
         for p in &mut d.parts {
-            let Some(engine) = self.engines.get(&p.id) else {
+            let Some(points) = engine.points(p.id) else {
                 continue;
             };
-            let points: Vec<[f64; 3]> = engine.points().iter().map(|p| p.to_array()).collect();
-            let kappa = engine.kappa();
-            let kappa = kappa.is_finite().then_some(kappa);
+            let points: Vec<[f64; 3]> = points.iter().map(|p| p.to_array()).collect();
+            let kappa = engine.kappa(p.id).filter(|k| k.is_finite());
             match &mut p.body {
                 PartBody::Surface(s) => {
                     s.surface.points = points;
@@ -102,8 +99,9 @@ impl DesignModel {
                     c.kappa = kappa;
                 }
             }
+            let part = p.id;
             for icon in p.body.icons_mut() {
-                if let Some(r) = engine.readback(icon.id) {
+                if let Some(r) = engine.readback(part, icon.id) {
                     icon.xyz = r.xyz.to_array();
                     // The kernel renormalises a normal's direction; keep the
                     // stored value when they agree to rounding, so a reload
@@ -129,42 +127,58 @@ impl DesignModel {
     }
 
     /// Applies an edit; returns what it created and the parts whose shape
-    /// may have changed (rebuilt and solved).
+    /// changed. Only the parts the edit touches rebuild (with everything
+    /// solved with them); on any error nothing changes.
     pub fn apply(&mut self, edit: Edit) -> Result<(Created, Vec<u64>), CommandError> {
         let current = self.to_doc();
-        let engines = &self.engines;
-        let query = |part: u64| {
-            engines
-                .get(&part)
-                .map(|e| e as &dyn super::edit::SurfaceQuery)
-        };
-        let (doc, created) = super::edit::apply(&current, &edit, &query)?;
+        let engine = &self.engine;
+        let query = |part: u64| engine.query(part);
+        let (mut doc, created) = super::edit::apply(&current, &edit, &query)?;
         doc.validate()?;
-        let touched: Vec<u64> = match &edit {
-            Edit::Part { part, .. } => vec![*part],
-            Edit::CreatePart { .. } => created.part.into_iter().collect(),
-            Edit::DeletePart { .. } | Edit::SetPart { .. } => Vec::new(),
-            Edit::Relate(kind) => kind.parts().to_vec(),
-            Edit::Unrelate { relation } => current
-                .relations
-                .iter()
-                .find(|r| r.id == *relation)
-                .map(|r| r.kind.parts().to_vec())
-                .unwrap_or_default(),
-        };
-        let mut rebuilt = BTreeMap::new();
-        for id in &touched {
-            if let Some(p) = doc.part(*id) {
-                rebuilt.insert(*id, PartEngine::build(&p.body)?);
+        // The kernel state changes in place (only the parts the edit
+        // touches are rebuilt, the others keep their factorisations); if
+        // the kernel refuses, it is rebuilt from the unchanged document.
+        let next = &mut self.engine;
+        let outcome = (|| -> Result<Vec<u64>, CommandError> {
+            Ok(match &edit {
+                Edit::Part { part, .. } => {
+                    let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
+                    next.rebuild_part(*part, &p.body)?
+                }
+                Edit::CreatePart { .. } => {
+                    let id = created.part.unwrap_or_default();
+                    let p = doc.part(id).ok_or_else(|| unknown_part(id))?;
+                    next.add_part(id, &p.body)?;
+                    vec![id]
+                }
+                Edit::DeletePart { part } => next.remove_part(*part)?,
+                Edit::SetPart { .. } => Vec::new(),
+                Edit::Relate(_) => {
+                    let id = created.relation.unwrap_or_default();
+                    let r = doc
+                        .relations
+                        .iter_mut()
+                        .find(|r| r.id == id)
+                        .ok_or_else(|| {
+                            CommandError::new(ErrorKind::UnknownRelation, "lost relation")
+                        })?;
+                    let (stored, moved) = next.relate(id, &r.kind)?;
+                    r.kind = stored;
+                    moved
+                }
+                Edit::Unrelate { relation } => next.unrelate(*relation)?,
+            })
+        })();
+        let moved = match outcome {
+            Ok(m) => m,
+            Err(e) => {
+                self.engine = ProductEngine::build_unsolved(&current)?;
+                return Err(e);
             }
-        }
-        let changed: Vec<u64> = rebuilt.keys().copied().collect();
-        self.engines.extend(rebuilt);
-        let alive: BTreeSet<u64> = doc.parts.iter().map(|p| p.id).collect();
-        self.engines.retain(|id, _| alive.contains(id));
+        };
         self.doc = doc;
         self.sync();
-        Ok((created, changed))
+        Ok((created, moved))
     }
 
     /// The icon with `id` and the id of its part.
@@ -204,17 +218,13 @@ impl DesignModel {
         Ok(())
     }
 
-    fn engine_mut(&mut self, part: u64) -> Result<&mut PartEngine, CommandError> {
-        self.engines.get_mut(&part).ok_or_else(|| unknown_part(part))
-    }
-
     /// Grabs `icon` on `part`: it becomes driving (the drag's reference is
     /// the current shape). Returns the parts a drag of it moves.
     pub fn grab(&mut self, part: u64, icon: u64) -> Result<Vec<u64>, CommandError> {
         self.check_icon(part, icon)?;
         self.check_unlocked(part)?;
-        self.engine_mut(part)?.grab(icon)?;
-        self.sync_part(part);
+        self.engine.grab(part, icon)?;
+        self.sync();
         Ok(vec![part])
     }
 
@@ -234,27 +244,21 @@ impl DesignModel {
                 "coordinates must be finite (no NaN or ∞)",
             ));
         }
-        let actual = self.engine_mut(part)?.drag(icon, xyz)?;
-        Ok((actual, vec![part]))
+        self.engine.drag(part, icon, xyz)
     }
 
     /// Ends a drag of `icon` on `part`.
     pub fn release(&mut self, part: u64, icon: u64) -> Result<Vec<u64>, CommandError> {
         self.check_icon(part, icon)?;
-        self.engine_mut(part)?.release(icon)?;
-        self.sync_part(part);
-        Ok(vec![part])
-    }
-
-    /// Reads one part back from its engine into the document.
-    fn sync_part(&mut self, _part: u64) {
+        let moved = self.engine.release(part, icon)?;
         self.sync();
+        Ok(moved)
     }
 
     /// The encoded geometry frame of `part` at revision `rev`.
     pub fn geometry(&self, design: u64, part: u64, rev: u64, drag: bool) -> Option<Geometry> {
         let p = self.doc.part(part)?;
-        let engine = self.engines.get(&part)?;
+        let points = self.engine.points(part)?;
         let icons: Vec<(u64, DVec3)> = p
             .body
             .icons()
@@ -262,13 +266,15 @@ impl DesignModel {
             .map(|i| {
                 (
                     i.id,
-                    engine.icon_xyz(i.id).unwrap_or_else(|| DVec3::from(i.xyz)),
+                    self.engine
+                        .icon_xyz(part, i.id)
+                        .unwrap_or_else(|| DVec3::from(i.xyz)),
                 )
             })
             .collect();
         Some(Geometry {
             rev,
-            frame: crate::convert::geometry_frame(design, rev, drag, p, engine.points(), &icons),
+            frame: crate::convert::geometry_frame(design, rev, drag, p, points, &icons),
         })
     }
 
@@ -289,16 +295,12 @@ impl DesignModel {
     pub fn mesh(&self, part: Option<u64>, density: usize) -> Result<MeshData, CommandError> {
         let density = density.clamp(1, 32);
         match part {
-            Some(id) => self
-                .engines
-                .get(&id)
-                .ok_or_else(|| unknown_part(id))?
-                .mesh(density),
+            Some(id) => self.engine.mesh(id, density),
             None => {
                 let mut out = MeshData::default();
                 for p in &self.doc.parts {
-                    if let (PartBody::Surface(_), Some(e)) = (&p.body, self.engines.get(&p.id)) {
-                        let m = e.mesh(density)?;
+                    if let PartBody::Surface(_) = &p.body {
+                        let m = self.engine.mesh(p.id, density)?;
                         let base = out.positions.len() as u32;
                         out.positions.extend(m.positions);
                         out.normals.extend(m.normals);
