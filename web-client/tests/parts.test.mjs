@@ -266,6 +266,9 @@ test('two plates joined G1 from the join tool: a second page lists the join and 
   const rest = documentPoints(await documentOf(d));
   const shown = await viewer.evaluate(() => Object.fromEntries([...window.vsculpt.design.parts.values()].map((p) => [p.id, Array.from(p.geometry.points)])));
   for (const [id, pts] of Object.entries(rest)) pts.forEach((x, i) => assert.ok(Math.abs(shown[id][i] - x) <= 1e-5 * (1 + Math.abs(x)), `part ${id} point ${i}: ${shown[id][i]} vs ${x}`));
+  // Joining moved both edges to meet (README, relate): a's last row of control points is b's first, on the page.
+  const firstRow = shown[b].slice(0, seam.last.length);
+  seam.last.forEach((x, i) => assert.ok(Math.abs(x - firstRow[i]) <= 1e-4 * (1 + Math.abs(x)), `edge point ${i}: ${x} vs ${firstRow[i]}`));
   await viewer.screenshot({ path: join(artifacts, 'parts-seam.png') });
   assert.deepEqual([...editor.errors, ...viewer.errors], []);
   await editor.close();
