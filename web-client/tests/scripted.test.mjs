@@ -97,12 +97,9 @@ function snapshotWithoutPoints() {
  * answers icon creation; resolves { page, sent (every JSON message the
  * page sent), server (to push more) }.
  */
-async function openScripted(access = 'editor', pageOptions = { viewport: { width: 1100, height: 700 } }) {
-  const page = await browser.newPage(pageOptions);
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(String(e)));
-  page.errors = errors;
-  await page.route(`${ORIGIN}/**`, (route) => {
+/** Serves the page's files from this folder under ORIGIN. */
+function serveFiles(page) {
+  return page.route(`${ORIGIN}/**`, (route) => {
     const url = new URL(route.request().url());
     const path = url.pathname === '/' ? '/index.html' : url.pathname;
     let body;
@@ -114,6 +111,14 @@ async function openScripted(access = 'editor', pageOptions = { viewport: { width
     const type = path.endsWith('.html') ? 'text/html' : path.endsWith('.css') ? 'text/css' : path.endsWith('.json') ? 'application/json' : 'text/javascript';
     return route.fulfill({ status: 200, body, headers: { 'content-type': type } });
   });
+}
+
+async function openScripted(access = 'editor', pageOptions = { viewport: { width: 1100, height: 700 } }) {
+  const page = await browser.newPage(pageOptions);
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.errors = errors;
+  await serveFiles(page);
   const sent = [];
   const snap = snapshotWithoutPoints();
   const server = { ws: null, snapshot: snap };
@@ -381,5 +386,24 @@ test('the binding tool: a surface line bound to a curve goes out as relate and i
   assert.ok(box[0][0] < 0.01 && box[1][0] > 0.99 && Math.abs(box[0][1] - 0.25) < 0.05 && Math.abs(box[1][1] - 0.25) < 0.05, JSON.stringify(box));
   assert.match(await page.textContent('#relations'), /binding: top shell along v = 0.25 follows feature line \(reversed\)/);
   assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a server of another protocol version: the page says so and stops trying', async () => {
+  const page = await browser.newPage();
+  await serveFiles(page);
+  let hellos = 0;
+  await page.routeWebSocket('ws://vsculpt.test/ws', (ws) => {
+    ws.onMessage((text) => {
+      if (JSON.parse(text).type !== 'hello') return;
+      hellos++;
+      ws.send(JSON.stringify({ type: 'error', code: 'bad_version', message: 'this server speaks protocol 3' }));
+      ws.close({ code: 1008 });
+    });
+  });
+  await page.goto(`${ORIGIN}/?design=1&token=scripted`);
+  await page.waitForFunction(() => /different protocol versions/.test(document.getElementById('status').textContent), null, { timeout: 20000 });
+  await new Promise((r) => setTimeout(r, 1500));
+  assert.equal(hellos, 1, 'no reconnect loop');
   await page.close();
 });
