@@ -735,7 +735,8 @@ impl Design {
     }
 
     /// Takes control points solved elsewhere (a joint solve of joined
-    /// parts, [`crate::product`]) and re-places the icons.
+    /// parts, [`crate::product`]; finite, as every solver output) and
+    /// re-places the icons.
     pub(crate) fn adopt_points(&mut self, points: &[DVec3]) -> Result<(), DesignError> {
         if points.len() != self.surface.points().len() {
             return Err(DesignError::Solve(SolveError::Size {
@@ -743,9 +744,8 @@ impl Design {
                 got: points.len(),
             }));
         }
-        if points.iter().any(|p| !p.is_finite()) {
-            return Err(DesignError::NotFinite("control points"));
-        }
+        // A joint solve's output is finite (the solver checks its inputs):
+        // no second pass over the points on every drag frame.
         self.surface.points_mut().copy_from_slice(points);
         self.replace_icons();
         self.revision += 1;
@@ -764,6 +764,12 @@ impl Design {
         if let Some(d) = self.drag {
             self.finish_drag_of(d.id);
         }
+    }
+
+    /// The running drag's icon key and input t (unscaled: what a problem
+    /// built now, with the spring's current stiffness, needs).
+    pub(crate) fn drag_input(&self) -> Option<(u64, DVec3)> {
+        self.drag.map(|d| (d.id.0, d.t))
     }
 
     /// The next solve rebuilds the problem (the design joined or left a

@@ -10,8 +10,8 @@ use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 use vsculpt_kernel::curve_design::CurveRole;
 use vsculpt_kernel::icon::Role;
 use vsculpt_kernel::product::{
-    BindingSpec, ChangedParts, Continuity, Edge, IsoLine, JoinSpec, PartId, Product, iso_curve,
-    map_parameter,
+    BindingSpec, ChangedParts, Continuity, Edge, IsoLine, JoinSpec, PartId, Product, ProductError,
+    iso_curve, map_parameter,
 };
 
 /// The largest distance between the curve and the surface's line at 200
@@ -161,6 +161,10 @@ fn a_curve_taken_from_the_surface_binds_without_moving_it() {
     let s = panel(0.0, 8, v_knots(1.0), 0.0, 0.1);
     let line = IsoLine::V(0.62);
     let on: BSplineCurve = iso_curve(&s, line).unwrap();
+    assert!(matches!(
+        iso_curve(&s, IsoLine::U(1.5)),
+        Err(ProductError::Incompatible(_))
+    ));
     for k in 0..50 {
         let t = (k as f64 + 0.3) / 50.0;
         assert!((on.point(t) - s.point(t, 0.62)).length() < 1e-14);

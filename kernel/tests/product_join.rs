@@ -285,3 +285,107 @@ fn unjoining_keeps_the_shapes_and_the_parts_move_alone_again() {
     assert_eq!(p.control_points(b).unwrap(), &before[&b][..]);
     assert!(moved(&before[&a], p.control_points(a).unwrap()) > 0.1);
 }
+
+#[test]
+fn an_edit_of_one_part_keeps_the_partners_running_drag() {
+    let (mut p, a, b) = pair();
+    p.join(spec(a, b, Continuity::G1)).unwrap();
+    let icon = p
+        .edit_surface(a, |d| d.add_icon(point(0.9, 0.5, Role::Position)))
+        .unwrap()
+        .value;
+    let to = p.surface(a).unwrap().icon(icon).unwrap().xyz + DVec3::new(0.0, 0.0, 0.2);
+    p.drag(a, icon, to).unwrap();
+    assert!((p.surface(a).unwrap().icon(icon).unwrap().xyz - to).length() < 1e-9);
+    // B is edited mid-drag: the pair is re-solved with A's drag still at `to`.
+    let c = p
+        .edit_surface(b, |d| d.add_icon(point(0.5, 0.5, Role::Position)))
+        .unwrap();
+    assert_eq!(c.changed, ChangedParts::from_ids([a, b]));
+    let at = p.surface(a).unwrap().icon(icon).unwrap().xyz;
+    assert!((at - to).length() < 1e-9, "{at} vs {to}");
+    assert_eq!(p.surface(a).unwrap().dragging(), Some(icon));
+    // The drag goes on from there, seam held.
+    p.drag(a, icon, to + DVec3::Y * 0.05).unwrap();
+    let (gap, ang) = seam(&p, a, b);
+    assert!(gap < 1e-9 && ang < 1e-9, "{gap} {ang}");
+}
+
+#[test]
+fn a_part_joined_to_itself_closes_into_a_tube() {
+    // A panel's v = min and v = max edges (both along u, 8 points) joined
+    // G1: the panel rolls into a closed tube with a smooth seam.
+    let mut p = Product::new();
+    let a = p.add_part(surface_part(panel(0.0, 8, v_knots(1.0), 0.0, 0.1)));
+    let (_, changed) = p
+        .join(JoinSpec {
+            a,
+            edge_a: Edge::VMax,
+            b: a,
+            edge_b: Edge::VMin,
+            reversed: false,
+            continuity: Continuity::G1,
+            ratio: None,
+        })
+        .unwrap();
+    assert_eq!(changed, ChangedParts::one(a));
+    let s = p.surface(a).unwrap().surface();
+    let (gap, ang) = seam_gaps(s, Edge::VMax, s, Edge::VMin, false, 50);
+    assert!(gap < 1e-9 * model_size(&p) && ang < 1e-9, "{gap} {ang}");
+    let icon = p
+        .edit_surface(a, |d| d.add_icon(point(0.5, 0.0, Role::Position)))
+        .unwrap()
+        .value;
+    let at = p.surface(a).unwrap().icon(icon).unwrap().xyz;
+    for k in 1..=4 {
+        p.drag(a, icon, at + DVec3::Z * 0.05 * k as f64).unwrap();
+        let s = p.surface(a).unwrap().surface();
+        let (gap, ang) = seam_gaps(s, Edge::VMax, s, Edge::VMin, false, 50);
+        assert!(
+            gap < 1e-9 * model_size(&p) && ang < 1e-9,
+            "frame {k}: {gap} {ang}"
+        );
+    }
+}
+
+#[test]
+fn a_load_released_by_its_last_sensor_keeps_both_joined_shapes() {
+    use vsculpt_kernel::icon::SensorId;
+    let (mut p, a, b) = pair();
+    p.join(spec(a, b, Continuity::G1)).unwrap();
+    let load = p
+        .edit_surface(a, |d| d.add_icon(point(0.8, 0.5, Role::Load)))
+        .unwrap()
+        .value;
+    let sensor = SensorId("glove".into());
+    p.edit_surface(a, |d| d.bind_sensor(load, sensor.clone()))
+        .unwrap();
+    let at = p.surface(a).unwrap().icon(load).unwrap().xyz;
+    for k in 1..=4 {
+        p.drag(a, load, at + DVec3::Z * 0.05 * k as f64).unwrap();
+    }
+    let dragged = all_points(&p);
+    // The last sensor leaves: the load is released (its pull kept as shape).
+    let c = p
+        .edit_surface(a, |d| d.unbind_sensor(load, &sensor))
+        .unwrap();
+    assert_eq!(c.changed, ChangedParts::from_ids([a, b]));
+    for id in [a, b] {
+        let m = moved(&dragged[&id], p.control_points(id).unwrap());
+        assert!(m < 1e-9, "{id:?} sprang back by {m:e}");
+    }
+    let (gap, ang) = seam(&p, a, b);
+    assert!(gap < 1e-9 && ang < 1e-9);
+    // A closure failing half-way leaves nothing behind.
+    let icons = p.surface(a).unwrap().icons().count();
+    let shape = p.control_points(a).unwrap().to_vec();
+    assert!(
+        p.edit_surface(a, |d| {
+            d.add_icon(point(0.5, 0.5, Role::Position))?;
+            d.add_icon(point(2.0, 0.5, Role::Position))
+        })
+        .is_err()
+    );
+    assert_eq!(p.surface(a).unwrap().icons().count(), icons);
+    assert_eq!(p.control_points(a).unwrap(), &shape[..]);
+}

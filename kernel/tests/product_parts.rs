@@ -146,6 +146,17 @@ fn each_part_is_edited_alone_and_reports_only_itself() {
     );
     assert_eq!(all_points(&p), before);
     assert_eq!(p.surface(a).unwrap().icons().count(), 1);
+    // A closure failing half-way on a curve leaves nothing behind either.
+    let n = p.curve(line).unwrap().icons().count();
+    assert!(
+        p.edit_curve(line, |d| {
+            d.add_icon(0.2, CurveRole::Position)?;
+            d.add_icon(7.0, CurveRole::Position)
+        })
+        .is_err()
+    );
+    assert_eq!(p.curve(line).unwrap().icons().count(), n);
+    assert_eq!(all_points(&p), before);
 }
 
 #[test]

@@ -408,10 +408,10 @@ async fn import(
     let target = part_param(&q)?;
     let handle = s.hub.open(id).await?;
     let current = handle.state().await?;
-    // Parsing and building the new surface are CPU work proportional to
-    // the file: off the async threads.
-    let doc = tokio::task::spawn_blocking(move || {
-        let surfaces = cad::read_iges(&text).map_err(|e| {
+    // Parsing and building the new parts are CPU work proportional to the
+    // file: off the async threads.
+    let (doc, added) = tokio::task::spawn_blocking(move || {
+        let parts = cad::read_iges_parts(&text).map_err(|e| {
             let code = match e {
                 cad::IgesError::TooLarge { .. } => "out_of_range",
                 _ => "malformed",
@@ -419,31 +419,53 @@ async fn import(
             ApiError(StatusCode::BAD_REQUEST, code, format!("IGES: {e}"))
         })?;
         drop(text);
-        let mut doc = (*current.doc).clone();
-        let part = doc
-            .parts
-            .iter_mut()
-            .find(|p| {
-                matches!(p.body, crate::design::part::PartBody::Surface(_))
-                    && target.is_none_or(|t| t == p.id)
-            })
-            .ok_or_else(|| {
-                ApiError(
-                    StatusCode::BAD_REQUEST,
-                    "unknown_part",
-                    "no such surface part to import into".into(),
-                )
-            })?;
-        if let crate::design::part::PartBody::Surface(sp) = &mut part.body {
-            *sp = crate::design::model::with_surface(sp, &surfaces[0])?;
+        match target {
+            // `?part=ID`: the file's first surface replaces that surface
+            // part's shape (its icons are kept where they still fit).
+            Some(part_id) => {
+                let surface = parts
+                    .iter()
+                    .find_map(|p| match &p.entity {
+                        cad::IgesEntity::Surface(s) => Some(s),
+                        _ => None,
+                    })
+                    .ok_or_else(|| {
+                        ApiError(
+                            StatusCode::BAD_REQUEST,
+                            "malformed",
+                            "IGES: the file has no surface (entity 128)".into(),
+                        )
+                    })?;
+                let mut doc = (*current.doc).clone();
+                let part = doc.part_mut(part_id).ok_or_else(|| {
+                    ApiError(
+                        StatusCode::NOT_FOUND,
+                        "unknown_part",
+                        format!("design {id} has no part {part_id}"),
+                    )
+                })?;
+                let crate::design::part::PartBody::Surface(sp) = &mut part.body else {
+                    return Err(ApiError(
+                        StatusCode::BAD_REQUEST,
+                        "incompatible",
+                        format!("part {part_id} is not a surface"),
+                    ));
+                };
+                *sp = crate::design::model::with_surface(sp, surface)?;
+                Ok::<_, ApiError>((doc, vec![part_id]))
+            }
+            // Every surface and curve of the file becomes a new part.
+            None => Ok(crate::design::exchange::with_iges_parts(
+                &current.doc,
+                &parts,
+            )?),
         }
-        Ok::<_, ApiError>(doc)
     })
     .await
     .map_err(storage)??;
     handle.replace(doc).await?;
     let view = handle.state().await?;
-    Ok(axum::Json(json!({ "id": id, "design": &*view.doc })).into_response())
+    Ok(axum::Json(json!({ "id": id, "parts": added, "design": &*view.doc })).into_response())
 }
 
 async fn export(

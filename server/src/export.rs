@@ -245,19 +245,18 @@ pub async fn mesh(
     .await
 }
 
-/// The IGES export of `doc` (one part, or every surface part), written on
-/// a blocking thread and streamed.
+/// The IGES export of `doc` — one part, or every part (surfaces as entity
+/// 128, curves as 126, each named) — written on a blocking thread and
+/// streamed.
 pub async fn iges(doc: Arc<DesignDoc>, part: Option<u64>) -> Result<Body, ExportError> {
-    let surfaces = export_surfaces(&doc, part)?;
+    let parts = crate::design::exchange::to_iges_parts(&doc, part)
+        .map_err(|e| ExportError::Part(e.message))?;
     let name = doc.name.clone();
     drop(doc);
     stream(
         move || {
             let meta = IgesMeta::now(&name, "vsculpt");
-            let first = surfaces
-                .first()
-                .ok_or_else(|| ExportError::Part("the design has no surface part".into()))?;
-            Ok(cad::write_iges(&first.1.to_iges(), &meta)?)
+            Ok(cad::write_iges_parts(&parts, &meta)?)
         },
         |text, out| out.write_all(text.as_bytes()),
     )

@@ -26,7 +26,9 @@ fn plate_json(nu: usize, nv: usize, x0: f64, w: f64, z: impl Fn(f64, f64) -> f64
     };
     let greville = |n: usize| -> Vec<f64> {
         let k = knots(n);
-        (0..n).map(|i| (k[i + 1] + k[i + 2] + k[i + 3]) / 3.0).collect()
+        (0..n)
+            .map(|i| (k[i + 1] + k[i + 2] + k[i + 3]) / 3.0)
+            .collect()
     };
     let (gu, gv) = (greville(nu), greville(nv));
     let mut points = Vec::new();
@@ -276,7 +278,10 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
     .await;
     let doc = stored(addr, design, &token).await;
     let (angle, gap) = seam_mismatch(&stored_surface(&doc, a), &stored_surface(&doc, b));
-    assert!(angle < 1e-9 && gap < 1e-9, "after join: {angle} rad, gap {gap}");
+    assert!(
+        angle < 1e-9 && gap < 1e-9,
+        "after join: {angle} rad, gap {gap}"
+    );
 
     // Drag the seam: a load on A's edge, pulled up in 8 frames. After every
     // frame, frames come for A and B only, and their seam agrees to f32.
@@ -316,7 +321,11 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
             got.push(f);
         }
         for f in got {
-            assert!(f.part == a || f.part == b, "frame of part {} on a drag of A", f.part);
+            assert!(
+                f.part == a || f.part == b,
+                "frame of part {} on a drag of A",
+                f.part
+            );
             latest.insert(f.part, f);
         }
         let (fa, fb) = (&latest[&a], &latest[&b]);
@@ -324,14 +333,20 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
             &surface_of(&shapes[&a], Some(&fa.points)),
             &surface_of(&shapes[&b], Some(&fb.points)),
         );
-        assert!(angle < 1e-4 && gap < 1e-3, "frame {k}: {angle} rad, gap {gap}");
+        assert!(
+            angle < 1e-4 && gap < 1e-3,
+            "frame {k}: {angle} rad, gap {gap}"
+        );
     }
     ed.ok(json!({"type": "drag_end", "part": a, "icon": seam_icon}))
         .await;
     let doc = stored(addr, design, &token).await;
     let (sa, sb) = (stored_surface(&doc, a), stored_surface(&doc, b));
     let (angle, gap) = seam_mismatch(&sa, &sb);
-    assert!(angle < 1e-9 && gap < 1e-9, "after the drag: {angle} rad, gap {gap}");
+    assert!(
+        angle < 1e-9 && gap < 1e-9,
+        "after the drag: {angle} rad, gap {gap}"
+    );
     // The seam moved (both panels followed).
     let ((_, u1), _) = sa.domain();
     assert!(sa.point(u1, 0.5).z - start[2] > 5.0);
@@ -383,7 +398,10 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
         .await;
     let doc = stored(addr, design, &token).await;
     let (angle, gap) = seam_mismatch(&stored_surface(&doc, a), &stored_surface(&doc, b));
-    assert!(angle < 1e-9 && gap < 1e-9, "after a restart: {angle} rad, gap {gap}");
+    assert!(
+        angle < 1e-9 && gap < 1e-9,
+        "after a restart: {angle} rad, gap {gap}"
+    );
 
     // Undo across parts: a change to the curve and one to B, undone in turn.
     ed.ok(json!({"type": "delete_icon", "part": curves[1], "icon": icons[4]}))
@@ -399,7 +417,8 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
     assert_eq!(part(&s, curves[1])["icons"][0]["id"], icons[4]);
 
     // Restore the first version (one plate) and back to the commit.
-    ed.ok(json!({"type": "restore_version", "version": 1})).await;
+    ed.ok(json!({"type": "restore_version", "version": 1}))
+        .await;
     let s = ed.wait_for("snapshot").await;
     assert_eq!(s["parts"].as_array().unwrap().len(), 1);
     assert!(s["relations"].as_array().unwrap().is_empty());
@@ -418,4 +437,3 @@ async fn three_surfaces_two_curves_joined_dragged_committed_restarted_restored_u
     assert!(doc["relations"].as_array().unwrap().is_empty());
     server.stop().await;
 }
-

@@ -21,9 +21,9 @@
 
 use glam::DVec3;
 
-use super::PartId;
 use super::compat::check_same_space;
 use super::join::sparse_row;
+use super::{PartId, ProductError};
 use crate::bspline::{BSplineCurve, BSplineSurface, KnotVector, basis_derivs};
 use crate::solve::Equation;
 
@@ -95,16 +95,18 @@ impl IsoLine {
 }
 
 /// The surface's parameter line `line` as it is now: a B-spline curve on
-/// the line's knots (exact, not fitted).
-pub fn iso_curve(s: &BSplineSurface, line: IsoLine) -> Result<BSplineCurve, String> {
-    line.check(s)?;
+/// the line's knots (exact, not fitted). A line outside the surface's
+/// domain is [`ProductError::Incompatible`].
+pub fn iso_curve(s: &BSplineSurface, line: IsoLine) -> Result<BSplineCurve, ProductError> {
+    line.check(s).map_err(ProductError::Incompatible)?;
     let p = s.points();
     let points: Vec<DVec3> = line
         .combinations(s)
         .iter()
         .map(|c| c.iter().map(|&(i, w)| p[i] * w).sum())
         .collect();
-    BSplineCurve::new(line.knots(s).clone(), points).map_err(|e| e.to_string())
+    BSplineCurve::new(line.knots(s).clone(), points)
+        .map_err(|e| ProductError::Incompatible(e.to_string()))
 }
 
 /// What to bind: curve part `curve` held along `line` of surface part `surface`.

@@ -136,7 +136,7 @@ impl SolveGroup {
     /// changed. Nothing is solved.
     pub fn refresh(
         &mut self,
-        parts: &BTreeMap<PartId, Part>,
+        parts: &mut BTreeMap<PartId, Part>,
         joins: &BTreeMap<JoinId, Join>,
         bindings: &BTreeMap<BindingId, Binding>,
     ) -> Result<(), DesignError> {
@@ -159,6 +159,14 @@ impl SolveGroup {
             self.reference[member.offset..member.offset + member.len]
                 .copy_from_slice(d.reference());
         }
+        // Each member's problem now comes from here (built with its spring's
+        // current stiffness): its next drag frame re-sends its own.
+        for member in &self.members {
+            if let Some(d) = parts.get_mut(&member.id).and_then(Part::as_surface_mut) {
+                d.mark_problem_dirty();
+            }
+        }
+        let parts = &*parts;
         if layout_changed {
             let blocks = self
                 .members
@@ -191,7 +199,7 @@ impl SolveGroup {
     }
 
     /// Re-reads the bindings' targets (the curves' control points).
-    pub fn refresh_bindings(
+    fn refresh_bindings(
         &mut self,
         parts: &BTreeMap<PartId, Part>,
         bindings: &BTreeMap<BindingId, Binding>,
@@ -236,7 +244,7 @@ impl SolveGroup {
                 .chain(&self.extra)
                 .cloned()
                 .collect();
-            solver.set_problem(Problem { groups })?;
+            solver.retarget(Problem { groups })?;
             self.problem_dirty = false;
         }
         Ok(match drag {
@@ -247,12 +255,21 @@ impl SolveGroup {
         })
     }
 
-    /// A full solve of the group, written to every member.
+    /// A full solve of the group (with a member's running drag at its
+    /// input), written to every member. Call it after [`Self::refresh`]:
+    /// the drag input is the raw one, right for problems built there.
     pub fn solve(
         &mut self,
         parts: &mut BTreeMap<PartId, Part>,
     ) -> Result<SolveReport, DesignError> {
-        let report = self.run(None)?;
+        let drag = self.members.iter().enumerate().find_map(|(m, member)| {
+            parts
+                .get(&member.id)
+                .and_then(Part::as_surface)
+                .and_then(Design::drag_input)
+                .map(|(key, t)| (m, key, t))
+        });
+        let report = self.run(drag)?;
         self.write_back(parts, None)?;
         Ok(report)
     }

@@ -76,7 +76,8 @@ pub struct JoinSpec {
 /// A join as the product holds it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Join {
-    /// What was joined.
+    /// What was joined, with `ratio` the one in force (`Some` for G1,
+    /// `None` for G0).
     pub spec: JoinSpec,
     /// The G1 ratio in force (1 for G0).
     pub ratio: f64,
@@ -128,7 +129,14 @@ impl Join {
                 "G1 ratio {ratio} (a degenerate cross-edge row of control points)"
             ));
         }
-        Ok(Self { spec, ratio })
+        let ratio_in_spec = (spec.continuity == Continuity::G1).then_some(ratio);
+        Ok(Self {
+            spec: JoinSpec {
+                ratio: ratio_in_spec,
+                ..spec
+            },
+            ratio,
+        })
     }
 
     /// The join's scalar equations over the group's unknowns, part `a`'s

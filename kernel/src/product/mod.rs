@@ -4,7 +4,8 @@
 //!
 //! * [`Part`] — one shape of one kind (a [`crate::design::Design`] surface
 //!   or a [`crate::curve_design::CurveDesign`] curve), keyed by [`PartId`].
-//!   A new kind is one new variant.
+//!   A new kind is one new variant (here, in [`PartSnapshot`] and in the
+//!   few `match`es of `part.rs` and `model.rs`).
 //! * [`Product`] — the parts, edits and drags forwarded to them, and which
 //!   parts each changed ([`ChangedParts`]). A part with no relation is
 //!   solved exactly as alone.
@@ -15,13 +16,13 @@
 //! * Groups of joined and bound surfaces are solved jointly over a
 //!   block-diagonal stiffness (`group.rs`).
 
-mod binding;
+pub mod binding;
 mod changed;
 mod compat;
 mod edge;
 mod error;
 mod group;
-mod join;
+pub mod join;
 mod model;
 mod part;
 
@@ -32,4 +33,4 @@ pub use edge::Edge;
 pub use error::ProductError;
 pub use join::{Continuity, Join, JoinId, JoinSpec};
 pub use model::{Edited, PartDrag, Product, RemovedPart};
-pub use part::{Part, PartId, PartKind};
+pub use part::{Part, PartId, PartKind, PartSnapshot};

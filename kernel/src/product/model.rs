@@ -17,6 +17,8 @@
 //! To rebuild a stored product: [`Product::insert_part`] each part (ids
 //! kept), [`Product::insert_join`] and [`Product::insert_binding`] each
 //! relation as stored (nothing is solved or baked), then
+//! [`Product::solve_all`]. To undo across parts: [`Product::restore_part`]
+//! each part of the version (a [`super::PartSnapshot`]), then
 //! [`Product::solve_all`].
 
 use std::collections::BTreeMap;
@@ -26,7 +28,7 @@ use glam::DVec3;
 use super::group::SolveGroup;
 use super::{
     Binding, BindingId, BindingSpec, ChangedParts, Join, JoinId, JoinSpec, Part, PartId, PartKind,
-    ProductError,
+    PartSnapshot, ProductError,
 };
 use crate::curve_design::CurveDesign;
 use crate::design::{Design, DesignError};
@@ -202,12 +204,80 @@ impl Product {
         }
     }
 
+    /// Replaces a part's value by `snapshot` (undo, redo, restore of a
+    /// version), as stored: nothing is solved — call [`Self::solve_all`]
+    /// (or [`Self::solve`]) once every part of a version is back. The part
+    /// keeps its relations, which must still fit the restored shape's knots
+    /// (else [`ProductError::Incompatible`]); on error nothing changes.
+    pub fn restore_part(
+        &mut self,
+        id: PartId,
+        snapshot: &PartSnapshot,
+    ) -> Result<(), ProductError> {
+        let part = self
+            .parts
+            .get_mut(&id)
+            .ok_or(ProductError::UnknownPart(id))?;
+        if part.kind() != snapshot.kind() {
+            return Err(ProductError::WrongKind {
+                part: id,
+                expected: snapshot.kind(),
+            });
+        }
+        let before = part.snapshot();
+        part.restore(snapshot)?;
+        let fits = self.check_relations_of(id).and_then(|()| {
+            if let Some(&g) = self.group_of.get(&id) {
+                if self.groups[g].member(id).is_some_and(|m| {
+                    self.groups[g].members[m].len != self.parts[&id].control_points().len()
+                }) {
+                    return Err(ProductError::Incompatible(format!(
+                        "part {} would change its control-point count while joined",
+                        id.0
+                    )));
+                }
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
+            }
+            Ok(())
+        });
+        if let Err(e) = fits {
+            if let Some(part) = self.parts.get_mut(&id) {
+                part.restore(&before)?;
+            }
+            if let Some(&g) = self.group_of.get(&id) {
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
+            }
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Every join and binding of `id` still fits the parts' knots.
+    fn check_relations_of(&self, id: PartId) -> Result<(), ProductError> {
+        for j in self.joins.values() {
+            if j.spec.a == id || j.spec.b == id {
+                self.check_join(j.spec)?;
+            }
+        }
+        for b in self.bindings.values() {
+            if b.spec.curve == id || b.spec.surface == id {
+                self.check_binding(b.spec)?;
+            }
+        }
+        Ok(())
+    }
+
     // ---- edits -----------------------------------------------------------
 
     /// Edits a surface part (add, remove or change icons, material, …)
     /// and solves it with its group. On error (the edit's or the solve's)
-    /// the product is as before. Use [`Self::drag`], [`Self::release`] and
-    /// [`Self::move_icon`] for pointer actions: they know the part's group.
+    /// the product is as before (the part is restored from a snapshot taken
+    /// first, so a closure that fails half-way leaves nothing behind). An
+    /// edit that keeps the part's shape as its reference (a load released
+    /// by unbinding its last sensor) keeps every group member's shape too,
+    /// as [`Self::release`] does. Use [`Self::drag`], [`Self::release`] and
+    /// [`Self::move_icon`] for pointer actions ([`Design::move_icon`] would
+    /// solve the part without its group).
     pub fn edit_surface<R>(
         &mut self,
         id: PartId,
@@ -215,22 +285,42 @@ impl Product {
     ) -> Result<Edited<R>, ProductError> {
         let d = self.surface_mut(id)?;
         let before = d.snapshot();
-        let value = f(d)?;
-        match self.solve_surface(id) {
-            Ok(changed) => Ok(Edited { value, changed }),
-            Err(e) => {
-                let d = self.surface_mut(id)?;
-                d.restore(&before)?;
-                if let Some(&g) = self.group_of.get(&id) {
-                    self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+        let result = f(d);
+        // A bake inside the edit: the partners keep their shapes as well.
+        let mut partners = Vec::new();
+        if result.is_ok()
+            && let Some(&g) = self.group_of.get(&id)
+            && self.surface_ref(id)?.reference() != &before.reference[..]
+        {
+            for &m in self.groups[g].ids.iter() {
+                if m != id
+                    && let Some(d) = self.parts.get(&m).and_then(Part::as_surface)
+                {
+                    partners.push((m, d.snapshot()));
                 }
-                Err(e)
+            }
+            self.keep_group_shape(id);
+        }
+        let solved = match result {
+            Ok(value) => self
+                .solve_surface(id)
+                .map(|changed| Edited { value, changed }),
+            Err(e) => Err(e.into()),
+        };
+        if solved.is_err() {
+            self.surface_mut(id)?.restore(&before)?;
+            for (m, snapshot) in &partners {
+                self.surface_mut(*m)?.restore(snapshot)?;
+            }
+            if let Some(&g) = self.group_of.get(&id) {
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             }
         }
+        solved
     }
 
     /// Edits a curve part and solves it, then the surfaces bound to it. On
-    /// error the product is as before.
+    /// error (the edit's or a solve's) the product is as before.
     pub fn edit_curve<R>(
         &mut self,
         id: PartId,
@@ -238,17 +328,18 @@ impl Product {
     ) -> Result<Edited<R>, ProductError> {
         let c = self.curve_mut(id)?;
         let before = c.snapshot();
-        let value = f(c)?;
-        match self.solve_curve(id) {
-            Ok(changed) => Ok(Edited { value, changed }),
-            Err(e) => {
-                self.curve_mut(id)?.restore(&before)?;
-                for g in self.groups_bound_to(id) {
-                    self.groups[g].refresh_bindings(&self.parts, &self.bindings)?;
-                }
-                Err(e)
-            }
+        let solved = match f(c) {
+            Ok(value) => self
+                .solve_curve(id)
+                .map(|changed| Edited { value, changed }),
+            Err(e) => Err(e.into()),
+        };
+        if solved.is_err() {
+            // Back to the curve as it was, and the bound surfaces with it.
+            self.curve_mut(id)?.restore(&before)?;
+            self.follow_curve(id)?;
         }
+        solved
     }
 
     /// Solves one part (with its group; a curve with the surfaces bound to
@@ -275,7 +366,7 @@ impl Product {
             }
         }
         for g in 0..self.groups.len() {
-            self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             self.groups[g].solve(&mut self.parts)?;
         }
         Ok(())
@@ -343,7 +434,7 @@ impl Product {
             }
         }
         if others {
-            self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
         }
         let d = self
             .parts
@@ -378,7 +469,7 @@ impl Product {
                     return Ok(ChangedParts::one(part));
                 };
                 self.keep_group_shape(part);
-                self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 self.groups[g].solve(&mut self.parts)?;
                 Ok(ChangedParts::shared(self.groups[g].ids.clone()))
             }
@@ -592,7 +683,7 @@ impl Product {
                 .group_of
                 .get(&part)
                 .ok_or(ProductError::UnknownPart(part))?;
-            self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             // Solve into the group's buffer only; members are written once
             // the solve succeeded.
             self.groups[g].solve(&mut self.parts)?;
@@ -602,7 +693,7 @@ impl Product {
             Ok(g) => {
                 let changed = ChangedParts::shared(self.groups[g].ids.clone());
                 self.keep_group_shape(part);
-                self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 Ok(changed)
             }
             Err(e) => {
@@ -635,7 +726,7 @@ impl Product {
                 Ok(ChangedParts::one(id))
             }
             Some(&g) => {
-                self.groups[g].refresh(&self.parts, &self.joins, &self.bindings)?;
+                self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
                 self.groups[g].solve(&mut self.parts)?;
                 Ok(ChangedParts::shared(self.groups[g].ids.clone()))
             }
@@ -668,7 +759,7 @@ impl Product {
         }
         let mut ids = vec![curve];
         for g in gs {
-            self.groups[g].refresh_bindings(&self.parts, &self.bindings)?;
+            self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
             self.groups[g].solve(&mut self.parts)?;
             ids.extend(self.groups[g].ids.iter().copied());
         }
@@ -738,7 +829,7 @@ impl Product {
                 Some(g) => g,
                 None => {
                     let mut g = SolveGroup::new(&self.parts, members.clone(), joins, bindings)?;
-                    g.refresh(&self.parts, &self.joins, &self.bindings)?;
+                    g.refresh(&mut self.parts, &self.joins, &self.bindings)?;
                     g
                 }
             };

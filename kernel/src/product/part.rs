@@ -7,8 +7,8 @@
 
 use glam::DVec3;
 
-use crate::curve_design::CurveDesign;
-use crate::design::Design;
+use crate::curve_design::{CurveDesign, CurveDesignSnapshot};
+use crate::design::{Design, DesignError, DesignSnapshot};
 
 /// A part's key in its product. The product never reuses an id it handed
 /// out; ids given to [`super::Product::insert_part`] are the caller's.
@@ -36,7 +36,55 @@ pub enum Part {
     Curve(CurveDesign),
 }
 
+/// A part as a value (undo, redo, store): its kind's snapshot.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PartSnapshot {
+    /// A surface part's value.
+    Surface(DesignSnapshot),
+    /// A curve part's value.
+    Curve(CurveDesignSnapshot),
+}
+
+impl PartSnapshot {
+    /// Its kind.
+    pub fn kind(&self) -> PartKind {
+        match self {
+            PartSnapshot::Surface(_) => PartKind::Surface,
+            PartSnapshot::Curve(_) => PartKind::Curve,
+        }
+    }
+}
+
 impl Part {
+    /// The part as a value.
+    pub fn snapshot(&self) -> PartSnapshot {
+        match self {
+            Part::Surface(d) => PartSnapshot::Surface(d.snapshot()),
+            Part::Curve(c) => PartSnapshot::Curve(c.snapshot()),
+        }
+    }
+
+    /// A part from its value.
+    pub fn from_snapshot(s: &PartSnapshot) -> Result<Self, DesignError> {
+        Ok(match s {
+            PartSnapshot::Surface(d) => Part::Surface(Design::from_snapshot(d)?),
+            PartSnapshot::Curve(c) => Part::Curve(CurveDesign::from_snapshot(c)?),
+        })
+    }
+
+    /// Replaces the part's value by `s` (of the same kind), keeping its
+    /// factorisation when knots and material are unchanged. Nothing is
+    /// solved. On error nothing changes.
+    pub(crate) fn restore(&mut self, s: &PartSnapshot) -> Result<(), DesignError> {
+        match (self, s) {
+            (Part::Surface(d), PartSnapshot::Surface(v)) => d.restore(v),
+            (Part::Curve(c), PartSnapshot::Curve(v)) => c.restore(v),
+            _ => Err(DesignError::Unsupported(
+                "a snapshot of another kind of part".into(),
+            )),
+        }
+    }
+
     /// Its kind.
     pub fn kind(&self) -> PartKind {
         match self {

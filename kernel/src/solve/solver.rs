@@ -455,6 +455,80 @@ impl Solver {
         Ok(())
     }
 
+    /// Takes a problem that differs from the current one only in its
+    /// equations' targets and its loads' forces (the same groups, keys,
+    /// rows, directions and gains, in the same order): Z, S and its inverse
+    /// and the drag response are kept, only the targets and forces change
+    /// (a bound curve moved, [`crate::product`]). Any other problem goes to
+    /// [`Self::set_problem`]. On error nothing changes.
+    pub fn retarget(&mut self, problem: Problem) -> Result<(), SolveError> {
+        let same_eq = |a: &Equation, b: &Equation| match (a, b) {
+            (Equation::Vector { row: r, .. }, Equation::Vector { row: q, .. }) => r == q,
+            (
+                Equation::Projected {
+                    row: r,
+                    direction: d,
+                    ..
+                },
+                Equation::Projected {
+                    row: q,
+                    direction: e,
+                    ..
+                },
+            ) => r == q && d == e,
+            _ => false,
+        };
+        let same = problem.groups.len() == self.problem.groups.len()
+            && problem
+                .groups
+                .iter()
+                .zip(&self.problem.groups)
+                .all(|(a, b)| {
+                    a.key == b.key
+                        && a.equations.len() == b.equations.len()
+                        && a.loads.len() == b.loads.len()
+                        && a.equations
+                            .iter()
+                            .zip(&b.equations)
+                            .all(|(x, y)| same_eq(x, y))
+                        && a.loads
+                            .iter()
+                            .zip(&b.loads)
+                            .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
+                });
+        if !same {
+            return self.set_problem(problem);
+        }
+        validate(&problem, self.dim())?;
+        // The scalar equations and load columns are in the order
+        // `set_problem` made them: group by group, a vector equation as its
+        // three coordinates.
+        let (mut e, mut l) = (0, 0);
+        for group in &problem.groups {
+            for eq in &group.equations {
+                match eq {
+                    Equation::Vector { target, .. } => {
+                        for k in 0..3 {
+                            self.eqs[e].target = target[k];
+                            e += 1;
+                        }
+                    }
+                    Equation::Projected { target, .. } => {
+                        self.eqs[e].target = *target;
+                        e += 1;
+                    }
+                }
+            }
+            for load in &group.loads {
+                self.loads[l].force = load.force;
+                l += 1;
+            }
+        }
+        self.problem = problem;
+        self.base = None;
+        Ok(())
+    }
+
     /// Keeps the columns of the current rows that `rows` drops for later,
     /// forgets retired columns `rows` uses again, and evicts the oldest past
     /// [`RETIRED_BYTES`].

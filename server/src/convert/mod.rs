@@ -611,7 +611,12 @@ pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
             .iter()
             .map(|p| parts::part_to_wire(p, &holders, points))
             .collect(),
-        relations: v.doc.relations.iter().map(parts::relation_to_wire).collect(),
+        relations: v
+            .doc
+            .relations
+            .iter()
+            .map(parts::relation_to_wire)
+            .collect(),
         versions: v.versions.iter().map(version_to_wire).collect(),
         presence: presence_to_wire(&v.presence),
         can_undo: v.can_undo,

@@ -11,9 +11,9 @@
 use super::command::{Ack, Command};
 use super::doc::IconDoc;
 use super::edit::MaterialEdit;
-use super::part::{PartDoc, RelationDoc};
 use super::error::{CommandError, ErrorKind};
 use super::model::{DesignDoc, DesignModel, GeometrySet};
+use super::part::{PartDoc, RelationDoc};
 use super::undo::UndoStack;
 use crate::metrics::Metrics;
 use crate::store::{DesignId, Role, Store, VersionInfo};
@@ -850,9 +850,13 @@ impl Actor {
             self.model.geometry_set(self.id, self.rev)
         } else {
             let mut set = (**self.geometry.borrow()).clone();
-            set.parts.retain(|id, _| self.model.doc().part(*id).is_some());
+            set.parts
+                .retain(|id, _| self.model.doc().part(*id).is_some());
             for &part in &dirty.parts {
-                if let Some(g) = self.model.geometry(self.id, part, self.rev, self.drag_frame) {
+                if let Some(g) = self
+                    .model
+                    .geometry(self.id, part, self.rev, self.drag_frame)
+                {
                     set.parts.insert(part, Arc::new(g));
                 }
             }
@@ -1000,7 +1004,14 @@ impl Actor {
                 geometry_dirty.parts(moved);
                 // Parts whose frames must appear or vanish.
                 if self.doc.parts.len() != before.parts.len() {
-                    geometry_dirty.parts(self.doc.parts.iter().map(|p| p.id).filter(|id| before.part(*id).is_none()).collect());
+                    geometry_dirty.parts(
+                        self.doc
+                            .parts
+                            .iter()
+                            .map(|p| p.id)
+                            .filter(|id| before.part(*id).is_none())
+                            .collect(),
+                    );
                     geometry_dirty.removed = true;
                 }
                 Ok(Ack {

@@ -7,7 +7,9 @@
 
 use super::doc::{AnchorDoc, DerivativeDoc, IconRoleDoc, IconStateDoc};
 use super::edit::SurfaceQuery;
-use super::engine::{IconReadback, SPRING_BAND, SPRING_ITERATIONS, kernel_error, state, state_back};
+use super::engine::{
+    IconReadback, SPRING_BAND, SPRING_ITERATIONS, kernel_error, state, state_back,
+};
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
 use super::part::{CurveMaterialDoc, CurvePart};

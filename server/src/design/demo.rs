@@ -7,13 +7,13 @@
 use super::doc::{
     AnchorDoc, DOC_FORMAT, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc,
 };
+use super::edit::SurfaceQuery;
+use super::engine::Engine;
+use super::error::{CommandError, ErrorKind};
 use super::part::{
     ContinuityDoc, CurveDoc, CurveMaterialDoc, CurvePart, EdgeDoc, IsoLineDoc, PALETTE, PartBody,
     PartDoc, RelationDoc, RelationKind, SurfacePart,
 };
-use super::edit::SurfaceQuery;
-use super::engine::Engine;
-use super::error::{CommandError, ErrorKind};
 use vsculpt_kernel::bspline::{KnotVector, basis_derivs, greville, interpolate_surface};
 
 fn kernel(e: impl std::fmt::Display) -> CommandError {

@@ -463,8 +463,9 @@ impl DesignDoc {
         struct Format {
             format: u32,
         }
-        let unreadable =
-            |e: serde_json::Error| CommandError::new(ErrorKind::Storage, format!("stored design unreadable: {e}"));
+        let unreadable = |e: serde_json::Error| {
+            CommandError::new(ErrorKind::Storage, format!("stored design unreadable: {e}"))
+        };
         let f: Format = serde_json::from_slice(bytes).map_err(unreadable)?;
         match f.format {
             DOC_FORMAT => serde_json::from_slice(bytes).map_err(unreadable),

@@ -5,7 +5,9 @@
 //! (u, v) outside the domain, a locked part); the kernel model then rebuilds
 //! what the edit touched, so a refused edit changes nothing.
 
-use super::doc::{AnchorDoc, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, finite_point};
+use super::doc::{
+    AnchorDoc, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, finite_point,
+};
 use super::part::{
     CurveMaterialDoc, MAX_PARTS, MAX_RELATIONS, PALETTE, PartBody, PartDoc, RelationDoc,
     RelationKind, is_colour,
@@ -181,7 +183,8 @@ fn locked(p: &PartDoc) -> CommandError {
 }
 
 fn check_part_name(doc: &DesignDoc, name: &str, except: Option<u64>) -> Result<(), CommandError> {
-    let name_ok = !name.trim().is_empty() && name.len() <= 200 && !name.chars().any(char::is_control);
+    let name_ok =
+        !name.trim().is_empty() && name.len() <= 200 && !name.chars().any(char::is_control);
     if !name_ok {
         return Err(CommandError::new(
             ErrorKind::InvalidValue,
@@ -203,7 +206,10 @@ fn check_part_name(doc: &DesignDoc, name: &str, except: Option<u64>) -> Result<(
 
 fn check_colour(c: &str) -> Result<(), CommandError> {
     if !is_colour(c) {
-        return Err(CommandError::new(ErrorKind::InvalidValue, "colour must be #rrggbb"));
+        return Err(CommandError::new(
+            ErrorKind::InvalidValue,
+            "colour must be #rrggbb",
+        ));
     }
     Ok(())
 }
@@ -310,9 +316,15 @@ pub fn apply<'q>(
                     for id in [a, b] {
                         match kind_of(*id) {
                             None => return Err(unknown_part(*id)),
-                            Some((_, true)) => return Err(locked(doc.part(*id).unwrap_or(&doc.parts[0]))),
+                            Some((_, true)) => {
+                                return Err(locked(doc.part(*id).unwrap_or(&doc.parts[0])));
+                            }
                             Some(("surface", _)) => {}
-                            Some(_) => return Err(incompatible("only surface parts are joined along edges")),
+                            Some(_) => {
+                                return Err(incompatible(
+                                    "only surface parts are joined along edges",
+                                ));
+                            }
                         }
                     }
                 }
@@ -320,13 +332,21 @@ pub fn apply<'q>(
                     match kind_of(*curve) {
                         None => return Err(unknown_part(*curve)),
                         Some(("curve", _)) => {}
-                        Some(_) => return Err(incompatible("a binding's `curve` must be a curve part")),
+                        Some(_) => {
+                            return Err(incompatible("a binding's `curve` must be a curve part"));
+                        }
                     }
                     match kind_of(*surface) {
                         None => return Err(unknown_part(*surface)),
-                        Some((_, true)) => return Err(locked(doc.part(*surface).unwrap_or(&doc.parts[0]))),
+                        Some((_, true)) => {
+                            return Err(locked(doc.part(*surface).unwrap_or(&doc.parts[0])));
+                        }
                         Some(("surface", _)) => {}
-                        Some(_) => return Err(incompatible("a binding's `surface` must be a surface part")),
+                        Some(_) => {
+                            return Err(incompatible(
+                                "a binding's `surface` must be a surface part",
+                            ));
+                        }
                     }
                 }
             }

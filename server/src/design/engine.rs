@@ -5,10 +5,10 @@
 //! error becomes a [`CommandError`] with a stable kind.
 
 use super::doc::{AnchorDoc, DerivativeDoc, IconRoleDoc, IconStateDoc, MaterialDoc};
-use super::part::SurfacePart;
 use super::edit::SurfaceQuery;
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
+use super::part::SurfacePart;
 use glam::DVec3;
 use std::collections::BTreeMap;
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};

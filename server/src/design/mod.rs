@@ -11,6 +11,7 @@ pub mod doc;
 pub mod edit;
 pub mod engine;
 pub mod error;
+pub mod exchange;
 pub mod hub;
 pub mod legacy;
 pub mod model;

@@ -9,12 +9,12 @@ pub use super::doc::DesignDoc;
 pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc};
 pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
 use super::engine::Engine;
+use super::error::{CommandError, ErrorKind};
 use super::part::{PartBody, SurfacePart};
 use super::product_engine::ProductEngine;
-use std::collections::BTreeMap;
-use super::error::{CommandError, ErrorKind};
 use crate::cad::IgesSurface;
 use glam::DVec3;
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
 /// A tessellation for mesh export.

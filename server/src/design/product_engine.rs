@@ -263,9 +263,7 @@ impl ProductEngine {
             .insert_part(PartId(id), part)
             .map_err(product_error)?;
         for (jid, join) in removed.joins {
-            self.product
-                .insert_join(jid, join)
-                .map_err(product_error)?;
+            self.product.insert_join(jid, join).map_err(product_error)?;
         }
         for (bid, b) in removed.bindings {
             self.product

@@ -1,0 +1,118 @@
+//! CAD exchange of a whole product: the parts of a design to IGES parts
+//! (every surface as an entity 128, every curve as a 126, each named) and
+//! IGES parts into a design as new parts (names from the file, made unique;
+//! unnamed entities numbered). The byte-level IGES work is `crate::cad`'s.
+
+use super::doc::{DesignDoc, SurfaceDoc};
+use super::error::{CommandError, ErrorKind};
+use super::part::{CurveDoc, CurvePart, MAX_PARTS, PALETTE, PartBody, PartDoc, SurfacePart};
+use crate::cad::{IgesCurve, IgesEntity, IgesPart};
+
+/// The IGES parts of `doc`: part `only`, or every part (hidden ones too:
+/// the exchange file is the whole product), named by their part names.
+pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>, CommandError> {
+    let parts: Vec<&PartDoc> =
+        match only {
+            Some(id) => vec![doc.part(id).ok_or_else(|| {
+                CommandError::new(ErrorKind::UnknownPart, format!("no part {id}"))
+            })?],
+            None => doc.parts.iter().collect(),
+        };
+    Ok(parts
+        .into_iter()
+        .map(|p| IgesPart {
+            name: Some(p.name.clone()),
+            entity: match &p.body {
+                PartBody::Surface(s) => IgesEntity::Surface(s.surface.to_iges()),
+                PartBody::Curve(c) => IgesEntity::Curve(IgesCurve {
+                    degree: c.curve.degree,
+                    knots: c.curve.knots.clone(),
+                    points: c.curve.points.clone(),
+                }),
+            },
+        })
+        .collect())
+}
+
+/// A name not used in `doc` (nor in `taken`): `name`, else `name (2)`, …
+fn unique_name(doc: &DesignDoc, taken: &[String], name: &str) -> String {
+    let used = |n: &str| doc.parts.iter().any(|p| p.name == n) || taken.iter().any(|t| t == n);
+    if !used(name) {
+        return name.to_string();
+    }
+    (2..)
+        .map(|k| format!("{name} ({k})"))
+        .find(|n| !used(n))
+        .unwrap_or_else(|| name.to_string())
+}
+
+/// `doc` with every IGES part added as a new part (bare: no icons), and the
+/// new part ids. Parts beyond the design's limit are refused, as is any part
+/// the validator refuses (nothing is added then).
+pub fn with_iges_parts(
+    doc: &DesignDoc,
+    parts: &[IgesPart],
+) -> Result<(DesignDoc, Vec<u64>), CommandError> {
+    if doc.parts.len() + parts.len() > MAX_PARTS {
+        return Err(CommandError::new(
+            ErrorKind::InvalidValue,
+            format!(
+                "the file has {} parts; a design holds at most {MAX_PARTS} ({} now)",
+                parts.len(),
+                doc.parts.len()
+            ),
+        ));
+    }
+    let mut out = doc.clone();
+    let mut names = Vec::new();
+    let mut ids = Vec::new();
+    for (k, p) in parts.iter().enumerate() {
+        let (kind, body) = match &p.entity {
+            IgesEntity::Surface(s) => (
+                "surface",
+                PartBody::Surface(SurfacePart {
+                    surface: SurfaceDoc::from_iges(s),
+                    material: Default::default(),
+                    icons: Vec::new(),
+                    kappa: None,
+                }),
+            ),
+            IgesEntity::Curve(c) => (
+                "curve",
+                PartBody::Curve(CurvePart {
+                    curve: CurveDoc {
+                        degree: c.degree,
+                        knots: c.knots.clone(),
+                        points: c.points.clone(),
+                    },
+                    material: Default::default(),
+                    icons: Vec::new(),
+                    kappa: None,
+                }),
+            ),
+        };
+        body.validate()?;
+        let base = p
+            .name
+            .as_deref()
+            .map(str::trim)
+            .filter(|n| !n.is_empty() && !n.chars().any(char::is_control))
+            .map(|n| n.chars().take(200).collect::<String>())
+            .unwrap_or_else(|| format!("imported {kind} {}", k + 1));
+        let name = unique_name(&out, &names, &base);
+        names.push(name.clone());
+        let id = out.next_part;
+        out.next_part += 1;
+        out.parts.push(PartDoc {
+            id,
+            name,
+            visible: true,
+            locked: false,
+            colour: PALETTE[out.parts.len() % PALETTE.len()].to_string(),
+            body,
+        });
+        ids.push(id);
+    }
+    out.validate()?;
+    Ok((out, ids))
+}
