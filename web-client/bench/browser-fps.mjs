@@ -19,7 +19,10 @@
 // baseline git revision (default: the last commit before the fast path),
 // alternating.
 //
-//   node bench/browser-fps.mjs [--before REV|none] [--seconds 5] [--rounds 2]
+//   node bench/browser-fps.mjs [--before REV|none] [--seconds 5] [--rounds 2] [--parts N]
+//
+// With --parts N the run also measures the 81×159 part among N parts (N − 1
+// small plates beside it, the drags on the big part).
 //
 // Frame pacing is Chromium's own: headless on this machine it hands a page
 // anywhere from ~3 (idle) to ~30 animation frames per second depending on
@@ -120,7 +123,10 @@ const sample = (page) =>
     js: window.__js,
     render: window.__render,
     rafs: window.__rafs,
-    uploads: window.vsculpt.view.geometry.attributes.position.version,
+    // Uploads of every part's mesh positions (a benchmark run drags one part).
+    uploads: window.vsculpt.partsView
+      ? [...window.vsculpt.partsView.drawings.values()].reduce((n, d) => n + (d.mesh.geometry.attributes.position?.version || 0), 0)
+      : window.vsculpt.view.geometry.attributes.position.version,
     frames: window.vsculpt.state.frames,
     perf: window.vsculpt.perf ? { ...window.vsculpt.perf } : null,
   }));
@@ -169,27 +175,27 @@ async function viewerScenario(browser, server, design, viewerPage, icon) {
   await driver.goto(`${server.base}/healthz`);
   const start = await viewerPage.evaluate((id) => window.vsculpt.state.icons.get(id).xyz, icon);
   await driver.evaluate(
-    ({ design: d, token, id, xyz, ms }) =>
+    ({ design: d, token, id, part, xyz, ms }) =>
       new Promise((resolve, reject) => {
         const ws = new WebSocket(`ws://${location.host}/ws`);
         window.__ws = ws;
         ws.onerror = () => reject(new Error('driver socket failed'));
         ws.onopen = () => {
-          ws.send(JSON.stringify({ type: 'hello', protocol: 1, token, design: d, client_name: 'fps-driver', client_kind: 'tool' }));
-          ws.send(JSON.stringify({ type: 'drag_start', icon: id, req: 1 }));
+          ws.send(JSON.stringify({ type: 'hello', protocol: 2, token, design: d, client_name: 'fps-driver', client_kind: 'tool' }));
+          ws.send(JSON.stringify({ type: 'drag_start', part, icon: id, req: 1 }));
           let k = 0;
           const timer = setInterval(() => {
             k++;
-            ws.send(JSON.stringify({ type: 'drag', icon: id, xyz: [xyz[0], xyz[1], xyz[2] + 3 * Math.abs(Math.sin(k / 30))], req: k + 1 }));
+            ws.send(JSON.stringify({ type: 'drag', part, icon: id, xyz: [xyz[0], xyz[1], xyz[2] + 3 * Math.abs(Math.sin(k / 30))], req: k + 1 }));
           }, 1000 / 60);
           setTimeout(() => {
             clearInterval(timer);
-            ws.send(JSON.stringify({ type: 'drag_end', icon: id }));
+            ws.send(JSON.stringify({ type: 'drag_end', part, icon: id }));
           }, ms);
           resolve();
         };
       }),
-    { design: design.id, token: design.tokens.editor, id: icon, xyz: start, ms: (seconds + 2) * 1000 },
+    { design: design.id, token: design.tokens.editor, id: icon, part: await viewerPage.evaluate((i) => window.vsculpt.state.icons.get(i).part, icon), xyz: start, ms: (seconds + 2) * 1000 },
   );
   await sleep(700);
   const a = await sample(viewerPage);
@@ -207,6 +213,13 @@ async function measure(browser, variant) {
     const url = (token) => `${server.base}/?design=${design.id}&token=${token}${variant.query || ''}`;
     const editor = await openClient(browser, url(design.tokens.editor), (p) => p.addInitScript(instrument));
     await timeRender(editor);
+    // A product: the 81×159 part and (parts − 1) small plates beside it; the drags stay on the big part.
+    for (let k = 1; k < (variant.parts || 1); k++) {
+      const count = await editor.evaluate(() => window.vsculpt.partsView.drawings.size);
+      await editor.evaluate(() => window.vsculpt.addPlane());
+      await editor.waitForFunction((c) => window.vsculpt.partsView.drawings.size > c, count, { timeout: 20000 });
+    }
+    await editor.evaluate(() => window.vsculpt.selectPart([...window.vsculpt.design.parts.keys()][0]));
     const n = await editor.evaluate(() => window.vsculpt.state.icons.size);
     await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.5, v: 0.5 }, { kind: 'load' }));
     await editor.waitForFunction((k) => window.vsculpt.state.icons.size > k, n, { timeout: 20000 });
@@ -236,6 +249,9 @@ const variants = [
   { name: 'this tree', dir: webDir },
   { name: 'this tree, ?worker=0', dir: webDir, query: '&worker=0' },
 ];
+// --parts N: the same with the 81×159 part among N parts (issue 11: a frame of one part costs what it costs alone).
+const parts = Number(arg('parts', 1));
+if (parts > 1) variants.push({ name: `this tree, ${parts} parts`, dir: webDir, parts });
 let baseline = null;
 if (before !== 'none') {
   baseline = clientAt(before);

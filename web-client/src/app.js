@@ -1,8 +1,10 @@
 // The vsculpt web client: joins the design named in the page URL
 // (?design=ID&token=TOKEN; the token is then moved out of the address bar),
-// draws it live, and — for an editor link — lets a
-// person create, drag and switch icons, set the material, undo, commit,
-// revert and restore versions. A viewer link shows the same, read-only, with
+// draws its parts live, and — for an editor link — lets a person select a
+// part (in the parts panel or the view), create, drag and switch icons on
+// it, show, hide, lock, rename, recolour, add, delete and join parts, set a
+// part's material, undo, commit, revert and restore versions. A viewer link
+// shows the same, read-only (it may hide parts on its own page), with
 // presence. Exposed as `window.vsculpt` for scripting and tests.
 
 import * as THREE from 'three';
@@ -13,14 +15,18 @@ import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
 import { XRSculpt } from './xr.js';
+import { Design, domainOf, relationParts } from './design.js';
+import { PartsView } from './parts-view.js';
+import { PartsPanel } from './parts-panel.js';
+import { deviation, sameDomain, versionSurface } from './compare.js';
 
 const params = new URLSearchParams(location.search);
-const design = Number(params.get('design') || 1);
+const designId = Number(params.get('design') || 1);
 // The token arrives in the link (?token= or #token=) and leaves the address
 // bar at once: kept for this tab only (sessionStorage, so a reload still
 // works), never in history, bookmarks or a referrer.
 const fragment = new URLSearchParams(location.hash.slice(1));
-const tokenKey = `vsculpt-token-${design}`;
+const tokenKey = `vsculpt-token-${designId}`;
 const token = params.get('token') || fragment.get('token') || sessionStorage.getItem(tokenKey) || '';
 if (token) sessionStorage.setItem(tokenKey, token);
 if (params.has('token') || fragment.has('token')) {
@@ -31,27 +37,36 @@ const $ = (id) => document.getElementById(id);
 
 const state = {
   access: null,
-  surface: null,
-  tess: null,
-  icons: new Map(),
+  /** The design: parts, relations, icons (design.js). */
+  design: new Design(),
   versions: [],
   presence: [],
+  /** The selected icon's id, or null. */
   selected: null,
+  /** The selected part's id (the icon tools act on it), or null. */
+  selectedPart: null,
+  /** Parts hidden on this page only (a viewer's show/hide; an editor's goes to everyone). */
+  hidden: new Set(),
   create: 'none',
   pending: [],
   revision: 0,
   frames: 0,
-  material: null,
   lastError: null,
   toasts: [],
   online: null,
   canUndo: false,
   canRedo: false,
-  /** The version being compared with: { version, other (its surface), tess, deviation, max } or null. */
+  /** The version being compared with: { version, part, other (its surface), tess, deviation, max } or null. */
   compare: null,
+  /** Every icon of the design by id (each with `part`). */
+  get icons() {
+    return this.design.icons;
+  },
 };
+const design = state.design;
 
 const view = new View($('viewport'));
+const partsView = new PartsView(view);
 const icons = new IconLayer(view.model);
 
 function status(kind, text) {
@@ -117,61 +132,97 @@ function setOnline(online) {
     pendingDrag = null;
   }
   gizmo.enabled = online;
+  renderPanels();
 }
 
-function surfaceFromSnapshot(s) {
-  return {
-    degreeU: s.u.degree,
-    degreeV: s.v.degree,
-    knotsU: Float64Array.from(s.u.knots),
-    knotsV: Float64Array.from(s.v.knots),
-    nu: s.nu,
-    nv: s.nv,
-    points: Float32Array.from(s.points.flat()),
-  };
+/** Whether part `id` is drawn here (visible for everyone and not hidden on this page). */
+function partShownHere(id) {
+  const p = design.parts.get(id);
+  return !!p && p.visible && !state.hidden.has(id);
 }
 
-/** Most vertices a tessellation may have. */
-const VERTEX_BUDGET = 50000;
-
-function density(s) {
-  // About 4 vertices per control point along each direction, within a budget
-  // of 50 000 vertices (81×159 gets 162×318; BENCHMARKS.md, web client).
-  let su = 4 * s.nu;
-  let sv = 4 * s.nv;
-  const scale = Math.min(1, Math.sqrt(VERTEX_BUDGET / (su * sv)));
-  su = Math.max(2 * s.nu, Math.round(su * scale), 8);
-  sv = Math.max(2 * s.nv, Math.round(sv * scale), 8);
-  return [su, sv];
+/** The icons of the parts drawn here. */
+function drawnIcons() {
+  const out = new Map();
+  for (const [id, icon] of design.icons) if (partShownHere(icon.part)) out.set(id, icon);
+  return out;
 }
+
+const geometryOf = (partId) => design.parts.get(partId)?.geometry || null;
 
 /** Work counted for BENCHMARKS.md (bench/browser-fps.mjs reads it): full redraws, surfaces sent to the worker and shown; when the first picture was drawn (ms since navigation start). */
 const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null, firstPicture: null };
 
-/** Counts surface changes (frames, snapshots); what the mesh shows is `shownSeq`. */
-let surfaceSeq = 0;
-let shownSeq = 0;
+/** Per part: how many shapes arrived (frames, snapshots) and which of them its drawing shows. */
+const partSeq = new Map();
+const partShownSeq = new Map();
+/** Parts with a frame not yet drawn. */
+const dirtyParts = new Set();
+/** Whether any part has been drawn (the first picture). */
+let pictured = false;
 
-/** Full redraw: tessellation on the main thread, exact bounds, icons rebuilt. */
+/** Full redraw: every part's drawing filled on the main thread, exact bounds, icons rebuilt. */
 function redraw() {
-  const s = state.surface;
-  if (!s) return;
   perf.redraws++;
-  if (!state.tess || !state.tess.fits(s)) state.tess = new Tessellator(s, ...density(s));
-  state.tess.fill(s);
-  shownSeq = surfaceSeq;
-  view.setTessellation(state.tess);
-  view.setNet(s);
-  icons.size = view.geometry.boundingSphere ? view.geometry.boundingSphere.radius * 0.025 : 0.05;
-  icons.update(state.icons, s, state.selected);
+  partsView.sync(design, { hidden: state.hidden, selected: state.selectedPart });
+  for (const id of design.parts.keys()) partShownSeq.set(id, partSeq.get(id) || 0);
+  dirtyParts.clear();
+  if (partsView.drawings.size) pictured = true;
+  const sphere = view.boundingSphere();
+  icons.size = sphere ? sphere.radius * 0.025 : 0.05;
+  icons.update(drawnIcons(), geometryOf, state.selected);
   attachGizmo();
   updateCompare();
+}
+
+/** The selected part, or undefined. */
+const selectedPart = () => design.parts.get(state.selectedPart);
+
+/** Keeps a selection that still exists; else the first part (the icon tools always have a part to act on). */
+function keepSelection() {
+  if (state.selected != null && !design.icons.has(state.selected)) state.selected = null;
+  if (state.selectedPart == null || !design.parts.has(state.selectedPart)) {
+    const first = [...design.parts.values()].find((p) => !p.provisional && partShownHere(p.id)) || [...design.parts.values()].find((p) => !p.provisional);
+    state.selectedPart = first ? first.id : null;
+    state.pending = [];
+    $('pending').textContent = '';
+  }
+}
+
+const partsPanel = new PartsPanel({
+  list: $('parts'),
+  relations: $('relations'),
+  joinForm: $('join'),
+  bindForm: $('bind'),
+  onSelect: (id) => selectPart(id),
+  onVisible: (id, visible) => setVisible(id, visible),
+  onLock: (id, locked) => send({ type: 'set_part', part: id, locked }),
+  onRename: (id, name) => send({ type: 'set_part', part: id, name }),
+  onColour: (id, colour) => send({ type: 'set_part', part: id, colour }),
+  onDelete: (id) => send({ type: 'delete_part', part: id }),
+  onJoin: (relation) => send({ type: 'relate', relation }),
+  onBind: (relation) => send({ type: 'relate', relation }),
+  onUnrelate: (id) => send({ type: 'unrelate', relation: id }),
+});
+
+/** Shows or hides part `id`: for everyone from an editor (set_part), on this page only for a viewer. */
+function setVisible(id, visible) {
+  if (state.access === 'editor') {
+    state.hidden.delete(id);
+    send({ type: 'set_part', part: id, visible });
+    return;
+  }
+  if (visible) state.hidden.delete(id);
+  else state.hidden.add(id);
+  if (!visible && state.selected != null && design.icons.get(state.selected)?.part === id) state.selected = null;
+  redraw();
+  renderPanels();
 }
 
 function renderPanels() {
   const editor = state.access === 'editor';
   document.body.classList.toggle('viewer', !editor);
-  $('role').textContent = state.access ? `${state.access} · design ${design}` : '';
+  $('role').textContent = state.access ? `${state.access} · design ${designId}` : '';
   $('presence').innerHTML = state.presence
     .map((p) => `<li>${escape(p.name)} <small>${p.access}</small>${p.holding ? ` holds icon ${p.holding}` : ''}</li>`)
     .join('');
@@ -182,19 +233,33 @@ function renderPanels() {
       <button data-compare="${v.version}">${state.compare && state.compare.version === v.version ? 'comparing' : 'compare'}</button>
       ${editor ? `<button data-restore="${v.version}"${state.online ? '' : ' disabled'}>restore</button>` : ''}</li>`)
     .join('');
-  const sel = state.icons.get(state.selected);
+  partsPanel.render({ design, selected: state.selectedPart, hidden: state.hidden, editor, online: !!state.online });
+  const part = selectedPart();
+  $('target-part').textContent = part ? `on ${part.name} (${part.kind})${part.locked ? ' · locked' : ''}` : 'no part selected';
+  const curve = part && part.kind === 'curve';
+  for (const o of $('create').options) o.disabled = curve && (o.value === 'curve' || o.value === 'join');
+  $('create').querySelector('option[value=point]').textContent = curve ? 'param icon (t)' : 'point icon';
+  $('create').querySelector('option[value=region]').textContent = curve ? 'span icon (t0…t1)' : 'region icon';
+  for (const sel of [$('create-role'), $('sel-role')]) for (const o of sel.options) o.hidden = curve && !CURVE_ROLES.has(o.value);
+  const sel = design.icons.get(state.selected);
   $('selection').hidden = !sel;
   if (sel) {
-    $('sel-title').textContent = `icon ${sel.id} · ${sel.anchor.kind}`;
+    const owner = design.parts.get(sel.part);
+    $('sel-title').textContent = `icon ${sel.id} · ${sel.anchor.kind} on ${owner ? owner.name : `part ${sel.part}`}`;
     $('sel-role').value = sel.role.kind === 'derivative' ? sel.role.which : sel.role.kind;
     $('sel-state').value = sel.state;
     $('sel-sensors').textContent = sel.sensors.join(', ') || 'none';
   }
-  if (state.material) {
-    $('alpha').value = state.material.alpha11;
-    $('beta').value = state.material.beta11;
+  const m = part && part.material;
+  $('material-part').textContent = part ? part.name : '';
+  if (m && m.alpha11 !== undefined) {
+    $('alpha').value = m.alpha11;
+    $('beta').value = m.beta11;
+  } else if (m && m.alpha !== undefined) {
+    $('alpha').value = m.alpha;
+    $('beta').value = m.beta;
   }
-  for (const fmt of ['igs', 'obj', 'stl', 'gltf']) $(`export-${fmt}`).href = `/api/designs/${design}/export.${fmt}?token=${encodeURIComponent(token)}`;
+  for (const fmt of ['igs', 'obj', 'stl', 'gltf']) $(`export-${fmt}`).href = `/api/designs/${designId}/export.${fmt}?token=${encodeURIComponent(token)}`;
 }
 
 function escape(s) {
@@ -208,33 +273,38 @@ function onMessage(msg) {
       break;
     case 'snapshot':
       shellDesign(msg.design);
-      // The compact join (geometry_first): the points came in the frame before
+      // The compact join (geometry_first): the points came in the frames before
       // this snapshot, and frames keep them current; only a full snapshot carries them.
-      if (msg.surface.points.length) {
-        state.surface = surfaceFromSnapshot(msg.surface);
-        surfaceSeq++;
-      }
-      state.icons = new Map(msg.icons.map((i) => [i.id, i]));
+      for (const p of msg.parts) if (partHasPoints(p)) partSeq.set(p.id, (partSeq.get(p.id) || 0) + 1);
+      design.applySnapshot(msg);
+      for (const id of [...state.hidden]) if (!design.parts.has(id)) state.hidden.delete(id);
       state.versions = msg.versions;
       state.presence = msg.presence;
-      state.material = msg.material;
       state.revision = msg.revision;
+      keepSelection();
       setHistory(msg.can_undo, msg.can_redo);
       redraw();
       break;
+    case 'part_created':
+    case 'part_deleted':
+    case 'part_changed':
+    case 'relation_created':
+    case 'relation_deleted':
     case 'icon_created':
     case 'icon_updated':
-      state.icons.set(msg.icon.id, msg.icon);
-      redraw();
-      break;
     case 'icon_deleted':
-      state.icons.delete(msg.icon);
-      if (state.selected === msg.icon) state.selected = null;
-      redraw();
+    case 'material_changed': {
+      if (msg.type === 'part_created' && partHasPoints(msg.part)) partSeq.set(msg.part.id, (partSeq.get(msg.part.id) || 0) + 1);
+      design.applyEvent(msg);
+      if (msg.type === 'part_deleted') {
+        state.hidden.delete(msg.part);
+        if (tessWorker) tessWorker.forget(msg.part);
+        if (state.compare && state.compare.part === msg.part) stopCompare();
+      }
+      keepSelection();
+      if (msg.type !== 'material_changed') redraw();
       break;
-    case 'material_changed':
-      state.material = msg.material;
-      break;
+    }
     case 'committed':
       state.versions.push(msg.version);
       break;
@@ -266,6 +336,12 @@ function onMessage(msg) {
   renderPanels();
 }
 
+/** Whether a part's JSON carries its control points (a full snapshot or part_created). */
+function partHasPoints(p) {
+  const s = p.shape;
+  return (s.kind === 'surface' ? s.surface.points : s.curve.points).length > 0;
+}
+
 function setHistory(canUndo, canRedo) {
   state.canUndo = canUndo;
   state.canRedo = canRedo;
@@ -275,20 +351,19 @@ function setHistory(canUndo, canRedo) {
 
 function onFrame(f) {
   state.frames++;
-  state.revision = f.revision;
-  state.surface = { degreeU: f.degreeU, degreeV: f.degreeV, knotsU: f.knotsU, knotsV: f.knotsV, nu: f.nu, nv: f.nv, points: f.points };
-  surfaceSeq++;
-  for (const fi of f.icons) {
-    const icon = state.icons.get(fi.id);
-    if (icon) icon.xyz = fi.xyz;
-  }
-  // Coalescing: the render loop tessellates only the newest surface, once per animation frame.
+  const known = design.parts.has(f.part);
+  if (!design.applyFrame(f)) return;
+  state.revision = design.revision;
+  partSeq.set(f.part, (partSeq.get(f.part) || 0) + 1);
+  if (!known) keepSelection();
+  dirtyParts.add(f.part);
+  // Coalescing: the render loop tessellates only the newest shape of each part, once per animation frame.
   frameDue = true;
   clearTimeout(settleTimer);
   settleTimer = setTimeout(settle, SETTLE_MS);
 }
 
-/** After this long without a frame, a full redraw redraws icons (curves, regions) on the settled surface. */
+/** After this long without a frame, a full redraw redraws icons (curves, regions, spans) on the settled shapes. */
 const SETTLE_MS = 200;
 let settleTimer = null;
 let frameDue = false;
@@ -298,46 +373,67 @@ function settle() {
   else redraw();
 }
 
-
-/** The per-frame path: the newest surface to the worker (or filled here when there is none); same layout only. */
-function showNewestFrame() {
-  const s = state.surface;
-  if (!s) return;
-  if (!state.tess || !state.tess.fits(s)) {
-    redraw();
-    return;
+/** The per-frame path: each changed part's newest shape to the worker (or filled here: curves, or when there is no worker); a new layout or a new part takes a full redraw; hidden parts wait. */
+function showNewestFrames() {
+  let full = false;
+  for (const id of dirtyParts) {
+    const part = design.parts.get(id);
+    // A hidden part's newest shape waits: showing it again redraws it (its drawing then lags its shape).
+    if (!part || !part.geometry || !partShownHere(id)) continue;
+    const seq = partSeq.get(id) || 0;
+    if (!partsView.drawings.has(id)) {
+      full = true;
+    } else if (part.kind === 'curve') {
+      perf.submitted++;
+      partsView.fill(id, part.geometry);
+      partShown(id, seq, null);
+    } else {
+      const tess = partsView.tessFor(id, part.geometry);
+      if (!tess) {
+        full = true;
+        continue;
+      }
+      perf.submitted++;
+      if (!tessWorker || !tessWorker.submit(id, seq, part.geometry, tess)) {
+        tess.fill(part.geometry);
+        partShown(id, seq, tess, part.geometry);
+      }
+    }
   }
-  perf.submitted++;
-  if (!tessWorker || !tessWorker.submit(surfaceSeq, s, state.tess)) {
-    state.tess.fill(s);
-    surfaceShown(surfaceSeq, state.tess);
-  }
+  dirtyParts.clear();
+  if (full) redraw();
 }
 
-/** `tess` now holds surface number `seq`: update the mesh, the net and the handles in place. */
-function surfaceShown(seq, tess) {
-  if (seq <= shownSeq || tess !== state.tess) return;
-  shownSeq = seq;
+/** Part `id`'s drawing now shows shape number `seq` (`tess` holds it for a surface: `g`): the mesh, seams and handles in place. */
+function partShown(id, seq, tess, g) {
+  if (seq <= (partShownSeq.get(id) || 0)) return;
+  partShownSeq.set(id, seq);
   perf.shown++;
-  view.updateTessellation(tess);
-  view.setNet(state.surface);
-  if (state.compare) updateCompare();
-  icons.move([...state.icons.values()].map((i) => ({ id: i.id, xyz: i.xyz })));
+  pictured = true;
+  const part = design.parts.get(id);
+  if (tess && part) partsView.surfaceFilled(id, tess, g);
+  if ([...design.relations.values()].some((r) => relationParts(r).includes(id))) partsView.drawSeams(design);
+  if (state.compare && state.compare.part === id) updateCompare();
+  if (part) icons.move([...part.icons].map((i) => design.icons.get(i)).filter(Boolean).map((i) => ({ id: i.id, xyz: i.xyz })));
 }
 
 // `?worker=0` keeps the same fill on the main thread (compared in bench/browser-fps.mjs).
 const tessWorker = params.get('worker') === '0' ? null : new TessellationWorker({
-  onFilled: surfaceShown,
+  onFilled: (id, seq, tess, g) => partShown(id, seq, tess, g),
   onFailure: (reason) => {
     perf.workerFailed = reason;
+    for (const id of design.parts.keys()) dirtyParts.add(id);
     frameDue = true;
   },
 });
 
-
-/** Sends `msg`; when the link is down says so and returns null (nothing is sent, nothing is queued). */
+/**
+ * Sends `msg` (a message acting on an icon is addressed to the icon's part
+ * when it names none); when the link is down says so and returns null
+ * (nothing is sent, nothing is queued).
+ */
 function send(msg) {
-  const req = link.send(msg);
+  const req = link.send(design.addressed(msg));
   if (req === null) toast(`not connected: ${msg.type.replace(/_/g, ' ')} was not sent`);
   return req;
 }
@@ -351,14 +447,25 @@ view.model.add(proxy);
 let dragging = false;
 let pendingDrag = null;
 
+/** Where the gizmo of icon `icon` sits: a point-like position constraint's target, else the icon on its part. */
+function dragPoint(icon) {
+  return icon.role.kind === 'position' && (icon.anchor.kind === 'point' || icon.anchor.kind === 'param') ? icon.target : icon.xyz;
+}
+
+/** Whether icon `icon` may be dragged from this page: an editor's, on a part drawn here and not locked, not a derivative. */
+function draggable(icon) {
+  const part = icon && design.parts.get(icon.part);
+  return !!part && state.access === 'editor' && !part.locked && partShownHere(part.id) && icon.role.kind !== 'derivative';
+}
+
 function attachGizmo() {
   const sel = state.icons.get(state.selected);
-  if (!sel || state.access !== 'editor' || sel.role.kind === 'derivative') {
+  if (!draggable(sel)) {
     gizmo.detach();
     return;
   }
   if (!dragging) {
-    proxy.position.set(...(sel.role.kind === 'position' && sel.anchor.kind === 'point' ? sel.target : sel.xyz));
+    proxy.position.set(...dragPoint(sel));
     gizmo.attach(proxy);
   }
 }
@@ -422,12 +529,36 @@ view.renderer.domElement.addEventListener('pointerup', (e) => {
     select(hitIcon.object.userData.iconId);
     return;
   }
-  const hit = raycaster.intersectObject(view.mesh, false)[0];
-  if (hit && hit.uv) pick(hit.uv.x, hit.uv.y);
+  const hit = raycaster.intersectObjects(partsView.pickables(), false)[0];
+  const at = hit && partsView.hitParams(hit);
+  if (!at) return;
+  if (at.part !== state.selectedPart) selectPart(at.part);
+  if (at.kind === 'surface') pick(at.u, at.v);
+  else pick(at.t);
 });
 
+/** Selects icon `id` (and its part), or nothing. */
 function select(id) {
   state.selected = id;
+  const icon = design.icons.get(id);
+  if (icon && icon.part !== state.selectedPart) {
+    state.selectedPart = icon.part;
+    state.pending = [];
+    $('pending').textContent = '';
+  }
+  redraw();
+  renderPanels();
+}
+
+/** Selects part `id`: the icon tools and the material act on it; a selected icon of another part is let go. */
+function selectPart(id) {
+  if (!design.parts.has(id)) return;
+  if (state.selectedPart !== id && state.create !== 'join') {
+    state.pending = [];
+    $('pending').textContent = '';
+  }
+  state.selectedPart = id;
+  if (state.selected != null && design.icons.get(state.selected)?.part !== id) state.selected = null;
   redraw();
   renderPanels();
 }
@@ -442,13 +573,43 @@ const ROLES = {
   V2: { kind: 'derivative', which: 'V2' },
   RV: { kind: 'derivative', which: 'RV' },
 };
+/** The roles an icon on a curve part may take (README: load, position, derivative R or R2). */
+const CURVE_ROLES = new Set(['position', 'load', 'R', 'R2']);
 
-/** A click on the surface at (u, v) in the current creation mode. */
+/**
+ * A click on the selected part in the current creation mode: at (u, v) on a
+ * surface part (point, curve or region icon), at t (the first argument) on
+ * a curve part (param or span icon).
+ */
 function pick(u, v) {
   if (state.access !== 'editor') return;
+  const part = selectedPart();
+  if (!part) return;
   const mode = state.create;
   const role = ROLES[$('create-role').value] || ROLES.position;
-  if (mode === 'point') {
+  if (part.kind === 'curve') {
+    const t = u;
+    if (mode === 'point') {
+      createIcon({ kind: 'param', t }, role);
+    } else if (mode === 'region') {
+      state.pending.push(t);
+      $('pending').textContent = 'span start picked: click where it ends (Esc cancels)';
+      if (state.pending.length === 2) {
+        const [t0, t1] = state.pending.slice().sort((a, b) => a - b);
+        state.pending = [];
+        $('pending').textContent = '';
+        createIcon({ kind: 'span', t0, t1 }, role);
+      }
+    } else if (mode === 'curve') {
+      toast('a curve icon goes on a surface part: pick a surface, or make a param or span icon here', 'info');
+    } else if (mode === 'join') {
+      toast('a join ties two surface edges: pick an edge of a surface part', 'info');
+    }
+    return;
+  }
+  if (mode === 'join') {
+    pickEdge(part, u, v);
+  } else if (mode === 'point') {
     createIcon({ kind: 'point', u, v }, role);
   } else if (mode === 'curve') {
     state.pending.push([u, v]);
@@ -465,21 +626,92 @@ function pick(u, v) {
   }
 }
 
-function createIcon(anchor, role) {
-  return send({ type: 'create_icon', spec: { anchor, role, state: 'passive' } });
+/** The edge of surface geometry `g` nearest to (u, v), measured across the domain (u_min, u_max, v_min, v_max). */
+function nearestEdge(g, u, v) {
+  const [[u0, u1], [v0, v1]] = domainOf(g);
+  const su = (u - u0) / (u1 - u0);
+  const sv = (v - v0) / (v1 - v0);
+  return [['u_min', su], ['u_max', 1 - su], ['v_min', sv], ['v_max', 1 - sv]].sort((a, b) => a[1] - b[1])[0][0];
+}
+
+/**
+ * The join tool in the view: a click on a surface picks its nearest edge;
+ * the second click (on another part) joins the two with the continuity and
+ * direction chosen in the panel's join form.
+ */
+function pickEdge(part, u, v) {
+  const edge = nearestEdge(part.geometry, u, v);
+  const f = $('join').elements;
+  if (!state.pending.length) {
+    state.pending = [{ part: part.id, edge }];
+    $('pending').textContent = `${part.name} ${edge.replace('_', ' ')} picked: click the edge to join it to (Esc cancels)`;
+    return;
+  }
+  const [a] = state.pending;
+  state.pending = [];
+  $('pending').textContent = '';
+  if (a.part === part.id && a.edge === edge) return;
+  send({ type: 'relate', relation: { kind: 'join', a, b: { part: part.id, edge }, continuity: f['join-continuity'].value, reversed: f['join-reversed'].checked } });
+}
+
+/** Creates an icon on part `part` (default: the selected part); refused here when a curve part cannot take the role. */
+function createIcon(anchor, role, part = state.selectedPart) {
+  const p = design.parts.get(part);
+  if (p && p.kind === 'curve') {
+    const name = role.kind === 'derivative' ? role.which : role.kind;
+    if (!CURVE_ROLES.has(name)) {
+      toast(`an icon on a curve is a load, a position or a derivative R or R2, not ${name}`, 'info');
+      return null;
+    }
+  }
+  return send({ type: 'create_icon', part, spec: { anchor, role, state: 'passive' } });
 }
 
 function finishCurve() {
   const pts = state.pending;
   state.pending = [];
   $('pending').textContent = '';
-  if (pts.length < 2) return;
+  if (pts.length < 2 || !Array.isArray(pts[0])) return;
   const degree = Math.min(3, pts.length - 1);
   const n = pts.length;
   const knots = [...Array(degree + 1).fill(0)];
   for (let k = 1; k < n - degree; k++) knots.push(k / (n - degree));
   knots.push(...Array(degree + 1).fill(1));
   createIcon({ kind: 'curve', curve: { knots: { degree, knots }, points: pts } }, ROLES[$('create-role').value] || ROLES.position);
+}
+
+// --- parts: add -----------------------------------------------------------------
+
+/** A name not yet used by a part: `base 1`, `base 2`, … */
+function freshName(base) {
+  const used = new Set([...design.parts.values()].map((p) => p.name));
+  for (let k = 1; ; k++) if (!used.has(`${base} ${k}`)) return `${base} ${k}`;
+}
+
+/** Where a new part goes: beside what is drawn (x beyond its right side), sized like a third of it. */
+function placeNew() {
+  const box = view.bounds();
+  if (!box || box.isEmpty()) return { x: 0, y: 0, z: 0, size: 1 };
+  const size = Math.max(box.max.x - box.min.x, box.max.y - box.min.y, 1e-3) / 3;
+  return { x: box.max.x + size * 0.3, y: (box.min.y + box.max.y) / 2 - size / 2, z: (box.min.z + box.max.z) / 2, size };
+}
+
+/** Adds a small flat bicubic plate (6 × 6 control points) beside the design. */
+function addPlane() {
+  const { x, y, z, size } = placeNew();
+  const n = 6;
+  const knots = [0, 0, 0, 0, 1 / 3, 2 / 3, 1, 1, 1, 1];
+  const points = [];
+  for (let i = 0; i < n; i++) for (let j = 0; j < n; j++) points.push([x + (size * i) / (n - 1), y + (size * j) / (n - 1), z]);
+  return send({ type: 'create_part', spec: { name: freshName('plane'), shape: { kind: 'surface', surface: { u: { degree: 3, knots }, v: { degree: 3, knots }, nu: n, nv: n, points } } } });
+}
+
+/** Adds a cubic curve (6 control points, a gentle arch) beside the design. */
+function addCurve() {
+  const { x, y, z, size } = placeNew();
+  const n = 6;
+  const points = Array.from({ length: n }, (_, i) => [x + (size * i) / (n - 1), y + size / 2, z + size * 0.3 * Math.sin((Math.PI * i) / (n - 1))]);
+  return send({ type: 'create_part', spec: { name: freshName('curve'), shape: { kind: 'curve', curve: { knots: { degree: 3, knots: [0, 0, 0, 0, 1 / 3, 2 / 3, 1, 1, 1, 1] }, points } } } });
 }
 
 // --- panels -------------------------------------------------------------------
@@ -496,9 +728,10 @@ $('mode').addEventListener('change', (e) => {
   view.setMode(mode);
   const analysis = mode === 'mean' || mode === 'gauss';
   $('legend').hidden = !analysis;
-  if (analysis && state.tess) {
-    // Start from the 95th percentile of |curvature|; the slider spans 100× around it.
-    const values = Array.from(mode === 'mean' ? state.tess.mean : state.tess.gauss, Math.abs).sort((a, b) => a - b);
+  const tessellations = [...partsView.drawings.values()].filter((d) => d.visible && d.tess).map((d) => d.tess);
+  if (analysis && tessellations.length) {
+    // Start from the 95th percentile of |curvature| over the surfaces drawn; the slider spans 100× around it.
+    const values = tessellations.flatMap((t) => Array.from(mode === 'mean' ? t.mean : t.gauss, Math.abs)).sort((a, b) => a - b);
     const p95 = values[Math.floor(values.length * 0.95)] || 1;
     $('range').min = p95 / 10;
     $('range').max = p95 * 10;
@@ -507,12 +740,15 @@ $('mode').addEventListener('change', (e) => {
   }
 });
 $('range').addEventListener('input', (e) => setRange(Number(e.target.value)));
-$('net').addEventListener('change', (e) => view.showNet(e.target.checked));
+$('net').addEventListener('change', (e) => partsView.setShowNet(e.target.checked));
 $('fit').addEventListener('click', () => view.fit());
 $('create').addEventListener('change', (e) => {
   state.create = e.target.value;
   state.pending = [];
+  $('pending').textContent = '';
 });
+$('add-plane').addEventListener('click', addPlane);
+$('add-curve').addEventListener('click', addCurve);
 $('finish-curve').addEventListener('click', finishCurve);
 $('sel-role').addEventListener('change', (e) => send({ type: 'set_role', icon: state.selected, role: ROLES[e.target.value] }));
 $('sel-state').addEventListener('change', (e) => send({ type: 'set_state', icon: state.selected, state: e.target.value }));
@@ -523,9 +759,13 @@ $('sel-bind').addEventListener('click', () => {
 });
 $('material').addEventListener('submit', (e) => {
   e.preventDefault();
+  const part = selectedPart();
+  if (!part) return;
   const a = Number($('alpha').value);
   const b = Number($('beta').value);
-  send({ type: 'set_material', material: { alpha11: a, alpha12: 0, alpha22: a, beta11: b, beta12: b, beta22: b } });
+  // A surface takes six coefficients (isotropic here), a curve alpha and beta.
+  const material = part.kind === 'curve' ? { alpha: a, beta: b } : { alpha11: a, alpha12: 0, alpha22: a, beta11: b, beta12: b, beta22: b };
+  send({ type: 'set_material', part: part.id, material });
 });
 $('undo').addEventListener('click', () => send({ type: 'undo' }));
 $('redo').addEventListener('click', () => send({ type: 'redo' }));
@@ -544,48 +784,51 @@ $('compare-stop').addEventListener('click', () => stopCompare());
 
 // --- version compare ------------------------------------------------------------------
 
+/** The surface part a comparison is about: the selected part when it is a surface, else the first surface part drawn. */
+function comparedPart() {
+  const sel = selectedPart();
+  if (sel && sel.kind === 'surface') return sel.id;
+  const first = [...design.parts.values()].find((p) => p.kind === 'surface' && partShownHere(p.id));
+  return first ? first.id : null;
+}
+
 /**
- * Compares the shape on screen with committed version `version`: both are
- * evaluated at the same (u, v) samples, each vertex coloured by how far the
- * current surface lies from the version's along its normal, and the version
- * drawn as a faint wireframe. Follows the live shape until stopped. Needs
- * the same parameter domain (a restore to another structure ends it).
+ * Compares a surface part on screen (the selected one, or the first) with
+ * committed version `version`: both are evaluated at the same (u, v)
+ * samples, each vertex coloured by how far the current surface lies from
+ * the version's along its normal, and the version drawn as a faint
+ * wireframe. Follows the live shape until stopped. Needs the same parameter
+ * domain (a restore to another structure ends it).
  */
 async function compareWith(version) {
-  const res = await fetch(`/api/designs/${design}/versions/${version}`, { headers: { authorization: `Bearer ${token}` } });
+  const part = comparedPart();
+  if (part == null) throw new Error('no surface part to compare');
+  const res = await fetch(`/api/designs/${designId}/versions/${version}`, { headers: { authorization: `Bearer ${token}` } });
   if (!res.ok) throw new Error(`${res.status} ${(await res.json().catch(() => ({}))).message || ''}`);
-  const s = (await res.json()).design.surface;
-  const other = {
-    degreeU: s.u_degree,
-    degreeV: s.v_degree,
-    knotsU: Float64Array.from(s.u_knots),
-    knotsV: Float64Array.from(s.v_knots),
-    nu: s.nu,
-    nv: s.nv,
-    points: Float64Array.from(s.points.flat()),
-  };
-  state.compare = { version, other, tess: null };
+  const other = versionSurface((await res.json()).design, part);
+  if (!other) throw new Error(`v${version} has no surface part ${design.parts.get(part)?.name ?? part}`);
+  state.compare = { version, part, other, tess: null };
+  partsView.compared = part;
   updateCompare();
   renderPanels();
 }
 
 function stopCompare() {
   state.compare = null;
-  view.setDeviation(null);
+  partsView.compared = null;
+  partsView.setGhost(null);
+  view.setDeviation(false);
   $('compare-legend').hidden = true;
   renderPanels();
 }
 
-/** Recomputes the deviation of the current tessellation from the compared version. */
+/** Recomputes the deviation of the compared part's tessellation from the version. */
 function updateCompare() {
   const c = state.compare;
-  const t = state.tess;
+  const d = c && partsView.drawings.get(c.part);
+  const t = d && d.tess;
   if (!c || !t) return;
-  const same = (a, b) => Math.abs(a - b) <= 1e-12 * Math.max(1, Math.abs(a));
-  const o = c.other;
-  const domain = [o.knotsU[o.degreeU], o.knotsU[o.nu], o.knotsV[o.degreeV], o.knotsV[o.nv]];
-  const shown = [t.us[0], t.us[t.su - 1], t.vs[0], t.vs[t.sv - 1]];
-  if (!domain.every((x, i) => same(x, shown[i]))) {
+  if (!sameDomain(t, c.other)) {
     toast(`v${c.version} has another parameter domain: it cannot be compared point by point`);
     stopCompare();
     return;
@@ -593,24 +836,15 @@ function updateCompare() {
   if (!c.tess || c.tess.su !== t.su || c.tess.sv !== t.sv) {
     c.tess = new Tessellator(c.other, t.su, t.sv);
     c.tess.fill(c.other);
+    partsView.setGhost(c.tess);
   }
-  const n = t.su * t.sv;
-  const d = c.deviation && c.deviation.length === n ? c.deviation : new Float32Array(n);
-  let max = 0;
-  for (let i = 0; i < n; i++) {
-    const o = 3 * i;
-    const dev =
-      (t.positions[o] - c.tess.positions[o]) * t.normals[o] +
-      (t.positions[o + 1] - c.tess.positions[o + 1]) * t.normals[o + 1] +
-      (t.positions[o + 2] - c.tess.positions[o + 2]) * t.normals[o + 2];
-    d[i] = dev;
-    max = Math.max(max, Math.abs(dev));
-  }
-  c.deviation = d;
+  const { deviation: dev, max } = deviation(t, c.tess, c.deviation);
+  c.deviation = dev;
   c.max = max;
-  view.setDeviation(d, max || 1, c.tess);
+  d.deviation = dev;
+  view.setDeviation(true, max || 1);
   $('compare-legend').hidden = false;
-  $('compare-text').textContent = `deviation from v${c.version}: up to ${max.toPrecision(3)} (blue below, red above)`;
+  $('compare-text').textContent = `deviation of ${design.parts.get(c.part)?.name ?? 'the part'} from v${c.version}: up to ${max.toPrecision(3)} (blue below, red above)`;
 }
 
 // --- keyboard -----------------------------------------------------------------------
@@ -632,6 +866,9 @@ const SHORTCUTS = [
   ['Delete', 'delete the selected icon', true],
   ['Esc', 'cancel the curve or region being picked, else deselect', false],
   ['F', 'frame the selected icon (or the whole design)', false],
+  ['[ and ]', 'select the previous or next part', false],
+  ['H', 'hide or show the selected part', false],
+  ['L', 'lock or unlock the selected part', true],
   ['?', 'show or hide this help', false],
 ];
 
@@ -645,7 +882,19 @@ function keyAction(e) {
   if (k === 'Escape') return 'cancel';
   if (k === 'f' || k === 'F') return 'frame';
   if (k === '?') return 'help';
+  if (k === ']') return 'next-part';
+  if (k === '[') return 'previous-part';
+  if (k === 'h' || k === 'H') return 'hide';
+  if (k === 'l' || k === 'L') return 'lock';
   return null;
+}
+
+/** Selects the part `step` places after the selected one in the panel's order (wrapping). */
+function cyclePart(step) {
+  const ids = [...design.parts.values()].filter((p) => !p.provisional).map((p) => p.id);
+  if (!ids.length) return;
+  const i = ids.indexOf(state.selectedPart);
+  selectPart(ids[(i + step + ids.length) % ids.length]);
 }
 
 document.addEventListener('keydown', (e) => {
@@ -654,7 +903,7 @@ document.addEventListener('keydown', (e) => {
   const action = keyAction(e);
   if (!action) return;
   e.preventDefault();
-  const editing = ['undo', 'redo', 'delete'].includes(action);
+  const editing = ['undo', 'redo', 'delete', 'lock'].includes(action);
   if (editing && state.access !== 'editor') {
     toast('view only: this link cannot edit', 'info');
     return;
@@ -665,6 +914,10 @@ document.addEventListener('keydown', (e) => {
   else if (action === 'cancel') cancel();
   else if (action === 'frame') frameSelection();
   else if (action === 'help') $('help').hidden = !$('help').hidden;
+  else if (action === 'next-part') cyclePart(1);
+  else if (action === 'previous-part') cyclePart(-1);
+  else if (action === 'hide' && selectedPart()) setVisible(state.selectedPart, !partShownHere(state.selectedPart));
+  else if (action === 'lock' && selectedPart()) send({ type: 'set_part', part: state.selectedPart, locked: !selectedPart().locked });
 });
 
 /** Centres the view on the selected icon at a close distance, or fits the whole design. */
@@ -676,7 +929,8 @@ function frameSelection() {
   }
   const at = new THREE.Vector3(...icon.xyz);
   const offset = view.camera.position.clone().sub(view.controls.target);
-  const r = view.geometry.boundingSphere ? view.geometry.boundingSphere.radius : offset.length();
+  const sphere = view.boundingSphere();
+  const r = sphere ? sphere.radius : offset.length();
   view.controls.target.copy(at);
   view.camera.position.copy(at).add(offset.setLength(r * 0.8));
   view.controls.update();
@@ -693,14 +947,21 @@ $('panel-toggle').addEventListener('click', () => document.body.classList.toggle
 
 const xr = new XRSculpt({
   view,
-  handles: () => icons.handles(),
+  // A grab takes icons of the parts drawn that are not locked.
+  handles: () => icons.handles().filter((h) => !design.partOfIcon(h.userData.iconId)?.locked),
   iconPosition: (id) => {
     const icon = state.icons.get(id);
-    if (!icon) return null;
-    return icon.role.kind === 'position' && icon.anchor.kind === 'point' ? icon.target : icon.xyz;
+    return icon ? dragPoint(icon) : null;
   },
   send,
-  create: (u, v) => createIcon({ kind: 'point', u, v }, ROLES[$('create-role').value] || ROLES.position),
+  pickables: () => partsView.pickables(),
+  create: (hit) => {
+    const at = partsView.hitParams(hit);
+    if (!at) return;
+    selectPart(at.part);
+    const role = ROLES[$('create-role').value] || ROLES.position;
+    createIcon(at.kind === 'surface' ? { kind: 'point', u: at.u, v: at.v } : { kind: 'param', t: at.t }, role, at.part);
+  },
   onDragging: (on, id) => {
     dragging = on;
     if (on) select(id);
@@ -716,7 +977,7 @@ $('enter-vr').addEventListener('click', () => {
 
 // Without a token this page is the bare server address: say what to open instead of failing to join.
 const link = token
-  ? new Link({ design, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status })
+  ? new Link({ design: designId, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status })
   : { send: () => null, open: false };
 if (!token) {
   $('shell-title').textContent = 'vsculpt';
@@ -731,15 +992,15 @@ if (!token) {
 view.renderer.setAnimationLoop(() => {
   if (frameDue) {
     frameDue = false;
-    showNewestFrame();
+    showNewestFrames();
   }
   xr.update();
   view.controls.update();
   view.render();
-  if (!shellDone && shownSeq > 0) {
+  if (!shellDone && pictured) {
     perf.firstPicture = performance.now();
     dismissShell();
   }
 });
 
-window.vsculpt = { state, send, view, icons, pick, select, createIcon, finishCurve, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, send, view, partsView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

@@ -1,5 +1,5 @@
-// B-spline surface evaluation and tessellation in the browser, from the
-// control net and knots the server sends (the kernel's evaluation is the
+// B-spline surface and curve evaluation and surface tessellation in the
+// browser, from the control nets and knots the server sends (the kernel's evaluation is the
 // reference; tests/bspline.test.mjs checks the identities). Curvature sign
 // convention as in the kernel: n = w_u × w_v normalised, a curvature is
 // positive where the surface bends toward n.
@@ -119,6 +119,24 @@ export function surfaceDerivs(s, u, v) {
       out.uu[x] += bu.d[2][a] * c[0][x];
       out.uv[x] += bu.d[1][a] * c[1][x];
       out.vv[x] += bu.d[0][a] * c[2][x];
+    }
+  }
+  return out;
+}
+
+/**
+ * A curve as the frame carries it: { degree, knots, n, points } with points
+ * a flat array of n·3. Returns c(t), c'(t) and c''(t) as arrays [x, y, z].
+ */
+export function curveDerivs(c, t) {
+  const b = basisDerivs(c.knots, c.degree, t);
+  const out = { p: [0, 0, 0], d1: [0, 0, 0], d2: [0, 0, 0] };
+  for (let a = 0; a <= c.degree; a++) {
+    const k = (b.first + a) * 3;
+    for (let x = 0; x < 3; x++) {
+      out.p[x] += b.d[0][a] * c.points[k + x];
+      out.d1[x] += b.d[1][a] * c.points[k + x];
+      out.d2[x] += b.d[2][a] * c.points[k + x];
     }
   }
   return out;

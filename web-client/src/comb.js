@@ -1,9 +1,10 @@
-// Curvature comb of a curve icon: the space curve c(t) = w(u(t), v(t)) that
-// the icon's (u, v) B-spline traces on the surface, its curvature along t
-// from the chain rule, and the comb's teeth (drawn against the curvature
-// vector, length proportional to the curvature), as designers read it.
+// Curvature comb of a space curve: a curve icon's c(t) = w(u(t), v(t)) that
+// its (u, v) B-spline traces on the surface (curvature along t from the
+// chain rule), or a curve part's own B-spline c(t); and the comb's teeth
+// (drawn against the curvature vector, length proportional to the
+// curvature), as designers read it.
 
-import { surfaceDerivs } from './bspline.js';
+import { curveDerivs, surfaceDerivs } from './bspline.js';
 
 /** The (u, v) curve of a curve anchor as a one-row "surface" so surfaceDerivs evaluates it and its t-derivatives. */
 function uvCurve(curve) {
@@ -44,13 +45,31 @@ export function curvatureSamples(surface, curve, n = 48) {
     const d1 = add(w.u.map((x) => x * u1), w.v, v1);
     let d2 = add(w.uu.map((x) => x * u1 * u1), w.uv, 2 * u1 * v1);
     d2 = add(add(add(d2, w.vv, v1 * v1), w.u, u2), w.v, v2);
-    const s2 = dot(d1, d1);
-    if (!(s2 > 1e-300)) {
-      out.push({ point: w.p, kappa: 0, vector: [0, 0, 0] });
-      continue;
-    }
-    const vector = add(d2, d1, -dot(d2, d1) / s2).map((x) => x / s2);
-    out.push({ point: w.p, kappa: Math.sqrt(dot(vector, vector)), vector });
+    out.push(sample(w.p, d1, d2));
+  }
+  return out;
+}
+
+/** Point, curvature and curvature vector (c'' − (c''·c̄')c̄') / |c'|² from the first two derivatives. */
+function sample(point, d1, d2) {
+  const s2 = dot(d1, d1);
+  if (!(s2 > 1e-300)) return { point, kappa: 0, vector: [0, 0, 0] };
+  const vector = add(d2, d1, -dot(d2, d1) / s2).map((x) => x / s2);
+  return { point, kappa: Math.sqrt(dot(vector, vector)), vector };
+}
+
+/**
+ * Samples a curve part ({ degree, knots, n, points }, frame layout) at n
+ * parameters spread over its domain: the point, κ ≥ 0 and the curvature
+ * vector, as curvatureSamples does for a curve icon.
+ */
+export function curvePartSamples(curve, n = 64) {
+  const a = curve.knots[curve.degree];
+  const b = curve.knots[curve.n];
+  const out = [];
+  for (let i = 0; i < n; i++) {
+    const d = curveDerivs(curve, a + ((b - a) * i) / (n - 1));
+    out.push(sample(d.p, d.d1, d.d2));
   }
   return out;
 }

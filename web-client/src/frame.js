@@ -1,53 +1,71 @@
-// Decoding of the binary geometry frame (protocol/README.md, "Binary
-// geometry frame"): zero-copy typed-array views, every size checked.
+// Decoding of the binary geometry frame of one part (protocol/README.md,
+// "Binary geometry frame", version 2): the 48-byte header with design, part
+// and revision; a surface part (kind 1: u and v knots, nu × nv net) or a
+// curve part (kind 2: u knots only, nu control points, nv = 1, pv = 0);
+// zero-copy typed-array views, every size checked.
 
 const MAGIC = [0x56, 0x53, 0x47, 0x46]; // "VSGF"
-export const PROTOCOL_VERSION = 1;
+export const PROTOCOL_VERSION = 2;
+/** Frame kinds (byte 4). */
+export const KIND_SURFACE = 1;
+export const KIND_CURVE = 2;
+/** Flags (bytes 6..8): bit 0 from a drag, bit 1 the shape of the snapshot that follows (compact join). */
+export const FLAG_DRAG = 1;
+export const FLAG_SNAPSHOT = 2;
+const HEADER = 48;
+/** Size limits of protocol/src/limits.rs and frame.rs: grid, icons, degree. */
+const MAX_GRID = 2048;
+const MAX_ICONS = 65536;
+const MAX_DEGREE = 15;
 
-/** Decodes a frame from an ArrayBuffer; throws an Error on any malformed input. */
+/**
+ * Decodes a frame from an ArrayBuffer; throws an Error on any malformed
+ * input. A surface frame gives { kind: 'surface', part, design, revision,
+ * flags, nu, nv, degreeU, degreeV, knotsU, knotsV, points, icons }; a curve
+ * frame { kind: 'curve', part, design, revision, flags, n, degree, knots,
+ * points, icons }. `points` is a Float32Array of x, y, z; `icons` a list of
+ * { id, xyz }.
+ */
 export function decodeFrame(buf) {
-  if (!(buf instanceof ArrayBuffer) || buf.byteLength < 40) throw new Error('frame too short');
+  if (!(buf instanceof ArrayBuffer) || buf.byteLength < HEADER) throw new Error('frame too short');
   const dv = new DataView(buf);
   for (let i = 0; i < 4; i++) if (dv.getUint8(i) !== MAGIC[i]) throw new Error('bad magic');
-  if (dv.getUint8(4) !== 1) throw new Error('unknown frame kind');
-  if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error('frame version mismatch');
+  const kind = dv.getUint8(4);
+  if (kind !== KIND_SURFACE && kind !== KIND_CURVE) throw new Error(`unknown frame kind ${kind}`);
+  if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
   const flags = dv.getUint16(6, true);
-  const design = dv.getBigUint64(8, true);
-  const revision = dv.getBigUint64(16, true);
-  const nu = dv.getUint32(24, true);
-  const nv = dv.getUint32(28, true);
-  const degreeU = dv.getUint8(32);
-  const degreeV = dv.getUint8(33);
-  const nIcons = dv.getUint32(36, true);
-  if (nu > 2048 || nv > 2048 || nIcons > 65536 || degreeU < 1 || degreeV < 1) throw new Error('frame sizes out of range');
-  if (nu < degreeU + 1 || nv < degreeV + 1) throw new Error('too few control points');
+  const design = Number(dv.getBigUint64(8, true));
+  const part = Number(dv.getBigUint64(16, true));
+  const revision = Number(dv.getBigUint64(24, true));
+  const nu = dv.getUint32(32, true);
+  const nv = dv.getUint32(36, true);
+  const degreeU = dv.getUint8(40);
+  const degreeV = dv.getUint8(41);
+  const nIcons = dv.getUint32(44, true);
+  const curve = kind === KIND_CURVE;
+  if (nu > MAX_GRID || nv > MAX_GRID || nIcons > MAX_ICONS) throw new Error('frame sizes out of range');
+  if (curve && (nv !== 1 || degreeV !== 0)) throw new Error('a curve frame has nv = 1 and degree v = 0');
+  if (degreeU < 1 || degreeU > MAX_DEGREE || nu < degreeU + 1) throw new Error(`degree ${degreeU} with ${nu} control points along u`);
+  if (!curve && (degreeV < 1 || degreeV > MAX_DEGREE || nv < degreeV + 1)) throw new Error(`degree ${degreeV} with ${nv} control points along v`);
   const nku = nu + degreeU + 1;
-  const nkv = nv + degreeV + 1;
-  const ku = 40;
+  const nkv = curve ? 0 : nv + degreeV + 1;
+  const ku = HEADER;
   const kv = ku + 8 * nku;
   const pts = kv + 8 * nkv;
   const icons = Math.ceil((pts + 12 * nu * nv) / 8) * 8;
   const total = icons + 24 * nIcons;
   if (buf.byteLength !== total) throw new Error(`frame is ${buf.byteLength} bytes, header says ${total}`);
-  const frame = {
-    flags,
-    design: Number(design),
-    revision: Number(revision),
-    nu,
-    nv,
-    degreeU,
-    degreeV,
-    knotsU: new Float64Array(buf, ku, nku),
-    knotsV: new Float64Array(buf, kv, nkv),
-    points: new Float32Array(buf, pts, nu * nv * 3),
-    icons: [],
-  };
+  const knotsU = new Float64Array(buf, ku, nku);
+  const points = new Float32Array(buf, pts, nu * nv * 3);
+  const frameIcons = [];
   for (let k = 0; k < nIcons; k++) {
     const o = icons + 24 * k;
-    frame.icons.push({
+    frameIcons.push({
       id: Number(dv.getBigUint64(o, true)),
       xyz: [dv.getFloat32(o + 8, true), dv.getFloat32(o + 12, true), dv.getFloat32(o + 16, true)],
     });
   }
-  return frame;
+  const common = { part, design, revision, flags, points, icons: frameIcons };
+  if (curve) return { kind: 'curve', ...common, n: nu, degree: degreeU, knots: knotsU };
+  return { kind: 'surface', ...common, nu, nv, degreeU, degreeV, knotsU, knotsV: new Float64Array(buf, kv, nkv) };
 }

@@ -1,12 +1,15 @@
 // Icons drawn as paper 003 draws them: red sphere = position constraint,
 // green sphere = load, yellow sphere labelled R/V/R2/V2/RV = derivative
 // constraint, a 3D arrow along N = normal constraint, a polyline for a curve
-// icon (with its curvature comb), an outlined patch for a region icon; grey when sleeping, larger and
-// glowing while driving. A position constraint the surface does not meet shows its target as a
-// hollow marker joined to the surface, labelled with the miss.
+// icon (with its curvature comb), an outlined patch for a region icon; on a
+// curve part, a sphere at a param icon's t and the stretch t0…t1 of a span
+// icon drawn along the curve; grey when sleeping, larger and glowing while
+// driving. A position constraint the surface does not meet shows its target
+// as a hollow marker joined to the surface, labelled with the miss. Each
+// icon is drawn against the geometry of its own part.
 
 import * as THREE from 'three';
-import { surfaceDerivs } from './bspline.js';
+import { curveDerivs, surfaceDerivs } from './bspline.js';
 import { curvatureSamples, combSegments } from './comb.js';
 
 const COLORS = { position: 0xe53935, load: 0x43a047, derivative: 0xfdd835, normal: 0x1e88e5 };
@@ -17,7 +20,7 @@ const GREY = 0x8a8a8a;
  * model's size or the zoom): light text on a dark rounded plate, drawn over
  * the surface.
  */
-function label(text, { color = '#fff', height = 0.03 } = {}) {
+export function label(text, { color = '#fff', height = 0.03 } = {}) {
   const c = document.createElement('canvas');
   const g0 = c.getContext('2d');
   g0.font = 'bold 40px sans-serif';
@@ -68,8 +71,12 @@ export class IconLayer {
     this.size = 0.05;
   }
 
-  /** Rebuilds the drawing of every icon against the current surface. */
-  update(icons, surface, selected) {
+  /**
+   * Rebuilds the drawing of every icon in `icons` (a Map id → icon with
+   * `part`) against its part's geometry, `geometryOf(partId)` (null: the
+   * part has no shape yet); icons not in `icons` (e.g. of hidden parts) go.
+   */
+  update(icons, geometryOf, selected) {
     for (const [id, obj] of this.objects) {
       if (!icons.has(id)) {
         this.remove(obj);
@@ -79,7 +86,7 @@ export class IconLayer {
     for (const icon of icons.values()) {
       let obj = this.objects.get(icon.id);
       if (obj) this.remove(obj);
-      obj = this.draw(icon, surface, icon.id === selected);
+      obj = this.draw(icon, geometryOf(icon.part), icon.id === selected);
       obj.userData.iconId = icon.id;
       this.objects.set(icon.id, obj);
       this.group.add(obj);
@@ -98,7 +105,9 @@ export class IconLayer {
     });
   }
 
-  draw(icon, surface, selected) {
+  draw(icon, geometry, selected) {
+    const surface = geometry && geometry.kind === 'surface' ? geometry : null;
+    const curve = geometry && geometry.kind === 'curve' ? geometry : null;
     const g = new THREE.Group();
     const kind = icon.role.kind;
     const sleeping = icon.state === 'sleeping';
@@ -118,7 +127,7 @@ export class IconLayer {
     }
     // A position constraint the solve could not meet (contradictory icons):
     // its target as a hollow marker, joined to where the surface is, with the miss.
-    if (kind === 'position' && icon.anchor.kind === 'point' && !sleeping) {
+    if (kind === 'position' && (icon.anchor.kind === 'point' || icon.anchor.kind === 'param') && !sleeping) {
       const at = new THREE.Vector3(...icon.xyz);
       const target = new THREE.Vector3(...icon.target);
       const miss = at.distanceTo(target);
@@ -152,6 +161,16 @@ export class IconLayer {
       const outline = new THREE.BufferGeometry();
       outline.setAttribute('position', new THREE.Float32BufferAttribute(comb.outline, 3));
       g.add(new THREE.LineSegments(teeth, combMat), new THREE.Line(outline, combMat));
+    }
+    if (curve && icon.anchor.kind === 'span') {
+      const { t0, t1 } = icon.anchor;
+      const pts = Array.from({ length: 33 }, (_, k) => new THREE.Vector3(...curveDerivs(curve, t0 + ((t1 - t0) * k) / 32).p));
+      const stretch = new THREE.Mesh(
+        new THREE.TubeGeometry(new THREE.CatmullRomCurve3(pts), 48, this.size * 0.45, 8, false),
+        new THREE.MeshStandardMaterial({ color, emissive: color, emissiveIntensity: selected ? 0.5 : 0.2 }),
+      );
+      stretch.name = `span-${icon.id}`;
+      g.add(stretch);
     }
     if (surface && icon.anchor.kind === 'region') {
       const { u0, v0, u1, v1 } = icon.anchor;

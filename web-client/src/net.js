@@ -9,7 +9,7 @@ import { decodeFrame, PROTOCOL_VERSION } from './frame.js';
 export const REFUSALS = {
   bad_token: (design) => `this link's token is not valid for design ${design}: ask the designer for a new link`,
   unknown_design: (design) => `design ${design} does not exist on this server: check the link`,
-  bad_version: () => 'this page is older than the server: reload it (Ctrl+Shift+R)',
+  bad_version: () => 'this page and the server speak different protocol versions: reload the page (Ctrl+Shift+R)',
   bad_handshake: () => 'the server did not accept this page\'s greeting: reload it',
 };
 

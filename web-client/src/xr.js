@@ -48,7 +48,8 @@ export class XRSculpt {
    * @param {() => THREE.Object3D[]} o.handles the icons' pickable handles (userData.iconId)
    * @param {(id: number) => number[] | null} o.iconPosition where the dragged point of icon `id` is now
    * @param {(msg: object) => void} o.send sends a protocol message
-   * @param {(u: number, v: number) => void} o.create creates an icon at surface parameter (u, v)
+   * @param {() => THREE.Object3D[]} o.pickables the part meshes a trigger may hit
+   * @param {(hit: THREE.Intersection) => void} o.create creates an icon where the trigger's ray hit a part
    * @param {(on: boolean, id: number | null) => void} o.onDragging told when a VR drag starts and ends
    * @param {() => boolean} o.canEdit whether this page may edit
    */
@@ -144,7 +145,8 @@ export class XRSculpt {
   /** The icon under controller i: the nearest handle within reach of the grip, else the one its ray hits. */
   iconAt(i) {
     const p = this.gripPosition(i);
-    const radius = this.view.geometry.boundingSphere ? this.view.geometry.boundingSphere.radius * this.view.model.scale.x : 1;
+    const sphere = this.view.boundingSphere();
+    const radius = sphere ? sphere.radius * this.view.model.scale.x : 1;
     const reach = Math.max(0.03, radius * 0.08);
     let best = null;
     for (const h of this.handles()) {
@@ -228,8 +230,8 @@ export class XRSculpt {
   trigger(i) {
     if (!this.canEdit()) return;
     this.aim(i);
-    const hit = this.raycaster.intersectObject(this.view.mesh, false)[0];
-    if (hit && hit.uv) this.create(hit.uv.x, hit.uv.y);
+    const hit = this.raycaster.intersectObjects(this.pickables(), false)[0];
+    if (hit && hit.uv) this.create(hit);
   }
 
   /** Called every frame: moves a held model, or sends the grabbed icon's new position when the hand moved. */

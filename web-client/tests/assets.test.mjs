@@ -15,7 +15,7 @@ import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { brotliDecompressSync, gunzipSync } from 'node:zlib';
-import { webDir, serverBinProblem, createDesign, startServer, stopServer, launchChromium } from './harness.mjs';
+import { webDir, serverBinProblem, createDesign, startServer, stopServer, launchChromium, shownPoints, documentPoints } from './harness.mjs';
 import { startLink } from './wan.mjs';
 import { fileFor, moduleGraph, pageEntries } from '../tools/module-graph.mjs';
 
@@ -143,13 +143,15 @@ test('through a 2 Mbit/s link: a cold visit is bounded in bytes, a warm one asks
     const cachedAsked = link.requests.filter((r) => r.includes('/vendor/') || r.includes('?v='));
     assert.deepEqual(cachedAsked, [], 'a warm visit takes the versioned and hashed files from the cache');
     assert.ok(link.bytes.down < 64 * 1024, `warm visit: ${(link.bytes.down / 1024).toFixed(0)} KiB`);
-    const shown = await page.evaluate(() => Array.from(window.vsculpt.state.surface.points));
+    const shown = await shownPoints(page);
     const token = new URL(server.viewer).searchParams.get('token');
-    const rest = JSON.parse((await get(`/api/designs/1?token=${token}`)).body.toString());
-    const points = rest.design.surface.points.flat();
-    assert.equal(shown.length, points.length);
-    const size = Math.max(...points.map(Math.abs));
-    for (let i = 0; i < points.length; i++) assert.ok(Math.abs(shown[i] - points[i]) <= 1e-6 * size, `point ${i}: ${shown[i]} vs ${points[i]}`);
+    const rest = documentPoints(JSON.parse((await get(`/api/designs/1?token=${token}`)).body.toString()).design);
+    assert.deepEqual(Object.keys(shown), Object.keys(rest), 'every part is drawn');
+    for (const [id, points] of Object.entries(rest)) {
+      assert.equal(shown[id].length, points.length, `part ${id}`);
+      const size = Math.max(...points.map(Math.abs));
+      for (let i = 0; i < points.length; i++) assert.ok(Math.abs(shown[id][i] - points[i]) <= 1e-6 * size, `part ${id} point ${i}: ${shown[id][i]} vs ${points[i]}`);
+    }
   } finally {
     await context.close();
     await link.close();
@@ -167,9 +169,11 @@ test('an 81 × 159 design joins compactly: the net crosses the link once, in bin
     // The page's modules (about 410 KiB compressed) and one 155 KiB frame; the JSON net alone was about 700 KiB.
     const cold = link.bytes.down;
     assert.ok(cold < 640 * 1024, `cold visit of 81 × 159: ${(cold / 1024).toFixed(0)} KiB`);
-    const shown = await page.evaluate(() => Array.from(window.vsculpt.state.surface.points));
-    const rest = JSON.parse((await get(`/api/designs/${big.id}?token=${big.tokens.viewer}`)).body.toString());
-    const points = rest.design.surface.points.flat();
+    const shownParts = await shownPoints(page);
+    const restParts = documentPoints(JSON.parse((await get(`/api/designs/${big.id}?token=${big.tokens.viewer}`)).body.toString()).design);
+    assert.deepEqual(Object.keys(shownParts), Object.keys(restParts));
+    const [[id, points]] = Object.entries(restParts);
+    const shown = shownParts[id];
     assert.equal(shown.length, 81 * 159 * 3);
     const size = Math.max(...points.map(Math.abs));
     for (let i = 0; i < points.length; i++) assert.ok(Math.abs(shown[i] - points[i]) <= 1e-6 * size, `point ${i}`);

@@ -1,6 +1,6 @@
 // End-to-end in real headless Chromium against the real server: the page
-// draws the surface, an editor creates a position constraint by clicking the
-// surface and drags it with the gizmo, the server's REST API shows the
+// draws the design's parts, an editor creates a position constraint by clicking the
+// selected surface part and drags it with the gizmo, the server's REST API shows the
 // surface moved, curvature and zebra views change the picture, a viewer sees
 // the change live and cannot edit, and the page reconnects by itself after
 // the server restarts.
@@ -10,7 +10,7 @@ import assert from 'node:assert/strict';
 import { mkdtempSync, mkdirSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { webDir, serverBinProblem, startServer, stopServer, launchChromium, openClient, gizmoZArrow, isLocal } from './harness.mjs';
+import { webDir, serverBinProblem, startServer, stopServer, launchChromium, openClient, gizmoZArrow, isLocal, shownPoints } from './harness.mjs';
 
 const artifacts = join(webDir, 'test-artifacts');
 const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-web-'));
@@ -84,10 +84,12 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   await editor.selectOption('#create-role', 'position');
   const centre = await editor.evaluate(() => {
     const v = window.vsculpt.view;
-    const s = v.geometry.boundingSphere;
+    const { partsView, state } = window.vsculpt;
+    const geometry = partsView.drawings.get(state.selectedPart).mesh.geometry;
+    const s = geometry.boundingSphere;
     const p = s.center.clone();
-    // The surface point under the bounding-sphere centre: nearest vertex to it in xy.
-    const pos = v.geometry.attributes.position.array;
+    // The selected surface's point under its bounding-sphere centre: nearest vertex to it in xy.
+    const pos = geometry.attributes.position.array;
     let best = 0;
     let bd = Infinity;
     for (let i = 0; i < pos.length; i += 3) {
@@ -106,6 +108,7 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   const icon = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
   const created = await editor.evaluate((id) => window.vsculpt.state.icons.get(id), icon);
   assert.equal(created.role.kind, 'position');
+  assert.equal(created.part, await editor.evaluate(() => window.vsculpt.state.selectedPart), 'created on the selected part');
 
   // Select it by clicking its handle, then drag the gizmo's Z arrow upward.
   await editor.selectOption('#create', 'none');
@@ -138,7 +141,7 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
 
   // The viewer saw it live: same revision and control points.
   await viewer.waitForFunction((id) => window.vsculpt.state.icons.has(id), icon, { timeout: 10000 });
-  const [pe, pv] = await Promise.all([editor, viewer].map((p) => p.evaluate(() => Array.from(window.vsculpt.state.surface.points))));
+  const [pe, pv] = await Promise.all([editor, viewer].map((p) => shownPoints(p)));
   assert.deepEqual(pv, pe);
 
   // A viewer's edit is refused by the server.
@@ -197,7 +200,7 @@ test('VR (iwer emulated Quest 3): controller models from our server, the design 
   // Real scale, y up, on a table in front of the headset, which is outside it.
   const placed = await page.evaluate(() => {
     const v = window.vsculpt.view;
-    const local = v.geometry.boundingBox.clone();
+    const local = v.bounds().clone();
     const world = local.clone().applyMatrix4(v.model.matrixWorld);
     const eye = v.renderer.xr.getCamera().getWorldPosition(new v.camera.position.constructor());
     const size = (b) => [b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z];
@@ -373,14 +376,16 @@ test('?worker=0: geometry frames are tessellated on the main thread and shown', 
   const icon = await page.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
   // The mean height of the drawn mesh (its vertex z), which a load pulled up raises wherever it is;
   // installed in the page once, so the wait below can call it.
-  await page.evaluate(() => {
+  await page.evaluate((id) => {
+    const { partsView, state } = window.vsculpt;
+    const part = state.icons.get(id).part;
     window.__meanZ = () => {
-      const a = window.vsculpt.view.geometry.attributes.position.array;
+      const a = partsView.drawings.get(part).mesh.geometry.attributes.position.array;
       let z = 0;
       for (let k = 2; k < a.length; k += 3) z += a[k];
       return z / (a.length / 3);
     };
-  });
+  }, icon);
   const z0 = await page.evaluate(() => window.__meanZ());
   await page.evaluate((id) => {
     const { send, state } = window.vsculpt;
@@ -431,7 +436,7 @@ test('the page reconnects by itself after the server restarts', async () => {
   await page.waitForFunction(() => document.getElementById('status').className.includes('reconnecting'), null, { timeout: 10000 });
   server = await startServer({ listen: `127.0.0.1:${port}`, dataDir });
   await page.waitForFunction(() => document.getElementById('status').className.includes('connected') && !document.getElementById('status').className.includes('re'), null, { timeout: 20000 });
-  assert.ok(await page.evaluate(() => window.vsculpt.state.surface !== null));
+  assert.ok(await page.evaluate(() => window.vsculpt.design.parts.size > 0 && [...window.vsculpt.design.parts.values()].every((p) => p.geometry)));
   await page.close();
 });
 

@@ -1,10 +1,9 @@
-// The browser's B-spline evaluation against exact identities, and the frame
-// decoder against a frame built byte by byte per protocol/README.md.
+// The browser's B-spline evaluation against exact identities and a
+// reference evaluation (the frame decoder has tests/frame.test.mjs).
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { basisDerivs, surfaceDerivs, curvature, Tessellator } from '../src/bspline.js';
-import { decodeFrame } from '../src/frame.js';
 
 const knots = [0, 0, 0, 0, 0.2, 0.5, 0.5, 0.8, 1, 1, 1, 1];
 
@@ -74,47 +73,6 @@ test('derivatives match finite differences and the tessellator matches direct ev
     }
     assert.ok(Math.abs(t.mean[idx] - c.mean) < 1e-4 * (1 + Math.abs(c.mean)));
   }
-});
-
-function frameBytes() {
-  const nu = 4;
-  const nv = 4;
-  const nk = 8;
-  const pts = 40 + 8 * nk * 2;
-  const icons = Math.ceil((pts + 12 * nu * nv) / 8) * 8;
-  const buf = new ArrayBuffer(icons + 24);
-  const dv = new DataView(buf);
-  [0x56, 0x53, 0x47, 0x46, 1, 1].forEach((b, i) => dv.setUint8(i, b));
-  dv.setBigUint64(8, 7n, true);
-  dv.setBigUint64(16, 42n, true);
-  dv.setUint32(24, nu, true);
-  dv.setUint32(28, nv, true);
-  dv.setUint8(32, 3);
-  dv.setUint8(33, 3);
-  dv.setUint32(36, 1, true);
-  [0, 0, 0, 0, 1, 1, 1, 1].forEach((k, i) => {
-    dv.setFloat64(40 + 8 * i, k, true);
-    dv.setFloat64(40 + 64 + 8 * i, k, true);
-  });
-  for (let k = 0; k < nu * nv * 3; k++) dv.setFloat32(pts + 4 * k, k, true);
-  dv.setBigUint64(icons, 9n, true);
-  dv.setFloat32(icons + 8, 1.5, true);
-  return buf;
-}
-
-test('a frame built per the README decodes; truncations are refused', () => {
-  const buf = frameBytes();
-  const f = decodeFrame(buf);
-  assert.equal(f.design, 7);
-  assert.equal(f.revision, 42);
-  assert.equal(f.points[5], 5);
-  assert.deepEqual(f.icons[0], { id: 9, xyz: [1.5, 0, 0] });
-  for (const len of [0, 10, 39, 100, buf.byteLength - 1]) {
-    assert.throws(() => decodeFrame(buf.slice(0, len)));
-  }
-  const bad = buf.slice(0);
-  new DataView(bad).setUint8(0, 0);
-  assert.throws(() => decodeFrame(bad), /magic/);
 });
 
 test('curvature comb: a parabola drawn on a plane has the analytic curvature', async () => {
@@ -202,4 +160,26 @@ test('the fast tessellator equals the reference evaluation to 1e-12 on random su
     assert.notDeepEqual(t.positions, before);
     assert.equal(t.fits({ ...s, knotsU: s.knotsU.map((k, i) => (i === pu + 1 ? k + 1e-9 : k)) }), false);
   }
+});
+
+test('a curve part: a quadratic Bézier has its analytic point, derivatives and curvature', async () => {
+  const { curveDerivs } = await import('../src/bspline.js');
+  const { curvePartSamples } = await import('../src/comb.js');
+  // Control points (0,0,0), (1,2,0), (2,0,0): c(t) = (2t, 4t(1−t), 0), c' = (2, 4 − 8t, 0), c'' = (0, −8, 0);
+  // κ = |c' × c''| / |c'|³ = 16 / (4 + (4 − 8t)²)^{3/2}.
+  const curve = { degree: 2, knots: [0, 0, 0, 1, 1, 1], n: 3, points: [0, 0, 0, 1, 2, 0, 2, 0, 0] };
+  for (let k = 0; k <= 20; k++) {
+    const t = k / 20;
+    const d = curveDerivs(curve, t);
+    const want = { p: [2 * t, 4 * t * (1 - t), 0], d1: [2, 4 - 8 * t, 0], d2: [0, -8, 0] };
+    for (const key of ['p', 'd1', 'd2']) for (let x = 0; x < 3; x++) assert.ok(Math.abs(d[key][x] - want[key][x]) < 1e-12, `${key} at ${t}`);
+  }
+  const samples = curvePartSamples(curve, 11);
+  samples.forEach((s, i) => {
+    const t = i / 10;
+    const exact = 16 / (4 + (4 - 8 * t) ** 2) ** 1.5;
+    assert.ok(Math.abs(s.kappa - exact) < 1e-12, `κ at ${t}: ${s.kappa} vs ${exact}`);
+  });
+  // The arch bends down (toward −y) at its top.
+  assert.ok(samples[5].vector[1] < 0);
 });

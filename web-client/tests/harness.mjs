@@ -114,8 +114,8 @@ export function launchChromium() {
 }
 
 /**
- * Opens `url` in a new page and waits until the client has its surface and
- * access and the page shell has made way for the picture; page.errors collects page errors, page.requests every URL the page
+ * Opens `url` in a new page and waits until the client has joined (its
+ * snapshot of the parts) with its access and the page shell has made way for the picture; page.errors collects page errors, page.requests every URL the page
  * requested, page.warnings its console warnings. `setup(page)` runs before
  * the page loads (e.g. to route requests).
  */
@@ -134,7 +134,7 @@ export async function openClient(browser, url, setup = async () => {}) {
   await setup(page);
   await page.goto(url);
   await page.waitForFunction(
-    () => window.vsculpt && window.vsculpt.state.surface && window.vsculpt.state.access && !document.querySelector('#shell:not(.done)'),
+    () => window.vsculpt && window.vsculpt.design.joined && window.vsculpt.partsView.drawings.size && window.vsculpt.state.access && !document.querySelector('#shell:not(.done)'),
     null,
     { timeout: 30000 },
   );
@@ -168,3 +168,14 @@ export function gizmoZArrow(page) {
     return { from: proj(tip), origin: proj(o) };
   });
 }
+
+/** Every part's control points as the page holds them: { id: [x, y, z, …] } (f32 values, from the frames). */
+export function shownPoints(page) {
+  return page.evaluate(() => Object.fromEntries([...window.vsculpt.design.parts.values()].map((p) => [p.id, Array.from(p.geometry ? p.geometry.points : [])])));
+}
+
+/** Every part's control points in a design document of the REST API (`design.parts[].body`): { id: [x, y, z, …] }. */
+export function documentPoints(doc) {
+  return Object.fromEntries(doc.parts.map((p) => [p.id, (p.body.kind === 'surface' ? p.body.surface.points : p.body.curve.points).flat()]));
+}
+

@@ -55,7 +55,7 @@ test('on a phone (390 × 844) the view takes the width, the status shows, the pa
 test('a server error is a toast; the connection badge still says connected', async () => {
   const page = await openClient(browser, server.editor);
   await connected(page);
-  await page.evaluate(() => window.vsculpt.send({ type: 'delete_icon', icon: 987654 }));
+  await page.evaluate(() => window.vsculpt.send({ type: 'delete_icon', part: window.vsculpt.state.selectedPart, icon: 987654 }));
   await page.waitForFunction(() => document.querySelector('#toasts .toast'), null, { timeout: 10000 });
   const toast = await page.textContent('#toasts .toast');
   assert.match(toast, /unknown/i, toast);
@@ -220,8 +220,9 @@ test('a viewer compares the live shape with a committed version: zero deviation 
   // At the sample nearest the pulled point the surface rose by 2 (the constraint's own move): its
   // deviation along the normal is 2·n_z there. (Elsewhere the plate may swing further: the rim is free.)
   const at = await viewer.evaluate(() => {
-    const { state, view } = window.vsculpt;
-    const t = state.tess;
+    const { state, view, partsView } = window.vsculpt;
+    const drawing = partsView.drawings.get(state.compare.part);
+    const t = drawing.tess;
     let best = 0;
     for (let i = 0; i < t.su * t.sv; i++) {
       const d = (k) => Math.hypot(t.uvs[2 * k] - 0.45, t.uvs[2 * k + 1] - 0.55);
@@ -231,9 +232,9 @@ test('a viewer compares the live shape with a committed version: zero deviation 
       dev: state.compare.deviation[best],
       nz: t.normals[3 * best + 2],
       max: state.compare.max,
-      colored: view.mesh.material === view.colored,
+      colored: drawing.mesh.material === view.colored,
       ghost: !!view.model.getObjectByName('compare-ghost'),
-      colour: Array.from(view.geometry.attributes.color.array.slice(3 * best, 3 * best + 3)),
+      colour: Array.from(drawing.mesh.geometry.attributes.color.array.slice(3 * best, 3 * best + 3)),
     };
   });
   assert.ok(Math.abs(at.dev - 2 * at.nz) < 0.15, `deviation at the pulled point ${at.dev}, expected 2·n_z = ${2 * at.nz}`);
@@ -241,7 +242,10 @@ test('a viewer compares the live shape with a committed version: zero deviation 
   assert.ok(at.colored && at.ghost, 'deviation colours and the version drawn as a ghost');
   assert.ok(at.colour[0] === 1 && at.colour[2] < 1, `raised points are red: ${at.colour}`);
   await viewer.click('#compare-stop');
-  assert.equal(await viewer.evaluate(() => window.vsculpt.view.mesh.material === window.vsculpt.view.shaded), true);
+  assert.equal(await viewer.evaluate(() => {
+    const { partsView } = window.vsculpt;
+    return [...partsView.drawings.values()].every((d) => d.mesh.material === d.shaded);
+  }), true);
   assert.equal(await viewer.evaluate(() => !!window.vsculpt.view.model.getObjectByName('compare-ghost')), false);
   assert.deepEqual([...editor.errors, ...viewer.errors], []);
   await editor.close();
