@@ -133,6 +133,33 @@ impl Stiffness {
             && self.lower.symbolic().row_idx() == other.lower.symbolic().row_idx()
     }
 
+    /// The matrix with the unknowns where `pinned` is true eliminated: their
+    /// rows and columns zeroed but for the diagonal, which is kept (so the
+    /// scale of the matrix is kept). Solving with it and a right-hand side
+    /// that is zero at the pinned unknowns solves K_ff x_f = b_f over the
+    /// free ones and leaves the pinned ones zero. The sparsity pattern is
+    /// unchanged, so refactoring for it is numeric only.
+    ///
+    /// # Panics
+    /// If `pinned` is not [`Self::dim`] long.
+    pub fn with_pinned(&self, pinned: &[bool]) -> Stiffness {
+        assert_eq!(pinned.len(), self.dim(), "with_pinned: length");
+        let mut out = self.clone();
+        let n = self.dim();
+        let cp = self.lower.symbolic().col_ptr().to_vec();
+        let ri = self.lower.symbolic().row_idx().to_vec();
+        let vals = out.lower.val_mut();
+        for c in 0..n {
+            for e in cp[c]..cp[c + 1] {
+                let r = ri[e];
+                if r != c && (pinned[r] || pinned[c]) {
+                    vals[e] = 0.0;
+                }
+            }
+        }
+        out
+    }
+
     /// y = K x for the full symmetric matrix.
     pub fn mul(&self, x: &[f64]) -> Vec<f64> {
         let n = self.dim();
