@@ -22,7 +22,8 @@ use crate::analysis::{Tessellation, tessellate};
 use crate::bspline::{BSplineSurface, BasisDerivs, GeometryError, basis_derivs_into};
 use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
 use crate::icon::{
-    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, icon_group, samples,
+    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, capture, icon_group,
+    samples,
 };
 use crate::solve::{Problem, SolveError, SolveReport, Solver};
 use crate::spring::{Adaptation, Spring};
@@ -73,6 +74,16 @@ impl From<StiffnessError> for DesignError {
             other => DesignError::Solve(SolveError::Stiffness(other)),
         }
     }
+}
+
+/// A curve's independent equations (see [`crate::icon::identity`]).
+fn identity_of(
+    anchor: &Anchor,
+    samples: &[(f64, f64)],
+    surface: &BSplineSurface,
+) -> Option<std::sync::Arc<crate::icon::Identity>> {
+    matches!(anchor, Anchor::Curve(_))
+        .then(|| std::sync::Arc::new(crate::icon::identity(samples, surface)))
 }
 
 /// A design as a value: everything that makes it, nothing cached.
@@ -183,7 +194,12 @@ impl Design {
         for icon in &s.icons {
             let mut icon = icon.clone();
             icon.samples = samples(&icon.anchor, &d.surface)?;
-            if icon.shape.len() != icon.samples.len() {
+            icon.identity = identity_of(&icon.anchor, &icon.samples, &d.surface);
+            let held = match (&icon.identity, icon.role) {
+                (Some(id), Role::Position) => id.rows.len(),
+                _ => icon.samples.len(),
+            };
+            if icon.shape.len() != held {
                 return Err(DesignError::Unsupported(format!(
                     "icon {:?}: shape does not match its anchor",
                     icon.id
@@ -330,10 +346,14 @@ impl Design {
             return Err(DesignError::NotFinite("target"));
         }
         let samples = samples(&spec.anchor, &self.surface)?;
-        let shape: Vec<DVec3> = samples
-            .iter()
-            .map(|&(u, v)| self.surface.point(u, v))
-            .collect();
+        let identity = identity_of(&spec.anchor, &samples, &self.surface);
+        let shape = capture(
+            &spec.anchor,
+            spec.role,
+            &samples,
+            identity.as_deref(),
+            &self.surface,
+        );
         let id = IconId(self.next_id);
         let (hu, hv) = spec.anchor.handle_uv();
         let handle = self.surface.point(hu, hv);
@@ -347,6 +367,7 @@ impl Design {
             target: DVec3::ZERO,
             shape,
             handle,
+            identity,
             samples,
         };
         icon.target = match spec.target {
@@ -385,12 +406,11 @@ impl Design {
             .role;
         Self::check_role(&anchor, role)?;
         let samples = samples(&anchor, &self.surface)?;
-        let shape: Vec<DVec3> = samples
-            .iter()
-            .map(|&(u, v)| self.surface.point(u, v))
-            .collect();
+        let identity = identity_of(&anchor, &samples, &self.surface);
+        let shape = capture(&anchor, role, &samples, identity.as_deref(), &self.surface);
         self.finish_drag_of(id);
         let mut icon = self.icons[&id].clone();
+        icon.identity = identity;
         icon.anchor = anchor;
         icon.samples = samples;
         icon.shape = shape;
@@ -409,12 +429,11 @@ impl Design {
         let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
         Self::check_role(&icon.anchor, role)?;
         self.finish_drag_of(id);
+        self.icon_mut(id)?.role = role;
         self.rebase_shape(id);
         let icon = &self.icons[&id];
         let target = self.current_target(role, icon.handle_uv());
-        let icon = self.icon_mut(id)?;
-        icon.role = role;
-        icon.target = target;
+        self.icon_mut(id)?.target = target;
         self.problem_dirty = true;
         Ok(())
     }
@@ -565,11 +584,14 @@ impl Design {
         for (id, icon) in &self.icons {
             let mut icon = icon.clone();
             icon.samples = samples(&icon.anchor, &surface)?;
-            icon.shape = icon
-                .samples
-                .iter()
-                .map(|&(u, v)| surface.point(u, v))
-                .collect();
+            icon.identity = identity_of(&icon.anchor, &icon.samples, &surface);
+            icon.shape = capture(
+                &icon.anchor,
+                icon.role,
+                &icon.samples,
+                icon.identity.as_deref(),
+                &surface,
+            );
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
             icons.insert(*id, icon);
@@ -617,11 +639,13 @@ impl Design {
     fn rebase_shape(&mut self, id: IconId) {
         let surface = &self.surface;
         if let Some(icon) = self.icons.get_mut(&id) {
-            icon.shape = icon
-                .samples
-                .iter()
-                .map(|&(u, v)| surface.point(u, v))
-                .collect();
+            icon.shape = capture(
+                &icon.anchor,
+                icon.role,
+                &icon.samples,
+                icon.identity.as_deref(),
+                surface,
+            );
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
         }
