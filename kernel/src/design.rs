@@ -76,16 +76,6 @@ impl From<StiffnessError> for DesignError {
     }
 }
 
-/// A curve's independent equations (see [`crate::icon::identity`]).
-fn identity_of(
-    anchor: &Anchor,
-    samples: &[(f64, f64)],
-    surface: &BSplineSurface,
-) -> Option<std::sync::Arc<crate::icon::Identity>> {
-    matches!(anchor, Anchor::Curve(_))
-        .then(|| std::sync::Arc::new(crate::icon::identity(samples, surface)))
-}
-
 /// A design as a value: everything that makes it, nothing cached.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DesignSnapshot {
@@ -194,12 +184,7 @@ impl Design {
         for icon in &s.icons {
             let mut icon = icon.clone();
             icon.samples = samples(&icon.anchor, &d.surface)?;
-            icon.identity = identity_of(&icon.anchor, &icon.samples, &d.surface);
-            let held = match (&icon.identity, icon.role) {
-                (Some(id), Role::Position) => id.rows.len(),
-                _ => icon.samples.len(),
-            };
-            if icon.shape.len() != held {
+            if icon.shape.len() != icon.samples.len() {
                 return Err(DesignError::Unsupported(format!(
                     "icon {:?}: shape does not match its anchor",
                     icon.id
@@ -346,14 +331,7 @@ impl Design {
             return Err(DesignError::NotFinite("target"));
         }
         let samples = samples(&spec.anchor, &self.surface)?;
-        let identity = identity_of(&spec.anchor, &samples, &self.surface);
-        let shape = capture(
-            &spec.anchor,
-            spec.role,
-            &samples,
-            identity.as_deref(),
-            &self.surface,
-        );
+        let shape = capture(&spec.anchor, spec.role, &samples, &self.surface);
         let id = IconId(self.next_id);
         let (hu, hv) = spec.anchor.handle_uv();
         let handle = self.surface.point(hu, hv);
@@ -367,7 +345,6 @@ impl Design {
             target: DVec3::ZERO,
             shape,
             handle,
-            identity,
             samples,
         };
         icon.target = match spec.target {
@@ -406,11 +383,9 @@ impl Design {
             .role;
         Self::check_role(&anchor, role)?;
         let samples = samples(&anchor, &self.surface)?;
-        let identity = identity_of(&anchor, &samples, &self.surface);
-        let shape = capture(&anchor, role, &samples, identity.as_deref(), &self.surface);
+        let shape = capture(&anchor, role, &samples, &self.surface);
         self.finish_drag_of(id);
         let mut icon = self.icons[&id].clone();
-        icon.identity = identity;
         icon.anchor = anchor;
         icon.samples = samples;
         icon.shape = shape;
@@ -584,14 +559,7 @@ impl Design {
         for (id, icon) in &self.icons {
             let mut icon = icon.clone();
             icon.samples = samples(&icon.anchor, &surface)?;
-            icon.identity = identity_of(&icon.anchor, &icon.samples, &surface);
-            icon.shape = capture(
-                &icon.anchor,
-                icon.role,
-                &icon.samples,
-                icon.identity.as_deref(),
-                &surface,
-            );
+            icon.shape = capture(&icon.anchor, icon.role, &icon.samples, &surface);
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
             icons.insert(*id, icon);
@@ -639,13 +607,7 @@ impl Design {
     fn rebase_shape(&mut self, id: IconId) {
         let surface = &self.surface;
         if let Some(icon) = self.icons.get_mut(&id) {
-            icon.shape = capture(
-                &icon.anchor,
-                icon.role,
-                &icon.samples,
-                icon.identity.as_deref(),
-                surface,
-            );
+            icon.shape = capture(&icon.anchor, icon.role, &icon.samples, surface);
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
         }

@@ -59,9 +59,6 @@ pub struct Icon {
     /// measured from.
     pub handle: DVec3,
     pub(crate) samples: Vec<(f64, f64)>,
-    /// For a curve: the independent equations its samples make (see
-    /// [`super::identity`]), computed with the samples.
-    pub(crate) identity: Option<std::sync::Arc<super::Identity>>,
 }
 
 impl Icon {

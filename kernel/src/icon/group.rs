@@ -53,17 +53,6 @@ pub fn icon_group(icon: &Icon, base: DVec3, surface: &BSplineSurface, k: f64) ->
                         });
                     }
                 }
-                // A curve: the independent equations of its identity.
-                None if icon.identity.is_some() => {
-                    if let Some(id) = &icon.identity {
-                        for (row, target) in id.rows.iter().zip(id.targets(&icon.shape, shift)) {
-                            group.equations.push(Equation::Vector {
-                                row: row.clone(),
-                                target,
-                            });
-                        }
-                    }
-                }
                 None => {
                     for (&(su, sv), p) in icon.samples.iter().zip(&icon.shape) {
                         group.equations.push(Equation::Vector {

@@ -4,61 +4,36 @@
 //! On each piece of the curve (its own knot spans, cut where u(t) or v(t)
 //! crosses a knot line of the surface) w∘c is one polynomial of degree
 //! q·(p_u + p_v) (q the curve's degree, p the surface's), so holding it at
-//! that many points plus one per piece ([`super::samples`]) holds it on the
-//! whole piece. Those collocation equations A P = shape are dependent
-//! (neighbouring pieces share the same control points), so they are
-//! replaced by an orthonormal basis of A's row space: with A = U Σ Vᵀ
-//! over the control points the curve touches, the rows are the columns of
-//! V whose singular value is above 1e-13 of the largest (the rest are exact
-//! dependencies, at round-off). A constraint captures the rows' values on
-//! the control points themselves (Vᵀ P), so no sample value is divided by
-//! a small singular value. The same equations, none redundant, none
-//! dropped: independent by construction and well scaled for the solver.
+//! that many points plus one per piece (`sampling::collocation`) holds it
+//! on the whole piece. Those collocation equations A P = shape are
+//! dependent (neighbouring pieces share control points), so only an
+//! independent subset is kept: the rows a column-pivoted QR of Aᵀ picks
+//! before its pivot falls below [`DEPENDENT`] of the first. Every other
+//! collocation row is a combination of the kept ones (to that tolerance),
+//! and the held values come from one surface, so holding the kept samples
+//! holds them all. The kept rows are ordinary point rows (4 × 4 control
+//! points), so the solver can treat them like any point constraint.
 
 use faer::Mat;
-use glam::DVec3;
 
 use super::surface_row;
 use crate::bspline::BSplineSurface;
-use crate::solve::ScalarRow;
 
-/// Relative singular value of A below which a direction is a dependency
-/// (exact dependencies come out at ~1e-16; a direction this weak moves the
-/// curve by at most 1e-13 of the motion along it).
-const DEPENDENT: f64 = 1e-13;
+/// Relative pivot of the QR below which a collocation row counts as
+/// dependent on the ones kept. Exact dependencies come out at 1e-12 and
+/// below, but the pivots of a curved curve decay smoothly down to ~1e-10
+/// (control points the curve barely touches): keeping rows below 1e-6 made
+/// S singular to working precision (rows dropped, the solve off by 3e-9 of
+/// the shape when a curve was created mid-drag). A row dropped here moves
+/// the curve by at most this fraction of the motion of its control points;
+/// measured at 10× the sample density, ≤ 1e-7 of the shape's size
+/// (`tests/held_everywhere.rs`).
+const DEPENDENT: f64 = 1e-6;
 
-/// The independent equations equivalent to holding a curve at its
-/// collocation samples.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Identity {
-    /// One row per independent direction (orthonormal over the control points).
-    pub rows: Vec<ScalarRow>,
-    /// Per row, the sum of its weights: a translation by s moves the row's
-    /// value by s times it.
-    pub sums: Vec<f64>,
-}
-
-impl Identity {
-    /// The rows' values on `points` (what a constraint captures: the
-    /// targets are these, no sample values in between to amplify).
-    pub fn capture(&self, points: &[DVec3]) -> Vec<DVec3> {
-        self.rows.iter().map(|r| r.apply(points)).collect()
-    }
-
-    /// The targets of the rows for the captured values translated by `shift`.
-    pub fn targets(&self, held: &[DVec3], shift: DVec3) -> Vec<DVec3> {
-        held.iter()
-            .zip(&self.sums)
-            .map(|(h, s)| *h + shift * *s)
-            .collect()
-    }
-}
-
-/// The identity of the curve sampled at `samples` on `surface`: an
-/// orthonormal basis of the row space of the collocation matrix A (its
-/// right singular vectors above [`DEPENDENT`]).
-pub fn identity(samples: &[(f64, f64)], surface: &BSplineSurface) -> Identity {
-    let rows: Vec<ScalarRow> = samples
+/// The independent subset of the collocation `samples` on `surface`, in
+/// their original order.
+pub fn independent_samples(samples: &[(f64, f64)], surface: &BSplineSurface) -> Vec<(f64, f64)> {
+    let rows: Vec<_> = samples
         .iter()
         .map(|&(u, v)| surface_row(surface, u, v, 0, 0))
         .collect();
@@ -68,32 +43,24 @@ pub fn identity(samples: &[(f64, f64)], surface: &BSplineSurface) -> Identity {
         .collect();
     touched.sort_unstable();
     touched.dedup();
-    let t = touched.len();
-    let mut a = Mat::<f64>::zeros(rows.len(), t);
+    // Aᵀ: one column per sample.
+    let mut at = Mat::<f64>::zeros(touched.len(), rows.len());
     for (s, r) in rows.iter().enumerate() {
         for (&i, &w) in r.indices.iter().zip(&r.weights) {
             if let Ok(c) = touched.binary_search(&i) {
-                a[(s, c)] += w;
+                at[(c, s)] += w;
             }
         }
     }
-    let Ok(svd) = a.thin_svd() else {
-        return Identity::default();
-    };
-    let (v, sigma) = (svd.V(), svd.S());
-    let k = sigma.dim();
-    let max = (0..k).map(|i| sigma[i]).fold(0.0f64, f64::max);
-    let mut out = Identity::default();
-    for d in (0..k).filter(|&d| sigma[d] > DEPENDENT * max) {
-        let mut row = ScalarRow::default();
-        for (c, &i) in touched.iter().enumerate() {
-            if v[(c, d)] != 0.0 {
-                row.indices.push(i);
-                row.weights.push(v[(c, d)]);
-            }
-        }
-        out.sums.push(row.weights.iter().sum());
-        out.rows.push(row);
-    }
-    out
+    let qr = at.col_piv_qr();
+    let r = qr.thin_R();
+    let k = r.nrows().min(r.ncols());
+    let first = if k > 0 { r[(0, 0)].abs() } else { 0.0 };
+    let rank = (0..k)
+        .take_while(|&d| r[(d, d)].abs() > DEPENDENT * first)
+        .count();
+    let (fwd, _) = qr.P().arrays();
+    let mut kept: Vec<usize> = fwd[..rank].to_vec();
+    kept.sort_unstable();
+    kept.into_iter().map(|s| samples[s]).collect()
 }

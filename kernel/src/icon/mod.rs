@@ -17,7 +17,7 @@ pub use distributed::load_row;
 pub use entity::{Icon, IconSpec, centroid};
 pub use group::icon_group;
 pub use id::{IconId, SensorId};
-pub use identity::{Identity, identity};
+pub use identity::independent_samples;
 pub use kind::{Anchor, Derivative, Edge, Role};
 pub use rows::{curve_row, surface_row};
 pub use sampling::{AnchorError, capture, held_points, samples};

@@ -1,9 +1,9 @@
 //! Where an icon touches the surface: the (u,v) sample points of its anchor.
 //!
-//! A point anchor is one sample. A curve is sampled at its collocation
-//! points: per piece where w∘c is one polynomial, as many as determine it
-//! (`collocation`); a constraint holds them through the independent
-//! equations of [`super::identity`], so it holds the whole curve.
+//! A point anchor is one sample. A curve is sampled at the independent
+//! subset ([`super::independent_samples`]) of its collocation points (per
+//! piece where w∘c is one polynomial, as many as determine it:
+//! `collocation`), so a constraint at its samples holds the whole curve.
 //!
 //! Regions and edges are held exactly, by control points ([`held_points`]):
 //! their samples are the Greville points of the control points they hold,
@@ -115,21 +115,12 @@ pub fn held_points(anchor: &Anchor, surface: &BSplineSurface) -> Option<Vec<usiz
 /// What a new or re-captured icon holds on `surface` at its `samples`: the
 /// surface points there, or for an icon that holds control points
 /// ([`held_points`], position constraints only) the control points.
-///
-/// A curve position constraint with its `identity` captures the identity's
-/// row values instead (see [`super::Identity::capture`]).
 pub fn capture(
     anchor: &Anchor,
     role: Role,
     samples: &[(f64, f64)],
-    identity: Option<&super::Identity>,
     surface: &BSplineSurface,
 ) -> Vec<DVec3> {
-    if role == Role::Position
-        && let Some(id) = identity
-    {
-        return id.capture(surface.points());
-    }
     match held_points(anchor, surface).filter(|_| role == Role::Position) {
         Some(points) => points.iter().map(|&c| surface.points()[c]).collect(),
         None => samples.iter().map(|&(u, v)| surface.point(u, v)).collect(),
@@ -139,7 +130,7 @@ pub fn capture(
 /// The collocation points of a curve on a surface: on every piece where
 /// w∘c is one polynomial (a curve span, cut where u(t) or v(t) crosses a
 /// surface knot line), q·(p_u + p_v) + 1 Gauss–Legendre points — enough to
-/// determine that polynomial (see [`super::identity`]).
+/// determine that polynomial.
 fn collocation(curve: &BSplineCurve, surface: &BSplineSurface) -> Vec<(f64, f64)> {
     let ((u0, u1), (v0, v1)) = surface.domain();
     let (ku, kv) = (surface.u_knots(), surface.v_knots());
@@ -235,7 +226,10 @@ pub fn samples(anchor: &Anchor, surface: &BSplineSurface) -> Result<Vec<(f64, f6
             if uv_len < 1e-9 {
                 return Err(AnchorError::Degenerate("curve has no length in (u,v)"));
             }
-            Ok(collocation(curve, surface))
+            Ok(super::independent_samples(
+                &collocation(curve, surface),
+                surface,
+            ))
         }
         Anchor::Region {
             u0,

@@ -103,6 +103,45 @@ struct PinEq {
     group: usize,
 }
 
+/// A vector equation's row folded into the factor: K̃ = K + ρ a aᵀ. The
+/// term ρ (a·δ − r)² it stands for is zero wherever the equation holds, so
+/// it changes no answer, only the multipliers (λ = μ + ρ a·δ); but it lifts
+/// the directions of S = C K̃⁻¹ Cᵀ that the soft modes of K (a small `rest`,
+/// the affine modes) made huge, so S stays well conditioned however many
+/// equations there are (S̃ = (S⁻¹ + ρ)⁻¹ for one row).
+#[derive(Clone, Debug, PartialEq)]
+struct Folded {
+    row: ScalarRow,
+    rho: f64,
+}
+
+impl Folded {
+    /// ρ = the mean diagonal of K over the row's points / |a|²: a penalty
+    /// as stiff as the surface there.
+    fn new(row: &ScalarRow, k: &Stiffness) -> Self {
+        let diag: f64 = row.indices.iter().map(|&i| k.diagonal(i)).sum::<f64>()
+            / row.indices.len().max(1) as f64;
+        let norm2: f64 = row.weights.iter().map(|w| w * w).sum();
+        Self {
+            row: row.clone(),
+            rho: if norm2 > 0.0 { diag / norm2 } else { 0.0 },
+        }
+    }
+}
+
+fn same_folds(a: &[Folded], b: &[Folded]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.row == y.row)
+}
+
+/// K + Σ ρ a aᵀ over `folded` (whose rows lie in K's pattern).
+fn fold(k: &Stiffness, folded: &[Folded]) -> Stiffness {
+    let mut out = k.clone();
+    for f in folded {
+        out.add_outer(&f.row.indices, &f.row.weights, f.rho);
+    }
+    out
+}
+
 /// A pinned control point and its equations (`pins[eqs]`). Pinned more
 /// than once, it takes the least-squares value Σ w d / Σ w².
 #[derive(Clone, Debug)]
@@ -222,6 +261,11 @@ pub struct Solver {
     factor: Factor,
     /// Which control points `factor` has eliminated.
     pinned: Vec<bool>,
+    /// Equations folded into the factor (see [`Folded`]).
+    folded: Vec<Folded>,
+    /// K + Σ ρ a aᵀ over `folded`: the matrix the factor eliminates the
+    /// pins from, and the one residuals are measured with.
+    augmented: Stiffness,
     /// The pin equations of the problem, sorted by control point.
     pins: Vec<PinEq>,
     /// The pinned control points: index and the range of their equations
@@ -258,6 +302,8 @@ impl Solver {
         let factor = Factor::new(stiffness.clone())?;
         Ok(Self {
             pinned: vec![false; stiffness.dim()],
+            folded: Vec::new(),
+            augmented: stiffness.clone(),
             stiffness,
             factor,
             pins: Vec::new(),
@@ -307,23 +353,21 @@ impl Solver {
         }
         // Factor::refactor keeps the old factor when it fails.
         let old = std::mem::replace(&mut self.stiffness, stiffness);
-        if let Err(e) = self
-            .factor
-            .refactor(self.stiffness.with_pinned(&self.pinned))
-        {
+        let old_folded = self.folded.clone();
+        let folded: Vec<Folded> = old_folded
+            .iter()
+            .map(|f| Folded::new(&f.row, &self.stiffness))
+            .collect();
+        if let Err(e) = self.rebuild_factor(self.pinned.clone(), folded) {
             self.stiffness = old;
             return Err(e);
         }
         let problem = std::mem::take(&mut self.problem);
-        self.forget_columns();
-        self.last = None;
         if let Err(e) = self.set_problem(problem.clone()) {
             // Only reachable if the problem was valid before and S fails now:
             // go back to the old stiffness so nothing changes.
             self.stiffness = old;
-            self.factor
-                .refactor(self.stiffness.with_pinned(&self.pinned))?;
-            self.forget_columns();
+            self.rebuild_factor(self.pinned.clone(), old_folded)?;
             self.set_problem(problem)?;
             return Err(e);
         }
@@ -388,26 +432,6 @@ impl Solver {
         let is_pin = |eq: &Equation| {
             matches!(eq, Equation::Vector { row, .. }
                 if row.indices.len() == 1 && row.weights[0] != 0.0)
-        };
-        let refactored = pinned != self.pinned;
-        if refactored {
-            self.factor.refactor(self.stiffness.with_pinned(&pinned))?;
-            self.forget_columns();
-        }
-        let restore = |this: &mut Self, e: SolveError| -> SolveError {
-            if refactored {
-                // Back to the old factor, so nothing changes.
-                if this
-                    .factor
-                    .refactor(this.stiffness.with_pinned(&this.pinned))
-                    .is_ok()
-                {
-                    let old = std::mem::take(&mut this.problem);
-                    this.pin_points.clear();
-                    let _ = this.set_problem(old);
-                }
-            }
-            e
         };
         // Columns: one per equation row and per load row, deduplicated.
         let mut rows: Vec<ScalarRow> = Vec::new();
@@ -479,6 +503,112 @@ impl Solver {
                 ScalarRow { indices, weights }
             })
             .collect();
+        // Equations whose rows lie in K's pattern can be folded into the
+        // factor (see `fold`): the ones that are neither pins nor projected.
+        let foldable: Vec<Folded> = {
+            let mut seen = std::collections::HashSet::new();
+            eqs.iter()
+                .filter(|e| e.shift.is_some())
+                .filter_map(|e| {
+                    let col = e.terms[0].col;
+                    let row = &free_rows[col];
+                    (seen.insert(col) && !row.indices.is_empty() && self.stiffness.holds(row))
+                        .then(|| Folded::new(row, &self.stiffness))
+                })
+                .collect()
+        };
+        let old = (self.pinned.clone(), self.folded.clone());
+        let mut fold = if self.folded.is_empty() {
+            Vec::new()
+        } else {
+            foldable.clone()
+        };
+        let mut refactored = false;
+        let (z, g, s_pinv, rank_deficiency) = loop {
+            if pinned != self.pinned || !same_folds(&fold, &self.folded) {
+                if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
+                    if refactored {
+                        self.restore_factor(old);
+                    }
+                    return Err(e);
+                }
+                refactored = true;
+            }
+            let (z, g, s) = self.schur(&rows, &free_rows, &eqs);
+            match pseudo_inverse(&s) {
+                Ok((_, _, false)) if fold.is_empty() && !foldable.is_empty() => {
+                    // S is ill-conditioned over K: fold the equations into
+                    // the factor and try again.
+                    fold = foldable.clone();
+                }
+                Ok((p, dropped, _)) => break (z, g, p, dropped),
+                Err(e) => {
+                    if refactored {
+                        self.restore_factor(old);
+                    }
+                    return Err(e);
+                }
+            }
+        };
+        // A drag response depends on the equations' and loads' structure
+        // (rows, columns, gains, pins), not on their targets and forces: a
+        // new problem of the same structure (a drag started, a load's spring
+        // re-attached) keeps it.
+        let same_structure = !refactored
+            && self.eqs.len() == eqs.len()
+            && self.loads.len() == loads.len()
+            && self.pins.len() == pins.len()
+            && self
+                .pins
+                .iter()
+                .zip(&pins)
+                .all(|(a, b)| a.index == b.index && a.weight == b.weight && a.group == b.group)
+            && self
+                .eqs
+                .iter()
+                .zip(&eqs)
+                .all(|(a, b)| a.terms == b.terms && a.group == b.group && a.shift == b.shift)
+            && self
+                .loads
+                .iter()
+                .zip(&loads)
+                .all(|(a, b)| a.col == b.col && a.gain == b.gain && a.group == b.group)
+            && self.z.len() == z.len()
+            && self
+                .z
+                .iter()
+                .zip(&z)
+                .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
+        self.retire(&z);
+        self.problem = problem;
+        self.rows = rows;
+        self.free_rows = free_rows;
+        self.z = z;
+        self.g = g;
+        self.eqs = eqs;
+        self.loads = loads;
+        self.s_pinv = s_pinv;
+        self.rank_deficiency = rank_deficiency + pin_redundant;
+        self.pinned = pinned;
+        self.pins = pins;
+        self.pin_points = pin_points;
+        self.pin_redundant = pin_redundant;
+        self.base = None;
+        if !same_structure {
+            self.response = None;
+        }
+        Ok(())
+    }
+
+    /// Z = K̃⁻¹[free rows] (cached columns reused, the rest in one batched
+    /// solve), G = Aᵀ Z and S over the scalar equations.
+    fn schur(
+        &mut self,
+        rows: &[ScalarRow],
+        free_rows: &[ScalarRow],
+        eqs: &[ScalarEq],
+    ) -> (Vec<Column>, Vec<f64>, Mat<f64>) {
+        let n = self.dim();
         // Z: reuse cached columns, solve for the rest in one batch.
         let old: HashMap<RowKey, usize> = self
             .rows
@@ -544,58 +674,32 @@ impl Solver {
                 s[(f, e)] = v;
             }
         }
-        let (s_pinv, rank_deficiency) = match pseudo_inverse(&s) {
-            Ok(x) => x,
-            Err(e) => return Err(restore(self, e)),
-        };
-        // A drag response depends on the equations' and loads' structure
-        // (rows, columns, gains, pins), not on their targets and forces: a
-        // new problem of the same structure (a drag started, a load's spring
-        // re-attached) keeps it.
-        let same_structure = !refactored
-            && self.eqs.len() == eqs.len()
-            && self.loads.len() == loads.len()
-            && self.pins.len() == pins.len()
-            && self
-                .pins
-                .iter()
-                .zip(&pins)
-                .all(|(a, b)| a.index == b.index && a.weight == b.weight && a.group == b.group)
-            && self
-                .eqs
-                .iter()
-                .zip(&eqs)
-                .all(|(a, b)| a.terms == b.terms && a.group == b.group && a.shift == b.shift)
-            && self
-                .loads
-                .iter()
-                .zip(&loads)
-                .all(|(a, b)| a.col == b.col && a.gain == b.gain && a.group == b.group)
-            && self.z.len() == z.len()
-            && self
-                .z
-                .iter()
-                .zip(&z)
-                .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
-        self.retire(&z);
-        self.problem = problem;
-        self.rows = rows;
-        self.free_rows = free_rows;
-        self.z = z;
-        self.g = g;
-        self.eqs = eqs;
-        self.loads = loads;
-        self.s_pinv = s_pinv;
-        self.rank_deficiency = rank_deficiency + pin_redundant;
+        (z, g, s)
+    }
+
+    /// Refactors for `pinned` control points eliminated and `folded`
+    /// equations folded in: K̃ = K + Σ ρ a aᵀ with the pinned rows and
+    /// columns eliminated. Every cached column belongs to the old factor and
+    /// is forgotten. On error the old factor stays (and nothing else changes).
+    fn rebuild_factor(&mut self, pinned: Vec<bool>, folded: Vec<Folded>) -> Result<(), SolveError> {
+        let augmented = fold(&self.stiffness, &folded);
+        self.factor.refactor(augmented.with_pinned(&pinned))?;
         self.pinned = pinned;
-        self.pins = pins;
-        self.pin_points = pin_points;
-        self.pin_redundant = pin_redundant;
-        self.base = None;
-        if !same_structure {
-            self.response = None;
-        }
+        self.folded = folded;
+        self.augmented = augmented;
+        self.forget_columns();
+        self.last = None;
         Ok(())
+    }
+
+    /// Back to an earlier factor after a failed problem change, and to the
+    /// problem it served.
+    fn restore_factor(&mut self, (pinned, folded): (Vec<bool>, Vec<Folded>)) {
+        if self.rebuild_factor(pinned, folded).is_ok() {
+            let old = std::mem::take(&mut self.problem);
+            self.pin_points.clear();
+            let _ = self.set_problem(old);
+        }
     }
 
     /// Keeps the columns of the current rows that `rows` drops for later,
@@ -656,6 +760,31 @@ impl Solver {
     /// answer, and per group the size of the pull its multipliers exert.
     fn last_solve(&self, reference: &[DVec3], out: &[DVec3], lambda: &[f64]) -> LastSolve {
         let mut pull: HashMap<GroupKey, f64> = HashMap::new();
+        // The solve's multipliers are μ; a folded equation's own is
+        // λ = μ + ρ a·δ (see [`Folded`]).
+        let lambda: Vec<f64> = if self.folded.is_empty() {
+            lambda.to_vec()
+        } else {
+            let rho: HashMap<RowKey, f64> = self
+                .folded
+                .iter()
+                .map(|f| (row_key(&f.row), f.rho))
+                .collect();
+            let delta: Vec<DVec3> = out.iter().zip(reference).map(|(o, r)| *o - *r).collect();
+            self.eqs
+                .iter()
+                .zip(lambda)
+                .map(|(eq, mu)| match (eq.shift, eq.terms.first()) {
+                    (Some(k), Some(t)) => {
+                        let row = &self.free_rows[t.col];
+                        rho.get(&row_key(row))
+                            .map_or(*mu, |r| mu + r * row.apply(&delta)[k])
+                    }
+                    _ => *mu,
+                })
+                .collect()
+        };
+        let lambda = lambda.as_slice();
         for (eq, lam) in self.eqs.iter().zip(lambda) {
             let key = self.problem.groups[eq.group].key;
             let size: f64 = eq
@@ -688,7 +817,7 @@ impl Solver {
             }
             let delta: Vec<DVec3> = out.iter().zip(reference).map(|(o, r)| *o - *r).collect();
             let mut kd = vec![DVec3::ZERO; n];
-            self.stiffness.mul_points(&delta, &mut kd);
+            self.augmented.mul_points(&delta, &mut kd);
             let scale = rho
                 .iter()
                 .chain(&kd)
@@ -1079,7 +1208,7 @@ impl Solver {
         let mut kd = vec![DVec3::ZERO; n];
         for (p, o) in out.iter().enumerate() {
             let Some((d, _)) = o else { continue };
-            self.stiffness.mul_points(d, &mut kd);
+            self.augmented.mul_points(d, &mut kd);
             for (c, &(q, k)) in columns.iter().enumerate() {
                 if q == p {
                     for (i, v) in kd.iter().enumerate() {
@@ -1256,7 +1385,7 @@ impl Solver {
         // error: it is zeroed).
         let mut computed = DVec3::ZERO;
         let mut k_delta = vec![DVec3::ZERO; n];
-        self.stiffness().mul_points(delta, &mut k_delta);
+        self.augmented.mul_points(delta, &mut k_delta);
         for ((r, kd), &pinned) in rho.iter_mut().zip(&k_delta).zip(&self.pinned) {
             if pinned {
                 *r = DVec3::ZERO;
@@ -1503,17 +1632,18 @@ fn validate(problem: &Problem, n: usize) -> Result<(), SolveError> {
 }
 
 /// The pseudo-inverse of the symmetric positive semi-definite `s` (row-major
-/// result) and the number of dropped eigen-directions.
+/// result), the number of dropped eigen-directions, and whether S was
+/// provably well conditioned (the Cholesky path).
 ///
 /// S is first equilibrated, Ŝ = D^-½ S D^-½ with D = diag(S), so that the
 /// cut-off (1e-12 of the largest eigenvalue of Ŝ) measures linear dependence
 /// between equations rather than their scale: exactly redundant equations
 /// give eigenvalues at round-off level and are dropped; independent ones,
 /// however differently scaled, are kept. S⁺ = D^-½ Ŝ⁺ D^-½.
-fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
+fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
     let m = s.nrows();
     if m == 0 {
-        return Ok((Vec::new(), 0));
+        return Ok((Vec::new(), 0, true));
     }
     let scale: Vec<f64> = (0..m)
         .map(|i| {
@@ -1526,7 +1656,7 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
         .collect();
     let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
     if let Some(inverse) = well_conditioned_inverse(&scaled, &scale) {
-        return Ok((inverse, 0));
+        return Ok((inverse, 0, true));
     }
     let evd = scaled
         .self_adjoint_eigen(faer::Side::Lower)
@@ -1550,7 +1680,7 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
         .flat_map(|i| (0..m).map(move |j| (i, j)))
         .map(|(i, j)| product[(i, j)])
         .collect();
-    Ok((out, m - kept.len()))
+    Ok((out, m - kept.len(), false))
 }
 
 /// Most steps of iterative refinement per solve (see
@@ -1627,7 +1757,8 @@ mod tests {
                 well_conditioned_inverse(&scaled, &scale).is_some(),
                 rank_drop == 0
             );
-            let (p, dropped) = pseudo_inverse(s).unwrap();
+            let (p, dropped, fast) = pseudo_inverse(s).unwrap();
+            assert_eq!(fast, rank_drop == 0);
             assert_eq!(dropped, rank_drop);
             let p = Mat::<f64>::from_fn(m, m, |i, j| p[i * m + j]);
             let sps = s * &p * s;
