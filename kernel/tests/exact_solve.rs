@@ -195,3 +195,55 @@ fn a_clamped_plate_with_1560_pins_is_exact_while_a_load_pulls() {
         }
     }
 }
+
+/// A control point pinned twice: at the same place it is redundant and met
+/// exactly (reported as 3 redundant scalar equations, no warning); at two
+/// places the answer is the least-squares middle, the residual half the
+/// gap, with a `Dependent` warning.
+#[test]
+fn a_point_pinned_twice_is_redundant_or_contradictory_as_documented() {
+    use vsculpt_kernel::solve::SolveWarning;
+    let s = square(6);
+    let pts = s.points().to_vec();
+    let k = Stiffness::surface(s.u_knots(), s.v_knots(), &SurfaceMaterial::default()).unwrap();
+    let mut solver = Solver::new(k).unwrap();
+    let c = 20;
+    let pin = |key, target| Group {
+        key,
+        equations: vec![Equation::Vector {
+            row: ScalarRow {
+                indices: vec![c],
+                weights: vec![1.0],
+            },
+            target,
+        }],
+        loads: vec![],
+    };
+    let up = pts[c] + DVec3::Z * 0.2;
+    solver
+        .set_problem(Problem {
+            groups: vec![pin(1, up), pin(2, up)],
+        })
+        .unwrap();
+    let mut out = pts.clone();
+    let r = solver.solve(&pts, &mut out).unwrap();
+    assert_eq!(r.rank_deficiency, 3, "{r:?}");
+    assert_eq!(r.warning, None);
+    assert!((out[c] - up).length() < 1e-15, "{:?}", out[c]);
+    let down = pts[c] - DVec3::Z * 0.2;
+    solver
+        .set_problem(Problem {
+            groups: vec![pin(1, up), pin(2, down)],
+        })
+        .unwrap();
+    let r = solver.solve(&pts, &mut out).unwrap();
+    assert!((out[c] - pts[c]).length() < 1e-15, "{:?}", out[c]);
+    assert!((r.constraint_residual - 0.2).abs() < 1e-15, "{r:?}");
+    assert_eq!(
+        r.warning,
+        Some(SolveWarning::Dependent {
+            dropped: 3,
+            residual: r.constraint_residual
+        })
+    );
+}
