@@ -18,7 +18,13 @@
 //! ones get the least-squares compromise in the S-norm; the residual
 //! |C P − d| is reported, never NaN.
 //!
-//! A full solve is refined once (see `refined_deltas`), and skipped when the
+//! Pins (a vector equation on one control point) are not rows of C: the
+//! factor is of K with them eliminated (see [`Stiffness::with_pinned`]),
+//! their values enter as a moved reference. When S is not provably well
+//! conditioned, the vector equations whose rows lie in K's pattern are
+//! folded into the factor (K + Σ ρ a aᵀ, see `Folded`).
+//!
+//! A full solve is refined to convergence (see `refined_deltas`), and skipped when the
 //! last solution still meets the new problem's optimality conditions (see
 //! `still_optimal`).
 //!
@@ -57,11 +63,11 @@ pub struct SolveReport {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolveWarning {
     /// The equations are dependent to working precision (S numerically
-    /// singular: `dropped` eigen-directions below 1e-12 of the largest) and
-    /// their targets disagree: the answer is the least-squares compromise and
-    /// `residual` is max |C P − d|. Genuinely contradictory constraints (the
-    /// same point held at two places) end here; so, today, do some
-    /// independent but nearly dependent sets (issue 15).
+    /// singular: `dropped` eigen-directions below 1e-12 of the largest, or a
+    /// control point pinned more than once) and their targets disagree: the
+    /// answer is the least-squares compromise and `residual` is
+    /// max |C P − d|. Genuinely contradictory constraints (the same point
+    /// held at two places) end here.
     Dependent {
         /// Dropped eigen-directions of S.
         dropped: usize,
