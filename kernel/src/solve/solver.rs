@@ -524,8 +524,18 @@ impl Solver {
                 .collect()
         };
         let old = (self.pinned.clone(), self.folded.clone());
+        // Keep the folded set while every folded row is still an equation
+        // (a new point icon, a switched one: no refactor); refold when one
+        // left, or when S asks for it below.
+        let still_folded = {
+            let keys: std::collections::HashSet<RowKey> =
+                foldable.iter().map(|f| row_key(&f.row)).collect();
+            self.folded.iter().all(|f| keys.contains(&row_key(&f.row)))
+        };
         let mut fold = if self.folded.is_empty() {
             Vec::new()
+        } else if still_folded {
+            self.folded.clone()
         } else {
             foldable.clone()
         };
@@ -542,7 +552,7 @@ impl Solver {
             }
             let (z, g, s) = self.schur(&rows, &free_rows, &eqs);
             match pseudo_inverse(&s) {
-                Ok((_, _, false)) if fold.is_empty() && !foldable.is_empty() => {
+                Ok((_, _, false)) if !same_folds(&fold, &foldable) => {
                     // S is ill-conditioned over K: fold the equations into
                     // the factor and try again.
                     fold = foldable.clone();
