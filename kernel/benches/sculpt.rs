@@ -16,6 +16,9 @@
 //! * `tessellate` — the client tessellation at the paper's polygon count;
 //! * `full_frame` — drag frame + tessellation with normals and curvature.
 //!
+//! And `clamped_plate`: a 128 × 128 plate clamped on its four edges (edge
+//! icons) under a dragged distributed load.
+//!
 //! Run: `cargo bench -p vsculpt-kernel --bench sculpt`. Figures in BENCHMARKS.md.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -26,7 +29,7 @@ use vsculpt_kernel::analysis::{Tessellation, Tessellator, samples_for};
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 use vsculpt_kernel::design::Design;
 use vsculpt_kernel::energy::SurfaceMaterial;
-use vsculpt_kernel::icon::{Anchor, IconId, IconSpec, IconState, Role};
+use vsculpt_kernel::icon::{Anchor, Edge, IconId, IconSpec, IconState, Role};
 
 /// (nu, nv, polygons) of paper 003's Table 2.
 const GRIDS: [(usize, usize, usize); 5] = [
@@ -216,5 +219,94 @@ fn benches(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(sculpt, benches);
+/// A clamped square plate of 128 × 128 control points (its four edges held
+/// by edge-clamp icons: two rows pinned each, 1 512 points, eliminated from
+/// the unknowns) under a distributed load over the whole plate, dragged.
+/// `clamp_change` switches one edge clamp off and on (the pin set changes:
+/// a numeric refactor each way).
+fn clamped_plate(c: &mut Criterion) {
+    let mut group = c.benchmark_group("clamped_plate");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    let n = 128;
+    let s = BSplineSurface::plane(1.0, 1.0, n, n, 3).unwrap();
+    let mut d = Design::new(s, SurfaceMaterial::default()).unwrap();
+    d.set_adaptive_spring(false);
+    let mut clamps = Vec::new();
+    for edge in [Edge::UMin, Edge::UMax, Edge::VMin, Edge::VMax] {
+        clamps.push(
+            d.add_icon(IconSpec {
+                anchor: Anchor::Edge {
+                    edge,
+                    clamped: true,
+                },
+                role: Role::Position,
+                state: IconState::Passive,
+                target: None,
+            })
+            .unwrap(),
+        );
+    }
+    let load = d
+        .add_icon(IconSpec {
+            anchor: Anchor::Region {
+                u0: 0.0,
+                v0: 0.0,
+                u1: 1.0,
+                v1: 1.0,
+                inside: true,
+            },
+            role: Role::Load,
+            state: IconState::Passive,
+            target: None,
+        })
+        .unwrap();
+    d.solve().unwrap();
+    let start = d.icon(load).unwrap().xyz;
+    d.drag_start(load).unwrap();
+    d.drag(load, start + DVec3::Z * 0.01).unwrap();
+    let id = format!("{n}x{n}");
+    let mut k = 0u64;
+    group.bench_function(BenchmarkId::new("drag_frame", &id), |b| {
+        b.iter(|| {
+            k += 1;
+            let lift = 0.01 + 0.001 * (k % 7) as f64;
+            black_box(d.drag(load, start + DVec3::Z * lift).unwrap())
+        })
+    });
+    d.release(load).unwrap();
+    group.bench_function(BenchmarkId::new("first_frame", &id), |b| {
+        b.iter_custom(|iters| {
+            let mut spent = Duration::ZERO;
+            for _ in 0..iters {
+                k += 1;
+                let at = d.icon(load).unwrap().xyz;
+                let lift = DVec3::Z * 0.001 * (1 + k % 3) as f64;
+                let t = std::time::Instant::now();
+                d.drag_start(load).unwrap();
+                black_box(d.drag(load, at + lift).unwrap());
+                spent += t.elapsed();
+                d.release(load).unwrap();
+            }
+            spent
+        })
+    });
+    group.bench_function(BenchmarkId::new("clamp_change", &id), |b| {
+        b.iter(|| {
+            k += 1;
+            let state = if k.is_multiple_of(2) {
+                IconState::Passive
+            } else {
+                IconState::Sleeping
+            };
+            d.set_state(clamps[0], state).unwrap();
+            black_box(d.solve().unwrap())
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(sculpt, benches, clamped_plate);
 criterion_main!(sculpt);

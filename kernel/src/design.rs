@@ -22,7 +22,8 @@ use crate::analysis::{Tessellation, tessellate};
 use crate::bspline::{BSplineSurface, BasisDerivs, GeometryError, basis_derivs_into};
 use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
 use crate::icon::{
-    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, icon_group, samples,
+    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, capture, icon_group,
+    samples,
 };
 use crate::solve::{Problem, SolveError, SolveReport, Solver};
 use crate::spring::{Adaptation, Spring};
@@ -346,10 +347,7 @@ impl Design {
             return Err(DesignError::NotFinite("target"));
         }
         let samples = samples(&spec.anchor, &self.surface)?;
-        let shape: Vec<DVec3> = samples
-            .iter()
-            .map(|&(u, v)| self.surface.point(u, v))
-            .collect();
+        let shape = capture(&spec.anchor, spec.role, &samples, &self.surface);
         let id = IconId(self.next_id);
         let (hu, hv) = spec.anchor.handle_uv();
         let handle = self.surface.point(hu, hv);
@@ -401,10 +399,7 @@ impl Design {
             .role;
         Self::check_role(&anchor, role)?;
         let samples = samples(&anchor, &self.surface)?;
-        let shape: Vec<DVec3> = samples
-            .iter()
-            .map(|&(u, v)| self.surface.point(u, v))
-            .collect();
+        let shape = capture(&anchor, role, &samples, &self.surface);
         self.finish_drag_of(id);
         let mut icon = self.icons[&id].clone();
         icon.anchor = anchor;
@@ -425,12 +420,11 @@ impl Design {
         let icon = self.icons.get(&id).ok_or(DesignError::UnknownIcon(id))?;
         Self::check_role(&icon.anchor, role)?;
         self.finish_drag_of(id);
+        self.icon_mut(id)?.role = role;
         self.rebase_shape(id);
         let icon = &self.icons[&id];
         let target = self.current_target(role, icon.handle_uv());
-        let icon = self.icon_mut(id)?;
-        icon.role = role;
-        icon.target = target;
+        self.icon_mut(id)?.target = target;
         self.problem_dirty = true;
         Ok(())
     }
@@ -581,11 +575,7 @@ impl Design {
         for (id, icon) in &self.icons {
             let mut icon = icon.clone();
             icon.samples = samples(&icon.anchor, &surface)?;
-            icon.shape = icon
-                .samples
-                .iter()
-                .map(|&(u, v)| surface.point(u, v))
-                .collect();
+            icon.shape = capture(&icon.anchor, icon.role, &icon.samples, &surface);
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
             icons.insert(*id, icon);
@@ -633,11 +623,7 @@ impl Design {
     fn rebase_shape(&mut self, id: IconId) {
         let surface = &self.surface;
         if let Some(icon) = self.icons.get_mut(&id) {
-            icon.shape = icon
-                .samples
-                .iter()
-                .map(|&(u, v)| surface.point(u, v))
-                .collect();
+            icon.shape = capture(&icon.anchor, icon.role, &icon.samples, surface);
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
         }

@@ -90,6 +90,11 @@ fn centre(anchor: &Anchor) -> (f64, f64) {
             (p.x, p.y)
         }
         Anchor::Region { u0, v0, u1, v1, .. } => ((u0 + u1) / 2.0, (v0 + v1) / 2.0),
+        // The middle of the edge of the unit parameter square.
+        Anchor::Edge { edge, .. } => {
+            let ((a, b), (c, d)) = edge.ends();
+            ((a + c) / 2.0, (b + d) / 2.0)
+        }
     }
 }
 

@@ -159,6 +159,74 @@ impl Stiffness {
             && self.lower.symbolic().row_idx() == other.lower.symbolic().row_idx()
     }
 
+    /// The matrix with the unknowns where `pinned` is true eliminated: their
+    /// rows and columns zeroed but for the diagonal, which is kept (so the
+    /// scale of the matrix is kept). Solving with it and a right-hand side
+    /// that is zero at the pinned unknowns solves K_ff x_f = b_f over the
+    /// free ones and leaves the pinned ones zero. The sparsity pattern is
+    /// unchanged, so refactoring for it is numeric only.
+    ///
+    /// # Panics
+    /// If `pinned` is not [`Self::dim`] long.
+    pub fn with_pinned(&self, pinned: &[bool]) -> Stiffness {
+        assert_eq!(pinned.len(), self.dim(), "with_pinned: length");
+        let mut out = self.clone();
+        let n = self.dim();
+        let cp = self.lower.symbolic().col_ptr().to_vec();
+        let ri = self.lower.symbolic().row_idx().to_vec();
+        let vals = out.lower.val_mut();
+        for c in 0..n {
+            for e in cp[c]..cp[c + 1] {
+                let r = ri[e];
+                if r != c && (pinned[r] || pinned[c]) {
+                    vals[e] = 0.0;
+                }
+            }
+        }
+        out
+    }
+
+    /// Where entry (r, c), r ≥ c, is stored in the lower triangle.
+    fn position(&self, r: usize, c: usize) -> Option<usize> {
+        let sym = self.lower.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let (lo, hi) = (cp[c], cp[c + 1]);
+        ri[lo..hi].binary_search(&r).ok().map(|k| lo + k)
+    }
+
+    /// K_ii.
+    ///
+    /// # Panics
+    /// If `i` is out of range.
+    pub fn diagonal(&self, i: usize) -> f64 {
+        self.position(i, i).map_or(0.0, |e| self.lower.val()[e])
+    }
+
+    /// Whether every pair of `row`'s indices is an entry of the pattern, so
+    /// that a a ᵀ can be added without changing it (e.g. the row of a
+    /// surface point: its 4 × 4 control points lie in the stencil).
+    pub fn holds(&self, row: &crate::solve::ScalarRow) -> bool {
+        let n = self.dim();
+        row.indices.iter().all(|&a| {
+            row.indices
+                .iter()
+                .all(|&b| a < n && b < n && self.position(a.max(b), a.min(b)).is_some())
+        })
+    }
+
+    /// K += ρ a aᵀ for the sparse vector a (`indices`, `weights`), whose
+    /// pairs must lie in the pattern ([`Self::holds`]); pairs that do not
+    /// are skipped.
+    pub fn add_outer(&mut self, indices: &[usize], weights: &[f64], rho: f64) {
+        for (x, (&a, &wa)) in indices.iter().zip(weights).enumerate() {
+            for (&b, &wb) in indices.iter().zip(weights).skip(x) {
+                if let Some(e) = self.position(a.max(b), a.min(b)) {
+                    self.lower.val_mut()[e] += rho * wa * wb;
+                }
+            }
+        }
+    }
+
     /// y = K x for the full symmetric matrix.
     pub fn mul(&self, x: &[f64]) -> Vec<f64> {
         let n = self.dim();

@@ -85,6 +85,7 @@ pub fn load_row(anchor: &Anchor, surface: &BSplineSurface) -> ScalarRow {
             row
         }
         Anchor::Curve(curve) => curve_row(curve, surface),
+        Anchor::Edge { edge, .. } => curve_row(&edge.curve(), surface),
     }
 }
 

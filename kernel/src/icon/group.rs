@@ -2,7 +2,9 @@
 //! equations or loads built from rows of the surface at its samples.
 //!
 //! * position → `Vector{row of w at sample i, shape_i + (target − handle)}`;
-//!   an outside region holds `shape_i` as it is;
+//!   a region or an edge pins its held control points
+//!   ([`super::held_points`]) at `shape_i + (target − handle)`; an outside
+//!   region holds them as they are;
 //! * derivative R/V/R2/V2/RV → `Vector{row of that derivative, target}`
 //! * normal → `Projected{row of w_u, N, 0}` and `Projected{row of w_v, N, 0}`
 //! * load → one load, `k·(target − handle)` times the consistent-load row of
@@ -15,9 +17,9 @@
 //! passive or driving constraint its equations, a driving load its force.
 use glam::DVec3;
 
-use super::{Anchor, Icon, Role, load_row, surface_row};
+use super::{Anchor, Icon, Role, held_points, load_row, surface_row};
 use crate::bspline::BSplineSurface;
-use crate::solve::{Equation, Group, Load};
+use crate::solve::{Equation, Group, Load, ScalarRow};
 
 /// The group of `icon` on `surface`, with `base` standing in for its target
 /// (the drag origin during a drag) and spring stiffness `k`; `None` when
@@ -37,11 +39,28 @@ pub fn icon_group(icon: &Icon, base: DVec3, surface: &BSplineSurface, k: f64) ->
                 Anchor::Region { inside: false, .. } => DVec3::ZERO,
                 _ => base - icon.handle,
             };
-            for (&(su, sv), p) in icon.samples.iter().zip(&icon.shape) {
-                group.equations.push(Equation::Vector {
-                    row: surface_row(surface, su, sv, 0, 0),
-                    target: *p + shift,
-                });
+            match held_points(&icon.anchor, surface) {
+                // A region or an edge: its control points pinned (the
+                // solver eliminates them: exact, however many).
+                Some(points) => {
+                    for (&c, p) in points.iter().zip(&icon.shape) {
+                        group.equations.push(Equation::Vector {
+                            row: ScalarRow {
+                                indices: vec![c],
+                                weights: vec![1.0],
+                            },
+                            target: *p + shift,
+                        });
+                    }
+                }
+                None => {
+                    for (&(su, sv), p) in icon.samples.iter().zip(&icon.shape) {
+                        group.equations.push(Equation::Vector {
+                            row: surface_row(surface, su, sv, 0, 0),
+                            target: *p + shift,
+                        });
+                    }
+                }
             }
         }
         Role::Derivative(d) => {

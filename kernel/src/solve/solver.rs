@@ -18,7 +18,13 @@
 //! ones get the least-squares compromise in the S-norm; the residual
 //! |C P − d| is reported, never NaN.
 //!
-//! A full solve is refined once (see `refined_deltas`), and skipped when the
+//! Pins (a vector equation on one control point) are not rows of C: the
+//! factor is of K with them eliminated (see [`Stiffness::with_pinned`]),
+//! their values enter as a moved reference. When S is not provably well
+//! conditioned, the vector equations whose rows lie in K's pattern are
+//! folded into the factor (K + Σ ρ a aᵀ, see `Folded`).
+//!
+//! A full solve is refined to convergence (see `refined_deltas`), and skipped when the
 //! last solution still meets the new problem's optimality conditions (see
 //! `still_optimal`).
 //!
@@ -57,11 +63,11 @@ pub struct SolveReport {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum SolveWarning {
     /// The equations are dependent to working precision (S numerically
-    /// singular: `dropped` eigen-directions below 1e-12 of the largest) and
-    /// their targets disagree: the answer is the least-squares compromise and
-    /// `residual` is max |C P − d|. Genuinely contradictory constraints (the
-    /// same point held at two places) end here; so, today, do some
-    /// independent but nearly dependent sets (issue 15).
+    /// singular: `dropped` eigen-directions below 1e-12 of the largest, or a
+    /// control point pinned more than once) and their targets disagree: the
+    /// answer is the least-squares compromise and `residual` is
+    /// max |C P − d|. Genuinely contradictory constraints (the same point
+    /// held at two places) end here.
     Dependent {
         /// Dropped eigen-directions of S.
         dropped: usize,
@@ -92,6 +98,62 @@ struct ScalarEq {
     group: usize,
     /// The coordinate of the drag input that shifts this equation's target.
     shift: Option<usize>,
+}
+
+/// A vector equation on one control point: `weight · P[index] = target`.
+#[derive(Clone, Debug)]
+struct PinEq {
+    index: usize,
+    weight: f64,
+    target: DVec3,
+    group: usize,
+}
+
+/// A vector equation's row folded into the factor: K̃ = K + ρ a aᵀ. The
+/// term ρ (a·δ − r)² it stands for is zero wherever the equation holds, so
+/// it changes no answer, only the multipliers (λ = μ + ρ a·δ); but it lifts
+/// the directions of S = C K̃⁻¹ Cᵀ that the soft modes of K (a small `rest`,
+/// the affine modes) made huge, so S stays well conditioned however many
+/// equations there are (S̃ = (S⁻¹ + ρ)⁻¹ for one row).
+#[derive(Clone, Debug, PartialEq)]
+struct Folded {
+    row: ScalarRow,
+    rho: f64,
+}
+
+impl Folded {
+    /// ρ = the mean diagonal of K over the row's points / |a|²: a penalty
+    /// as stiff as the surface there.
+    fn new(row: &ScalarRow, k: &Stiffness) -> Self {
+        let diag: f64 = row.indices.iter().map(|&i| k.diagonal(i)).sum::<f64>()
+            / row.indices.len().max(1) as f64;
+        let norm2: f64 = row.weights.iter().map(|w| w * w).sum();
+        Self {
+            row: row.clone(),
+            rho: if norm2 > 0.0 { diag / norm2 } else { 0.0 },
+        }
+    }
+}
+
+fn same_folds(a: &[Folded], b: &[Folded]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.row == y.row)
+}
+
+/// K + Σ ρ a aᵀ over `folded` (whose rows lie in K's pattern).
+fn fold(k: &Stiffness, folded: &[Folded]) -> Stiffness {
+    let mut out = k.clone();
+    for f in folded {
+        out.add_outer(&f.row.indices, &f.row.weights, f.rho);
+    }
+    out
+}
+
+/// A pinned control point and its equations (`pins[eqs]`). Pinned more
+/// than once, it takes the least-squares value Σ w d / Σ w².
+#[derive(Clone, Debug)]
+struct PinPoint {
+    index: usize,
+    eqs: std::ops::Range<usize>,
 }
 
 #[derive(Clone, Debug)]
@@ -198,9 +260,30 @@ struct LastSolve {
 /// Solves the problem icons hand it, fast enough for drag frames.
 #[derive(Debug)]
 pub struct Solver {
+    /// The stiffness K the energy is measured with.
+    stiffness: Stiffness,
+    /// K with the pinned control points eliminated (see
+    /// [`Stiffness::with_pinned`]), factored.
     factor: Factor,
+    /// Which control points `factor` has eliminated.
+    pinned: Vec<bool>,
+    /// Equations folded into the factor (see [`Folded`]).
+    folded: Vec<Folded>,
+    /// K + Σ ρ a aᵀ over `folded`: the matrix the factor eliminates the
+    /// pins from, and the one residuals are measured with.
+    augmented: Stiffness,
+    /// The pin equations of the problem, sorted by control point.
+    pins: Vec<PinEq>,
+    /// The pinned control points: index and the range of their equations
+    /// in `pins`.
+    pin_points: Vec<PinPoint>,
+    /// Redundant pin equations (a point pinned more than once), ×3.
+    pin_redundant: usize,
     problem: Problem,
+    /// The rows of the equations that are not pins and of the loads, whole.
     rows: Vec<ScalarRow>,
+    /// The same rows without their pinned control points: what Z is made of.
+    free_rows: Vec<ScalarRow>,
     /// Z = K⁻¹[a_c], one column per row. Columns are shared, not copied,
     /// when a new problem keeps a row: a constraint change costs only the
     /// new rows' solves.
@@ -222,11 +305,19 @@ pub struct Solver {
 impl Solver {
     /// Factors `stiffness` (symbolic and numeric); the problem starts empty.
     pub fn new(stiffness: Stiffness) -> Result<Self, SolveError> {
-        let factor = Factor::new(stiffness)?;
+        let factor = Factor::new(stiffness.clone())?;
         Ok(Self {
+            pinned: vec![false; stiffness.dim()],
+            folded: Vec::new(),
+            augmented: stiffness.clone(),
+            stiffness,
             factor,
+            pins: Vec::new(),
+            pin_points: Vec::new(),
+            pin_redundant: 0,
             problem: Problem::default(),
             rows: Vec::new(),
+            free_rows: Vec::new(),
             z: Vec::new(),
             retired: VecDeque::new(),
             g: Vec::new(),
@@ -251,9 +342,10 @@ impl Solver {
         self.factor.columns_solved()
     }
 
-    /// The factored stiffness.
+    /// The stiffness K (the factor holds K with the pinned control points
+    /// eliminated).
     pub fn stiffness(&self) -> &Stiffness {
-        self.factor.stiffness()
+        &self.stiffness
     }
 
     /// Refactors for a new stiffness (numeric only when the pattern is
@@ -266,21 +358,35 @@ impl Solver {
             return Ok(());
         }
         // Factor::refactor keeps the old factor when it fails.
-        let old = self.factor.stiffness().clone();
-        self.factor.refactor(stiffness)?;
+        let old = std::mem::replace(&mut self.stiffness, stiffness);
+        let old_folded = self.folded.clone();
+        let folded: Vec<Folded> = old_folded
+            .iter()
+            .map(|f| Folded::new(&f.row, &self.stiffness))
+            .collect();
+        if let Err(e) = self.rebuild_factor(self.pinned.clone(), folded) {
+            self.stiffness = old;
+            return Err(e);
+        }
         let problem = std::mem::take(&mut self.problem);
-        self.rows.clear();
-        self.z.clear();
-        self.retired.clear();
-        self.last = None;
         if let Err(e) = self.set_problem(problem.clone()) {
             // Only reachable if the problem was valid before and S fails now:
             // go back to the old stiffness so nothing changes.
-            self.factor.refactor(old)?;
+            self.stiffness = old;
+            self.rebuild_factor(self.pinned.clone(), old_folded)?;
             self.set_problem(problem)?;
             return Err(e);
         }
         Ok(())
+    }
+
+    /// Drops every cached column of Z (they belong to the old factor).
+    fn forget_columns(&mut self) {
+        self.rows.clear();
+        self.free_rows.clear();
+        self.z.clear();
+        self.retired.clear();
+        self.response = None;
     }
 
     /// The current problem.
@@ -294,6 +400,45 @@ impl Solver {
     pub fn set_problem(&mut self, problem: Problem) -> Result<(), SolveError> {
         let n = self.dim();
         validate(&problem, n)?;
+        // Pins: a vector equation on one control point fixes it. They are
+        // eliminated from the unknowns (the factor is of K_ff), not
+        // answered through S: any number of them, exactly.
+        let mut pins: Vec<PinEq> = Vec::new();
+        for (gi, group) in problem.groups.iter().enumerate() {
+            for eq in &group.equations {
+                if let Equation::Vector { row, target } = eq
+                    && let ([index], [weight]) = (row.indices.as_slice(), row.weights.as_slice())
+                    && *weight != 0.0
+                {
+                    pins.push(PinEq {
+                        index: *index,
+                        weight: *weight,
+                        target: *target,
+                        group: gi,
+                    });
+                }
+            }
+        }
+        pins.sort_by_key(|p| p.index);
+        let mut pin_points: Vec<PinPoint> = Vec::new();
+        for (e, p) in pins.iter().enumerate() {
+            match pin_points.last_mut() {
+                Some(last) if last.index == p.index => last.eqs.end = e + 1,
+                _ => pin_points.push(PinPoint {
+                    index: p.index,
+                    eqs: e..e + 1,
+                }),
+            }
+        }
+        let pin_redundant = 3 * (pins.len() - pin_points.len());
+        let mut pinned = vec![false; n];
+        for p in &pin_points {
+            pinned[p.index] = true;
+        }
+        let is_pin = |eq: &Equation| {
+            matches!(eq, Equation::Vector { row, .. }
+                if row.indices.len() == 1 && row.weights[0] != 0.0)
+        };
         // Columns: one per equation row and per load row, deduplicated.
         let mut rows: Vec<ScalarRow> = Vec::new();
         let mut index: HashMap<RowKey, usize> = HashMap::new();
@@ -306,7 +451,7 @@ impl Solver {
         let mut eqs = Vec::new();
         let mut loads = Vec::new();
         for (gi, group) in problem.groups.iter().enumerate() {
-            for eq in &group.equations {
+            for eq in group.equations.iter().filter(|eq| !is_pin(eq)) {
                 match eq {
                     Equation::Vector { row, target } => {
                         let col = col_of(row, &mut rows);
@@ -351,6 +496,135 @@ impl Solver {
                 });
             }
         }
+        let free_rows: Vec<ScalarRow> = rows
+            .iter()
+            .map(|r| {
+                let (indices, weights) = r
+                    .indices
+                    .iter()
+                    .zip(&r.weights)
+                    .filter(|(i, _)| !pinned[**i])
+                    .map(|(i, w)| (*i, *w))
+                    .unzip();
+                ScalarRow { indices, weights }
+            })
+            .collect();
+        // Equations whose rows lie in K's pattern can be folded into the
+        // factor (see `fold`): the ones that are neither pins nor projected.
+        let foldable: Vec<Folded> = {
+            let mut seen = std::collections::HashSet::new();
+            eqs.iter()
+                .filter(|e| e.shift.is_some())
+                .filter_map(|e| {
+                    let col = e.terms[0].col;
+                    let row = &free_rows[col];
+                    (seen.insert(col) && !row.indices.is_empty() && self.stiffness.holds(row))
+                        .then(|| Folded::new(row, &self.stiffness))
+                })
+                .collect()
+        };
+        let old = (self.pinned.clone(), self.folded.clone());
+        // Keep the folded set while every folded row is still an equation
+        // (a new point icon, a switched one: no refactor); refold when one
+        // left, or when S asks for it below.
+        let still_folded = {
+            let keys: std::collections::HashSet<RowKey> =
+                foldable.iter().map(|f| row_key(&f.row)).collect();
+            self.folded.iter().all(|f| keys.contains(&row_key(&f.row)))
+        };
+        let mut fold = if self.folded.is_empty() {
+            Vec::new()
+        } else if still_folded {
+            self.folded.clone()
+        } else {
+            foldable.clone()
+        };
+        let mut refactored = false;
+        let (z, g, s_pinv, rank_deficiency) = loop {
+            if pinned != self.pinned || !same_folds(&fold, &self.folded) {
+                if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
+                    if refactored {
+                        self.restore_factor(old);
+                    }
+                    return Err(e);
+                }
+                refactored = true;
+            }
+            let (z, g, s) = self.schur(&rows, &free_rows, &eqs);
+            match pseudo_inverse(&s) {
+                Ok((_, _, false)) if !same_folds(&fold, &foldable) => {
+                    // S is ill-conditioned over K: fold the equations into
+                    // the factor and try again.
+                    fold = foldable.clone();
+                }
+                Ok((p, dropped, _)) => break (z, g, p, dropped),
+                Err(e) => {
+                    if refactored {
+                        self.restore_factor(old);
+                    }
+                    return Err(e);
+                }
+            }
+        };
+        // A drag response depends on the equations' and loads' structure
+        // (rows, columns, gains, pins), not on their targets and forces: a
+        // new problem of the same structure (a drag started, a load's spring
+        // re-attached) keeps it.
+        let same_structure = !refactored
+            && self.eqs.len() == eqs.len()
+            && self.loads.len() == loads.len()
+            && self.pins.len() == pins.len()
+            && self
+                .pins
+                .iter()
+                .zip(&pins)
+                .all(|(a, b)| a.index == b.index && a.weight == b.weight && a.group == b.group)
+            && self
+                .eqs
+                .iter()
+                .zip(&eqs)
+                .all(|(a, b)| a.terms == b.terms && a.group == b.group && a.shift == b.shift)
+            && self
+                .loads
+                .iter()
+                .zip(&loads)
+                .all(|(a, b)| a.col == b.col && a.gain == b.gain && a.group == b.group)
+            && self.z.len() == z.len()
+            && self
+                .z
+                .iter()
+                .zip(&z)
+                .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
+        self.retire(&z);
+        self.problem = problem;
+        self.rows = rows;
+        self.free_rows = free_rows;
+        self.z = z;
+        self.g = g;
+        self.eqs = eqs;
+        self.loads = loads;
+        self.s_pinv = s_pinv;
+        self.rank_deficiency = rank_deficiency + pin_redundant;
+        self.pinned = pinned;
+        self.pins = pins;
+        self.pin_points = pin_points;
+        self.pin_redundant = pin_redundant;
+        self.base = None;
+        if !same_structure {
+            self.response = None;
+        }
+        Ok(())
+    }
+
+    /// Z = K̃⁻¹[free rows] (cached columns reused, the rest in one batched
+    /// solve), G = Aᵀ Z and S over the scalar equations.
+    fn schur(
+        &mut self,
+        rows: &[ScalarRow],
+        free_rows: &[ScalarRow],
+        eqs: &[ScalarEq],
+    ) -> (Vec<Column>, Vec<f64>, Mat<f64>) {
+        let n = self.dim();
         // Z: reuse cached columns, solve for the rest in one batch.
         let old: HashMap<RowKey, usize> = self
             .rows
@@ -376,7 +650,7 @@ impl Solver {
         if !missing.is_empty() {
             let mut rhs = Mat::<f64>::zeros(n, missing.len());
             for (m, &c) in missing.iter().enumerate() {
-                for (&i, &w) in rows[c].indices.iter().zip(&rows[c].weights) {
+                for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
                     rhs[(i, m)] += w;
                 }
             }
@@ -387,10 +661,10 @@ impl Solver {
         }
         let z: Vec<Column> = z.into_iter().flatten().collect();
         debug_assert_eq!(z.len(), rows.len());
-        // G = Aᵀ Z.
+        // G = Aᵀ Z (Z is zero at the pinned points: the free rows suffice).
         let nc = rows.len();
         let mut g = vec![0.0; nc * nc];
-        for (a, row) in rows.iter().enumerate() {
+        for (a, row) in free_rows.iter().enumerate() {
             for b in 0..nc {
                 let zb = &z[b].values;
                 g[a * nc + b] = row
@@ -416,42 +690,21 @@ impl Solver {
                 s[(f, e)] = v;
             }
         }
-        let (s_pinv, rank_deficiency) = pseudo_inverse(&s)?;
-        // A drag response depends on the equations' and loads' structure
-        // (rows, columns, gains), not on their targets and forces: a new
-        // problem of the same structure (a drag started, a load's spring
-        // re-attached) keeps it.
-        let same_structure = self.eqs.len() == eqs.len()
-            && self.loads.len() == loads.len()
-            && self
-                .eqs
-                .iter()
-                .zip(&eqs)
-                .all(|(a, b)| a.terms == b.terms && a.group == b.group && a.shift == b.shift)
-            && self
-                .loads
-                .iter()
-                .zip(&loads)
-                .all(|(a, b)| a.col == b.col && a.gain == b.gain && a.group == b.group)
-            && self.z.len() == z.len()
-            && self
-                .z
-                .iter()
-                .zip(&z)
-                .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
-        self.retire(&z);
-        self.problem = problem;
-        self.rows = rows;
-        self.z = z;
-        self.g = g;
-        self.eqs = eqs;
-        self.loads = loads;
-        self.s_pinv = s_pinv;
-        self.rank_deficiency = rank_deficiency;
-        self.base = None;
-        if !same_structure {
-            self.response = None;
-        }
+        (z, g, s)
+    }
+
+    /// Refactors for `pinned` control points eliminated and `folded`
+    /// equations folded in: K̃ = K + Σ ρ a aᵀ with the pinned rows and
+    /// columns eliminated. Every cached column belongs to the old factor and
+    /// is forgotten. On error the old factor stays (and nothing else changes).
+    fn rebuild_factor(&mut self, pinned: Vec<bool>, folded: Vec<Folded>) -> Result<(), SolveError> {
+        let augmented = fold(&self.stiffness, &folded);
+        self.factor.refactor(augmented.with_pinned(&pinned))?;
+        self.pinned = pinned;
+        self.folded = folded;
+        self.augmented = augmented;
+        self.forget_columns();
+        self.last = None;
         Ok(())
     }
 
@@ -496,7 +749,10 @@ impl Solver {
                             .zip(&b.loads)
                             .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
                 });
-        if !same {
+        // Pinned points (eliminated from the unknowns) and folded
+        // equations carry their targets outside `eqs`: those problems take
+        // the full path.
+        if !same || !self.pin_points.is_empty() || !self.folded.is_empty() {
             return self.set_problem(problem);
         }
         validate(&problem, self.dim())?;
@@ -527,6 +783,16 @@ impl Solver {
         self.problem = problem;
         self.base = None;
         Ok(())
+    }
+
+    /// Back to an earlier factor after a failed problem change, and to the
+    /// problem it served.
+    fn restore_factor(&mut self, (pinned, folded): (Vec<bool>, Vec<Folded>)) {
+        if self.rebuild_factor(pinned, folded).is_ok() {
+            let old = std::mem::take(&mut self.problem);
+            self.pin_points.clear();
+            let _ = self.set_problem(old);
+        }
     }
 
     /// Keeps the columns of the current rows that `rows` drops for later,
@@ -565,12 +831,11 @@ impl Solver {
             });
             return self.checked(self.report(out, None, DVec3::ZERO), out, None);
         }
-        let cx = self.c_times(reference);
         let inputs = self.inputs(None, DVec3::ZERO);
-        let (delta, lambda) = if self.at_rest(&inputs, &cx) {
+        let (delta, lambda) = if self.at_rest(&inputs, reference) {
             (vec![DVec3::ZERO; self.dim()], vec![0.0; self.eqs.len()])
         } else {
-            self.refined_delta(&inputs, &cx, max_extent(reference))
+            self.refined_delta(&inputs, reference)
         };
         for ((o, r), d) in out.iter_mut().zip(reference).zip(&delta) {
             *o = *r + *d;
@@ -588,6 +853,31 @@ impl Solver {
     /// answer, and per group the size of the pull its multipliers exert.
     fn last_solve(&self, reference: &[DVec3], out: &[DVec3], lambda: &[f64]) -> LastSolve {
         let mut pull: HashMap<GroupKey, f64> = HashMap::new();
+        // The solve's multipliers are μ; a folded equation's own is
+        // λ = μ + ρ a·δ (see [`Folded`]).
+        let lambda: Vec<f64> = if self.folded.is_empty() {
+            lambda.to_vec()
+        } else {
+            let rho: HashMap<RowKey, f64> = self
+                .folded
+                .iter()
+                .map(|f| (row_key(&f.row), f.rho))
+                .collect();
+            let delta: Vec<DVec3> = out.iter().zip(reference).map(|(o, r)| *o - *r).collect();
+            self.eqs
+                .iter()
+                .zip(lambda)
+                .map(|(eq, mu)| match (eq.shift, eq.terms.first()) {
+                    (Some(k), Some(t)) => {
+                        let row = &self.free_rows[t.col];
+                        rho.get(&row_key(row))
+                            .map_or(*mu, |r| mu + r * row.apply(&delta)[k])
+                    }
+                    _ => *mu,
+                })
+                .collect()
+        };
+        let lambda = lambda.as_slice();
         for (eq, lam) in self.eqs.iter().zip(lambda) {
             let key = self.problem.groups[eq.group].key;
             let size: f64 = eq
@@ -596,6 +886,44 @@ impl Solver {
                 .map(|t| t.coef.abs() * self.z[t.col].norm)
                 .sum();
             *pull.entry(key).or_default() += lam.abs() * size;
+        }
+        if !self.pin_points.is_empty() {
+            // A pin's multiplier is its reaction (b − Kδ − Cᵀλ at the pinned
+            // point). K⁻¹ is not at hand for a pinned point, so a group
+            // whose pins react beyond round-off counts as pulling.
+            let n = self.dim();
+            let forces = self.inputs(None, DVec3::ZERO).forces;
+            let mut rho = vec![DVec3::ZERO; n];
+            for (l, f) in self.loads.iter().zip(&forces) {
+                let row = &self.rows[l.col];
+                for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                    rho[i] += *f * w;
+                }
+            }
+            for (eq, lam) in self.eqs.iter().zip(lambda) {
+                for t in &eq.terms {
+                    let row = &self.rows[t.col];
+                    for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                        rho[i][t.k] -= t.coef * lam * w;
+                    }
+                }
+            }
+            let delta: Vec<DVec3> = out.iter().zip(reference).map(|(o, r)| *o - *r).collect();
+            let mut kd = vec![DVec3::ZERO; n];
+            self.augmented.mul_points(&delta, &mut kd);
+            let scale = rho
+                .iter()
+                .chain(&kd)
+                .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+            for p in &self.pin_points {
+                let reaction = (rho[p.index] - kd[p.index]).abs().max_element();
+                if reaction > 1e-13 * scale {
+                    for e in &self.pins[p.eqs.clone()] {
+                        let key = self.problem.groups[e.group].key;
+                        pull.insert(key, f64::INFINITY);
+                    }
+                }
+            }
         }
         LastSolve {
             reference: reference.to_vec(),
@@ -695,12 +1023,11 @@ impl Solver {
             .position(|g| g.key == key)
             .ok_or(SolveError::UnknownGroup(key))?;
         if !cached {
-            let cx = self.c_times(reference);
             let inputs = self.inputs(None, DVec3::ZERO);
-            let start = if self.at_rest(&inputs, &cx) {
+            let start = if self.at_rest(&inputs, reference) {
                 reference.to_vec()
             } else {
-                let (delta, _) = self.refined_delta(&inputs, &cx, max_extent(reference));
+                let (delta, _) = self.refined_delta(&inputs, reference);
                 reference.iter().zip(&delta).map(|(r, d)| *r + *d).collect()
             };
             self.base = Some(Base {
@@ -709,11 +1036,11 @@ impl Solver {
             });
         }
         if self.response.as_ref().is_none_or(|r| r.group != group) {
-            let zero = vec![0.0; self.eqs.len()];
             let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
             let mut solved = self
-                // A response is δ per unit of drag input: its scale is 1.
-                .refined_deltas(&inputs, &[&zero, &zero, &zero], &[1.0; 3])
+                // A response is δ per unit of drag input, from a zero
+                // reference: its scale is 1.
+                .refined_deltas(&inputs, &[None, None, None], &[1.0; 3])
                 .into_iter();
             let mut next = || solved.next().map(|(delta, _)| delta).unwrap_or_default();
             let r = [next(), next(), next()];
@@ -788,7 +1115,29 @@ impl Solver {
                     }
                 })
                 .collect(),
+            pins: self
+                .pin_points
+                .iter()
+                .map(|p| self.pin_value(p, shifted, t))
+                .collect(),
         }
+    }
+
+    /// The least-squares value of a pinned point, Σ w (d + shift) / Σ w²,
+    /// with group `shifted`'s drag input at `t`.
+    fn pin_value(&self, p: &PinPoint, shifted: Option<usize>, t: DVec3) -> DVec3 {
+        let eqs = &self.pins[p.eqs.clone()];
+        let (mut num, mut den) = (DVec3::ZERO, 0.0);
+        for e in eqs {
+            let d = if Some(e.group) == shifted {
+                e.target + t
+            } else {
+                e.target
+            };
+            num += d * e.weight;
+            den += e.weight * e.weight;
+        }
+        num / den
     }
 
     /// The derivative of the inputs with respect to group `group`'s drag input along `e`.
@@ -811,6 +1160,20 @@ impl Solver {
                     } else {
                         DVec3::ZERO
                     }
+                })
+                .collect(),
+            pins: self
+                .pin_points
+                .iter()
+                .map(|p| {
+                    let eqs = &self.pins[p.eqs.clone()];
+                    let den: f64 = eqs.iter().map(|q| q.weight * q.weight).sum();
+                    let num: f64 = eqs
+                        .iter()
+                        .filter(|q| q.group == group)
+                        .map(|q| q.weight)
+                        .sum();
+                    e * (num / den)
                 })
                 .collect(),
         }
@@ -874,28 +1237,91 @@ impl Solver {
     /// the reference already meets every equation (to 1e-12 of its scale).
     /// That is the state after every bake (a released load), so a grab
     /// starts without a solve.
-    fn at_rest(&self, inputs: &Inputs, cx: &[f64]) -> bool {
+    fn at_rest(&self, inputs: &Inputs, reference: &[DVec3]) -> bool {
+        let close = |d: f64, c: f64| (d - c).abs() <= 1e-12 * d.abs().max(c.abs()).max(1.0);
         inputs.forces.iter().all(|f| *f == DVec3::ZERO)
+            && self.pin_points.iter().zip(&inputs.pins).all(|(p, v)| {
+                let r = reference[p.index];
+                (0..3).all(|k| close(v[k], r[k]))
+            })
             && inputs
                 .targets
                 .iter()
-                .zip(cx)
-                .all(|(d, c)| (d - c).abs() <= 1e-12 * d.abs().max(c.abs()).max(1.0))
+                .zip(self.c_times(reference))
+                .all(|(d, c)| close(*d, c))
     }
 
     /// δ with one step of iterative refinement on the optimality conditions
     /// K δ + Cᵀλ = b, C δ = d − C P_ref.
     /// Also returns the Lagrange multipliers λ (one per scalar equation).
     /// `extent` is the size of the shape δ displaces (max |P_ref|).
-    fn refined_delta(
+    fn refined_delta(&mut self, inputs: &Inputs, reference: &[DVec3]) -> (Vec<DVec3>, Vec<f64>) {
+        self.refined_deltas(
+            std::slice::from_ref(inputs),
+            &[Some(reference)],
+            &[max_extent(reference)],
+        )
+        .pop()
+        .unwrap_or_default()
+    }
+
+    /// Per input: δ_pin, the pinned points' displacement from the reference
+    /// (`None`: from zero, for a drag response), and u = K_ff⁻¹(−K δ_pin)_f,
+    /// the free points' answer to it — one batched sparse solve for every
+    /// input whose pins move.
+    fn pin_displacements(
         &mut self,
-        inputs: &Inputs,
-        cx: &[f64],
-        extent: f64,
-    ) -> (Vec<DVec3>, Vec<f64>) {
-        self.refined_deltas(std::slice::from_ref(inputs), &[cx], &[extent])
-            .pop()
-            .unwrap_or_default()
+        inputs: &[Inputs],
+        references: &[Option<&[DVec3]>],
+    ) -> Vec<Option<(Vec<DVec3>, Vec<DVec3>)>> {
+        let n = self.dim();
+        let mut out: Vec<Option<(Vec<DVec3>, Vec<DVec3>)>> = inputs
+            .iter()
+            .zip(references)
+            .map(|(inp, r)| {
+                let mut d = vec![DVec3::ZERO; n];
+                let mut moved = false;
+                for (p, v) in self.pin_points.iter().zip(&inp.pins) {
+                    d[p.index] = *v - r.map_or(DVec3::ZERO, |r| r[p.index]);
+                    moved |= d[p.index] != DVec3::ZERO;
+                }
+                moved.then_some((d, Vec::new()))
+            })
+            .collect();
+        let columns: Vec<(usize, usize)> = out
+            .iter()
+            .enumerate()
+            .filter_map(|(p, o)| o.as_ref().map(|_| p))
+            .flat_map(|p| (0..3).map(move |k| (p, k)))
+            .collect();
+        if columns.is_empty() {
+            return out;
+        }
+        let mut rhs = Mat::<f64>::zeros(n, columns.len());
+        let mut kd = vec![DVec3::ZERO; n];
+        for (p, o) in out.iter().enumerate() {
+            let Some((d, _)) = o else { continue };
+            self.augmented.mul_points(d, &mut kd);
+            for (c, &(q, k)) in columns.iter().enumerate() {
+                if q == p {
+                    for (i, v) in kd.iter().enumerate() {
+                        if !self.pinned[i] {
+                            rhs[(i, c)] = -v[k];
+                        }
+                    }
+                }
+            }
+        }
+        self.factor.solve_in_place(rhs.as_mut());
+        for (c, &(p, k)) in columns.iter().enumerate() {
+            if let Some((_, u)) = &mut out[p] {
+                u.resize(n, DVec3::ZERO);
+                for (ui, &v) in u.iter_mut().zip(rhs.col_as_slice(c)) {
+                    ui[k] = v;
+                }
+            }
+        }
+        out
     }
 
     /// [`Self::refined_delta`] for several inputs at once, their refinement
@@ -924,27 +1350,52 @@ impl Solver {
     fn refined_deltas(
         &mut self,
         inputs: &[Inputs],
-        cxs: &[&[f64]],
+        references: &[Option<&[DVec3]>],
         extents: &[f64],
     ) -> Vec<(Vec<DVec3>, Vec<f64>)> {
         let n = self.dim();
+        let m = self.eqs.len();
         let mut deltas = Vec::with_capacity(inputs.len());
         let mut lambdas: Vec<Vec<f64>> = Vec::with_capacity(inputs.len());
         let mut reaches = Vec::with_capacity(inputs.len());
-        for (inputs, cx) in inputs.iter().zip(cxs) {
-            let (lambda, w) = self.lambda_weights(inputs, cx);
+        let cx_owned: Vec<Vec<f64>> = references
+            .iter()
+            .map(|r| r.map_or_else(|| vec![0.0; m], |r| self.c_times(r)))
+            .collect();
+        let cxs: Vec<&[f64]> = cx_owned.iter().map(Vec::as_slice).collect();
+        let pinned = self.pin_displacements(inputs, references);
+        for ((inputs, cx), pin) in inputs.iter().zip(&cxs).zip(pinned) {
+            // The pinned points and the free points' answer to them act as
+            // a moved reference: C (P_ref + δ_pin + u).
+            let (mut delta, cx_moved, pin_reach) = match pin {
+                Some((d, u)) => {
+                    let mut moved = d;
+                    for (a, b) in moved.iter_mut().zip(&u) {
+                        *a += *b;
+                    }
+                    let cm: Vec<f64> = self
+                        .c_times(&moved)
+                        .iter()
+                        .zip(cx.iter())
+                        .map(|(a, b)| a + b)
+                        .collect();
+                    let reach = u.iter().fold(DVec3::ZERO, |m, v| m.max(v.abs()));
+                    (moved, Some(cm), reach)
+                }
+                None => (vec![DVec3::ZERO; n], None, DVec3::ZERO),
+            };
+            let (lambda, w) = self.lambda_weights(inputs, cx_moved.as_deref().unwrap_or(cx));
             // How strongly each coordinate's δ = Σ w_c z_c leans on Z.
             let reach = w
                 .iter()
                 .zip(&self.z)
-                .fold(DVec3::ZERO, |m, (wc, col)| m + wc.abs() * col.norm);
-            let mut delta = vec![DVec3::ZERO; n];
+                .fold(pin_reach, |m, (wc, col)| m + wc.abs() * col.norm);
             self.add_columns(&mut delta, &w);
             deltas.push(delta);
             lambdas.push(lambda);
             reaches.push(reach);
         }
-        if self.eqs.is_empty() && self.loads.is_empty() {
+        if self.eqs.is_empty() && self.loads.is_empty() && self.pin_points.is_empty() {
             return deltas.into_iter().zip(lambdas).collect();
         }
         // The size of the last residual per input, to stop when a step no
@@ -1022,12 +1473,18 @@ impl Solver {
                 }
             }
         }
-        // The size of the terms whose rounding makes up ρ, per coordinate.
-        let mut computed = rho.iter().fold(DVec3::ZERO, |m, r| m.max(r.abs()));
+        // The size of the terms whose rounding makes up ρ, per coordinate,
+        // over the free points (a pinned point's ρ is its reaction, not an
+        // error: it is zeroed).
+        let mut computed = DVec3::ZERO;
         let mut k_delta = vec![DVec3::ZERO; n];
-        self.stiffness().mul_points(delta, &mut k_delta);
-        for (r, kd) in rho.iter_mut().zip(&k_delta) {
-            computed = computed.max(kd.abs());
+        self.augmented.mul_points(delta, &mut k_delta);
+        for ((r, kd), &pinned) in rho.iter_mut().zip(&k_delta).zip(&self.pinned) {
+            if pinned {
+                *r = DVec3::ZERO;
+                continue;
+            }
+            computed = computed.max(r.abs()).max(kd.abs());
             *r -= *kd;
         }
         let worst = rho.iter().fold(DVec3::ZERO, |m, r| m.max(r.abs()));
@@ -1136,6 +1593,10 @@ impl Solver {
             return Ok(report);
         }
         let targets = self.eqs.iter().fold(0.0f64, |m, e| m.max(e.target.abs()));
+        let targets = self
+            .pins
+            .iter()
+            .fold(targets, |m, p| m.max(p.target.abs().max_element()));
         // How far the loads alone would move the shape (‖K⁻¹b‖∞ bound): the
         // constrained answer cancels against it, so its rounding scales
         // with it.
@@ -1182,6 +1643,13 @@ impl Solver {
                 (value - target).abs()
             })
             .fold(0.0, f64::max);
+        let residual = self.pins.iter().fold(residual, |m, p| {
+            let target = match shifted {
+                Some(g) if p.group == g => p.target + t,
+                _ => p.target,
+            };
+            m.max((out[p.index] * p.weight - target).abs().max_element())
+        });
         SolveReport {
             constraint_residual: residual,
             rank_deficiency: self.rank_deficiency,
@@ -1198,6 +1666,8 @@ type Pending = (Vec<f64>, [Option<Vec<f64>>; 3]);
 struct Inputs {
     targets: Vec<f64>,
     forces: Vec<DVec3>,
+    /// The value of every pinned point (`pin_points` order).
+    pins: Vec<DVec3>,
 }
 
 fn validate(problem: &Problem, n: usize) -> Result<(), SolveError> {
@@ -1255,17 +1725,18 @@ fn validate(problem: &Problem, n: usize) -> Result<(), SolveError> {
 }
 
 /// The pseudo-inverse of the symmetric positive semi-definite `s` (row-major
-/// result) and the number of dropped eigen-directions.
+/// result), the number of dropped eigen-directions, and whether S was
+/// provably well conditioned (the Cholesky path).
 ///
 /// S is first equilibrated, Ŝ = D^-½ S D^-½ with D = diag(S), so that the
 /// cut-off (1e-12 of the largest eigenvalue of Ŝ) measures linear dependence
 /// between equations rather than their scale: exactly redundant equations
 /// give eigenvalues at round-off level and are dropped; independent ones,
 /// however differently scaled, are kept. S⁺ = D^-½ Ŝ⁺ D^-½.
-fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
+fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
     let m = s.nrows();
     if m == 0 {
-        return Ok((Vec::new(), 0));
+        return Ok((Vec::new(), 0, true));
     }
     let scale: Vec<f64> = (0..m)
         .map(|i| {
@@ -1278,7 +1749,7 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
         .collect();
     let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
     if let Some(inverse) = well_conditioned_inverse(&scaled, &scale) {
-        return Ok((inverse, 0));
+        return Ok((inverse, 0, true));
     }
     let evd = scaled
         .self_adjoint_eigen(faer::Side::Lower)
@@ -1302,13 +1773,13 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize), SolveError> {
         .flat_map(|i| (0..m).map(move |j| (i, j)))
         .map(|(i, j)| product[(i, j)])
         .collect();
-    Ok((out, m - kept.len()))
+    Ok((out, m - kept.len(), false))
 }
 
 /// Most steps of iterative refinement per solve (see
 /// `Solver::refined_deltas`); it stops earlier when a step gains less than
 /// half.
-const MAX_REFINEMENT_STEPS: usize = 4;
+const MAX_REFINEMENT_STEPS: usize = 12;
 
 /// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
 const RETIRED_BYTES: usize = 16 << 20;
@@ -1379,7 +1850,8 @@ mod tests {
                 well_conditioned_inverse(&scaled, &scale).is_some(),
                 rank_drop == 0
             );
-            let (p, dropped) = pseudo_inverse(s).unwrap();
+            let (p, dropped, fast) = pseudo_inverse(s).unwrap();
+            assert_eq!(fast, rank_drop == 0);
             assert_eq!(dropped, rank_drop);
             let p = Mat::<f64>::from_fn(m, m, |i, j| p[i * m + j]);
             let sps = s * &p * s;

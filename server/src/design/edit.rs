@@ -253,16 +253,6 @@ pub fn apply<'q>(
                 ));
             }
             let q = query(*part).ok_or_else(|| unknown_part(*part))?;
-            if let Some(id) = edit.icon() {
-                // An icon named on a part it is not on: `unknown_part`
-                // (protocol/README.md), not `unknown_icon`.
-                if let Some((other, _)) = doc.icon(id).filter(|(p, _)| p.id != *part) {
-                    return Err(CommandError::new(
-                        ErrorKind::UnknownPart,
-                        format!("icon {id} is on part {}, not part {part}", other.id),
-                    ));
-                }
-            }
             let total_icons = doc.icons().count();
             let mut next_icon = doc.next_icon;
             let p = doc.part_mut(*part).ok_or_else(|| unknown_part(*part))?;
@@ -407,21 +397,6 @@ pub fn apply<'q>(
     Ok((doc, created))
 }
 
-impl PartEdit {
-    /// The existing icon the edit names, if any.
-    pub fn icon(&self) -> Option<u64> {
-        match self {
-            PartEdit::MoveIcon { id, .. }
-            | PartEdit::SetAnchor { id, .. }
-            | PartEdit::DeleteIcon { id }
-            | PartEdit::SetRole { id, .. }
-            | PartEdit::SetState { id, .. }
-            | PartEdit::BindSensor { id, .. }
-            | PartEdit::UnbindSensor { id, .. } => Some(*id),
-            PartEdit::AddIcon { .. } | PartEdit::SetMaterial(_) => None,
-        }
-    }
-}
 
 /// `body` with `edit` applied; returns the created icon's id.
 fn apply_part(
