@@ -143,7 +143,7 @@ async fn acked_snapshot(ed: &mut Client, msg: Value) -> Value {
     snap.unwrap()
 }
 
-fn part<'a>(snapshot: &'a Value, id: u64) -> &'a Value {
+fn part(snapshot: &Value, id: u64) -> &Value {
     snapshot["parts"]
         .as_array()
         .unwrap()

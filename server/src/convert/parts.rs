@@ -117,7 +117,7 @@ pub fn create_part(spec: &wire::PartSpec) -> Edit {
     };
     Edit::CreatePart {
         name: spec.name.clone(),
-        body,
+        body: Box::new(body),
         colour: spec.colour.clone(),
     }
 }

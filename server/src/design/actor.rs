@@ -587,12 +587,12 @@ impl Actor {
                 Request::Leave { client } => {
                     self.feedback.remove(&client);
                     self.refusals.remove(&client);
-                    if let Some((part, icon)) = self.dragging.remove(&client) {
-                        if let Ok(moved) = self.model.release(part, icon) {
-                            self.changed();
-                            self.announce_icon(icon);
-                            geometry_dirty.parts(moved);
-                        }
+                    if let Some((part, icon)) = self.dragging.remove(&client)
+                        && let Ok(moved) = self.model.release(part, icon)
+                    {
+                        self.changed();
+                        self.announce_icon(icon);
+                        geometry_dirty.parts(moved);
                     }
                     if self.clients.remove(&client).is_some() {
                         self.broadcast_presence(client);

@@ -42,8 +42,8 @@ pub enum Edit {
     CreatePart {
         /// Its name (unique).
         name: String,
-        /// Its shape and material.
-        body: PartBody,
+        /// Its shape and material (boxed: a part is large, most edits small).
+        body: Box<PartBody>,
         /// Its colour; the next of [`PALETTE`] when `None`.
         colour: Option<String>,
     },
@@ -277,7 +277,7 @@ pub fn apply<'q>(
                 }
                 None => PALETTE[doc.parts.len() % PALETTE.len()].to_string(),
             };
-            let mut body = body.clone();
+            let mut body = (**body).clone();
             body.icons_mut().clear();
             body.validate()?;
             let id = doc.next_part;
@@ -396,7 +396,6 @@ pub fn apply<'q>(
     }
     Ok((doc, created))
 }
-
 
 /// `body` with `edit` applied; returns the created icon's id.
 fn apply_part(
