@@ -1,9 +1,11 @@
 //! A data directory that fills up during a session (a test-only size cap on
 //! the database, SQLite's `max_page_count`, from the `fault-injection`
-//! feature: writes past it fail with `SQLITE_FULL` as on a full disk).
-//! Commits get the `storage` code and change nothing, edits go on in
-//! memory, the working state is written again by itself once space is
-//! back, commits succeed again, and nothing acked is lost across a restart.
+//! feature: writes past it fail with `SQLITE_FULL` as on a full disk), and
+//! one that turns read-only (SQLite's `query_only`: writes fail with
+//! `SQLITE_READONLY` as on a disk remounted read-only). Commits and new
+//! designs get the `storage` code and change nothing, edits go on in memory,
+//! the working state is written again by itself once the disk is back,
+//! commits succeed again, and nothing acked is lost across a restart.
 
 mod common;
 
@@ -139,6 +141,99 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
         .map(|v| v["message"].as_str().unwrap())
         .collect();
     assert_eq!(msgs, acked);
+    let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
+        .await
+        .json();
+    assert_eq!(now["design"]["parts"], in_memory["design"]["parts"]);
+    shutdown.trigger();
+    serving.await.unwrap().unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_read_only_disk_refuses_every_write_keeps_the_work_and_recovers() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let (server, shutdown) = start(&data).await;
+    let addr = server.local_addr();
+    let store = server.hub().store().clone();
+    let d = server.designs().unwrap()[0].clone();
+    let serving = tokio::spawn(server.run());
+    let mut ann = Client::connect(addr, d.id, &d.tokens.editor, "ann").await;
+    let (icon, p) = load_icon(&ann.snapshot);
+    ann.ok(json!({"type": "commit", "message": "before"})).await;
+
+    store.read_only(true).unwrap();
+    // A commit is refused with `storage`, saying why.
+    drag(&mut ann, icon, [p[0], p[1], p[2] + 5.0]).await;
+    let r = ann
+        .request(json!({"type": "commit", "message": "refused"}))
+        .await;
+    assert_eq!(r["code"], "storage", "{r}");
+    assert!(r["message"].as_str().unwrap().contains("readonly"), "{r}");
+    // So is a new design (the other write path of a client), and nothing
+    // is created.
+    ann.send(json!({"type": "create_design", "req": 77, "name": "nope"}))
+        .await;
+    let r = loop {
+        let v = ann.wait_for("error").await;
+        if v["req"] == 77 {
+            break v;
+        }
+    };
+    assert_eq!(r["code"], "storage", "{r}");
+    let list = get(addr, "/api/designs", Some(&d.tokens.editor)).await.json();
+    assert_eq!(list["designs"].as_array().unwrap().len(), 1, "{list}");
+    // Edits go on in memory; the working state cannot be written.
+    for k in 0..3 {
+        let u = 0.2 + 0.2 * k as f64;
+        ann.ok(json!({"type": "create_icon", "part": 1, "spec": {"anchor": {"kind": "point", "u": u, "v": 0.2}, "role": {"kind": "position"}}}))
+            .await;
+    }
+    let in_memory = get(addr, "/api/designs/1", Some(&d.tokens.editor))
+        .await
+        .json();
+    let stored = |store: &vsculpt_server::store::Store| {
+        let bytes = store.working(d.id).unwrap().unwrap();
+        serde_json::to_value(DesignDoc::from_bytes(&bytes).unwrap()).unwrap()
+    };
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    assert_ne!(
+        parts::icons(&stored(&store), 1),
+        parts::icons(&in_memory["design"], 1)
+    );
+
+    // The disk is writable again: the working state is written by itself,
+    // commits succeed.
+    store.read_only(false).unwrap();
+    let mut saved = false;
+    for _ in 0..400 {
+        if parts::icons(&stored(&store), 1) == parts::icons(&in_memory["design"], 1) {
+            saved = true;
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    assert!(saved, "the working state was never written after the disk came back");
+    ann.ok(json!({"type": "commit", "message": "writable again"}))
+        .await;
+    drop(ann);
+    shutdown.trigger();
+    serving.await.unwrap().unwrap();
+
+    // Nothing acked is lost; nothing refused was stored.
+    let (server, shutdown) = start(&data).await;
+    let addr = server.local_addr();
+    let serving = tokio::spawn(server.run());
+    let v = get(addr, "/api/designs/1/versions", Some(&d.tokens.viewer))
+        .await
+        .json();
+    let msgs: Vec<&str> = v["versions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(msgs, vec!["created", "before", "writable again"]);
     let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
         .await
         .json();

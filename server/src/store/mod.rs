@@ -326,6 +326,20 @@ impl Store {
         Ok(n as u64)
     }
 
+    /// Test-only: makes every write fail as on a read-only disk (SQLite's
+    /// `query_only`: a write is refused with `SQLITE_READONLY`, "attempt to
+    /// write a readonly database") or lifts that.
+    #[cfg(feature = "fault-injection")]
+    pub fn read_only(&self, on: bool) -> Result<(), StoreError> {
+        self.conn()
+            .execute_batch(if on {
+                "PRAGMA query_only = 1"
+            } else {
+                "PRAGMA query_only = 0"
+            })?;
+        Ok(())
+    }
+
     /// Test-only: the database's size in pages.
     #[cfg(feature = "fault-injection")]
     pub fn page_count(&self) -> Result<u64, StoreError> {
