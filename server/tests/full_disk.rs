@@ -181,7 +181,9 @@ async fn a_read_only_disk_refuses_every_write_keeps_the_work_and_recovers() {
         }
     };
     assert_eq!(r["code"], "storage", "{r}");
-    let list = get(addr, "/api/designs", Some(&d.tokens.editor)).await.json();
+    let list = get(addr, "/api/designs", Some(&d.tokens.editor))
+        .await
+        .json();
     assert_eq!(list["designs"].as_array().unwrap().len(), 1, "{list}");
     // Edits go on in memory; the working state cannot be written.
     for k in 0..3 {
@@ -213,7 +215,10 @@ async fn a_read_only_disk_refuses_every_write_keeps_the_work_and_recovers() {
         }
         tokio::time::sleep(Duration::from_millis(25)).await;
     }
-    assert!(saved, "the working state was never written after the disk came back");
+    assert!(
+        saved,
+        "the working state was never written after the disk came back"
+    );
     ann.ok(json!({"type": "commit", "message": "writable again"}))
         .await;
     drop(ann);

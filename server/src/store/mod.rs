@@ -331,12 +331,11 @@ impl Store {
     /// write a readonly database") or lifts that.
     #[cfg(feature = "fault-injection")]
     pub fn read_only(&self, on: bool) -> Result<(), StoreError> {
-        self.conn()
-            .execute_batch(if on {
-                "PRAGMA query_only = 1"
-            } else {
-                "PRAGMA query_only = 0"
-            })?;
+        self.conn().execute_batch(if on {
+            "PRAGMA query_only = 1"
+        } else {
+            "PRAGMA query_only = 0"
+        })?;
         Ok(())
     }
 
