@@ -135,6 +135,7 @@ test('through a 2 Mbit/s link: a cold visit is bounded in bytes, a warm one asks
     await page.goto(url, { waitUntil: 'commit' });
     await firstPicture();
     const cold = link.bytes.down;
+    console.log(`# cold visit of 81 × 159: ${(cold / 1024).toFixed(0)} KiB`);
     // Before this change a cold visit of the demo carried 2447 KiB (BENCHMARKS.md); the budget holds 3 s at 2 Mbit/s with room for round trips.
     assert.ok(cold < 600 * 1024, `cold visit: ${(cold / 1024).toFixed(0)} KiB crossed the link`);
     link.reset();
@@ -168,6 +169,7 @@ test('an 81 × 159 design joins compactly: the net crosses the link once, in bin
     await page.waitForFunction(() => window.vsculpt && window.vsculpt.perf.firstPicture !== null && window.vsculpt.state.access, null, { timeout: 60000 });
     // The page's modules (about 410 KiB compressed) and one 155 KiB frame; the JSON net alone was about 700 KiB.
     const cold = link.bytes.down;
+    console.log(`# cold visit of 81 × 159: ${(cold / 1024).toFixed(0)} KiB`);
     assert.ok(cold < 640 * 1024, `cold visit of 81 × 159: ${(cold / 1024).toFixed(0)} KiB`);
     const shownParts = await shownPoints(page);
     const restParts = documentPoints(JSON.parse((await get(`/api/designs/${big.id}?token=${big.tokens.viewer}`)).body.toString()).design);
