@@ -149,6 +149,11 @@ pub enum ServerMessage {
         actual: Vec3,
         /// The shape revision this belongs to.
         revision: u64,
+        /// Set when this frame's solve could not meet every constraint (they
+        /// contradict each other): why, and by how much the shape misses
+        /// them (the least-squares compromise).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        warning: Option<String>,
     },
     /// Undo/redo availability changed.
     History {

@@ -52,6 +52,7 @@ const state = {
   revision: 0,
   frames: 0,
   lastError: null,
+  lastWarning: null,
   toasts: [],
   online: null,
   canUndo: false,
@@ -329,6 +330,12 @@ function onMessage(msg) {
     case 'error':
       state.lastError = `${msg.code}: ${msg.message}`;
       toast(state.lastError);
+      break;
+    case 'icon_feedback':
+      // The solve could not meet every constraint (they contradict each
+      // other): said once per drag, not at the frame rate.
+      if (msg.warning && msg.warning !== state.lastWarning) toast(msg.warning, 'error');
+      state.lastWarning = msg.warning || null;
       break;
     default:
       break;

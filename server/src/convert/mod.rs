@@ -688,6 +688,7 @@ pub fn feedback(f: &Feedback) -> Utf8Bytes {
         requested: f.requested.to_array(),
         actual: f.actual.to_array(),
         revision: f.revision,
+        warning: f.warning.clone(),
     })
 }
 

@@ -96,7 +96,7 @@ impl Dirty {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Feedback {
     /// The part the icon is on.
     pub part: u64,
@@ -108,6 +108,8 @@ pub struct Feedback {
     pub actual: DVec3,
     /// Shape revision.
     pub revision: u64,
+    /// Why the solve misses a constraint, if it does.
+    pub warning: Option<String>,
 }
 
 /// A drag frame without a request number that was refused (unknown icon,
@@ -1048,7 +1050,7 @@ impl Actor {
                         .await?;
                 }
                 let t = Instant::now();
-                let (actual, moved) = self.model.drag(part, icon, xyz)?;
+                let (actual, moved, warning) = self.model.drag(part, icon, xyz)?;
                 self.metrics.solve(t.elapsed());
                 if self.persist_at.is_none() {
                     self.persist_at = Some(Instant::now() + self.persist_delay);
@@ -1062,6 +1064,7 @@ impl Actor {
                         requested: xyz,
                         actual,
                         revision: self.rev + 1,
+                        warning,
                     }));
                 }
                 Ok(Ack::default())

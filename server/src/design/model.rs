@@ -229,13 +229,14 @@ impl DesignModel {
     }
 
     /// A drag frame: icon `icon`'s handle is at `xyz`. Returns where the
-    /// icon is on the solved shape and the parts that moved.
+    /// icon is on the solved shape, the parts that moved and the solve's
+    /// warning, if any.
     pub fn drag(
         &mut self,
         part: u64,
         icon: u64,
         xyz: DVec3,
-    ) -> Result<(DVec3, Vec<u64>), CommandError> {
+    ) -> Result<(DVec3, Vec<u64>, Option<String>), CommandError> {
         self.check_icon(part, icon)?;
         self.check_unlocked(part)?;
         if !xyz.is_finite() {

@@ -26,6 +26,7 @@ use vsculpt_kernel::product::{
     BindingId, BindingSpec, ChangedParts, Continuity, Edge, IsoLine, Join, JoinId, JoinSpec, Part,
     PartId, Product, ProductError,
 };
+use vsculpt_kernel::solve::SolveWarning;
 
 /// Every part's kernel design, the relations, and the id maps.
 pub struct ProductEngine {
@@ -329,13 +330,14 @@ impl ProductEngine {
 
     /// A drag frame: `icon`'s handle is at `xyz`. A load is pulled again
     /// until the spring lands in its band (paper 003's adaptive spring).
-    /// Returns where the icon is and the parts that moved.
+    /// Returns where the icon is, the parts that moved and, when the solve
+    /// could not meet every constraint, why (for the client).
     pub fn drag(
         &mut self,
         part: u64,
         icon: u64,
         xyz: DVec3,
-    ) -> Result<(DVec3, Vec<u64>), CommandError> {
+    ) -> Result<(DVec3, Vec<u64>, Option<String>), CommandError> {
         let kid = self.kid(part, icon)?;
         if self.grabbed.get(&part).map(|g| g.0) != Some(icon) {
             self.grab(part, icon)?;
@@ -350,6 +352,7 @@ impl ProductEngine {
         };
         let mut actual = DVec3::ZERO;
         let mut changed = Vec::new();
+        let mut warning = None;
         for _ in 0..SPRING_ITERATIONS {
             let r = self
                 .product
@@ -357,6 +360,11 @@ impl ProductEngine {
                 .map_err(product_error)?;
             actual = r.actual;
             changed = ids_of(&r.changed);
+            warning = r.report.and_then(|r| r.warning).map(|w| match w {
+                SolveWarning::Dependent { dropped, residual } => format!(
+                    "the constraints contradict each other ({dropped} dependent equations): the shape misses them by up to {residual:.3e} (least-squares compromise)"
+                ),
+            });
             let dx = (xyz - from).length();
             if !is_load || dx < 1e-9 {
                 break;
@@ -366,7 +374,7 @@ impl ProductEngine {
                 break;
             }
         }
-        Ok((actual, changed))
+        Ok((actual, changed, warning))
     }
 
     /// Ends a drag; returns the parts that moved.

@@ -204,7 +204,7 @@ pub async fn run(
                 if r.is_err() {
                     continue;
                 }
-                let f = *joined.feedback.borrow_and_update();
+                let f = joined.feedback.borrow_and_update().clone();
                 if let Some(f) = f
                     && sink.send(Message::Text(convert::feedback(&f))).await.is_err()
                 {
