@@ -37,7 +37,7 @@ async fn contradictory_constraints_come_back_as_a_warning() {
         .await
         .json();
     let icon = common::parts::icons(&doc["design"], 1)
-        .into_iter()
+        .iter()
         .find(|i| i["id"] == ids[0])
         .unwrap();
     let p: [f64; 3] = serde_json::from_value(icon["xyz"].clone()).unwrap();
