@@ -1,15 +1,14 @@
 //! The kernel side of a curve part: a `vsculpt_kernel::curve_design::
 //! CurveDesign` (paper 003, eq. 1: a deformable B-spline curve sculpted by
-//! the same icons as a surface) built from a [`CurvePart`], driven by drags
-//! and read back. Icons sit at a parameter (`param`) or along a stretch
+//! the same icons as a surface) built from a [`CurvePart`] for the product
+//! engine, which drags it and reads it back (`curve_readback`, `CurveQuery`,
+//! `curve_mesh` here). Icons sit at a parameter (`param`) or along a stretch
 //! (`span`); their roles are load, position, and the first (R) or second
 //! (R2) derivative.
 
 use super::doc::{AnchorDoc, DerivativeDoc, IconRoleDoc, IconStateDoc};
 use super::edit::SurfaceQuery;
-use super::engine::{
-    IconReadback, SPRING_BAND, SPRING_ITERATIONS, kernel_error, state, state_back,
-};
+use super::engine::{IconReadback, kernel_error, state, state_back};
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
 use super::part::{CurveMaterialDoc, CurvePart};
@@ -24,7 +23,6 @@ use vsculpt_kernel::icon::{IconId, IconState, SensorId};
 pub struct CurveEngine {
     design: CurveDesign,
     ids: BTreeMap<u64, IconId>,
-    grabbed: Option<(u64, DVec3)>,
 }
 
 fn invalid(msg: impl Into<String>) -> CommandError {
@@ -61,15 +59,6 @@ pub fn curve_role(r: IconRoleDoc) -> Result<CurveRole, CommandError> {
 }
 
 impl CurveEngine {
-    /// The kernel design of `part`, solved.
-    pub fn build(part: &CurvePart) -> Result<Self, CommandError> {
-        let mut e = Self::build_unsolved(part)?;
-        if !e.ids.is_empty() {
-            e.design.solve().map_err(kernel_error)?;
-        }
-        Ok(e)
-    }
-
     /// The kernel design of `part`, its control points as stored.
     pub fn build_unsolved(part: &CurvePart) -> Result<Self, CommandError> {
         let c = &part.curve;
@@ -106,97 +95,13 @@ impl CurveEngine {
             }
             ids.insert(icon.id, kid);
         }
-        Ok(Self {
-            design,
-            ids,
-            grabbed: None,
-        })
-    }
-
-    fn kid(&self, icon: u64) -> Result<IconId, CommandError> {
-        self.ids
-            .get(&icon)
-            .copied()
-            .ok_or_else(|| CommandError::new(ErrorKind::UnknownIcon, format!("no icon {icon}")))
-    }
-
-    /// The control points.
-    pub fn points(&self) -> &[DVec3] {
-        self.design.curve().points()
-    }
-
-    /// The curve.
-    pub fn curve(&self) -> &BSplineCurve {
-        self.design.curve()
-    }
-
-    /// Where icon `id` is on the curve.
-    pub fn icon_xyz(&self, id: u64) -> Option<DVec3> {
-        self.design.icon(*self.ids.get(&id)?).map(|i| i.xyz)
-    }
-
-    /// Icon `id` as the kernel holds it.
-    pub fn readback(&self, id: u64) -> Option<IconReadback> {
-        curve_readback(&self.design, *self.ids.get(&id)?)
+        Ok(Self { design, ids })
     }
 
     /// The kernel design and the map from document icon ids, to hand to a
     /// product.
     pub fn into_parts(self) -> (CurveDesign, BTreeMap<u64, IconId>) {
         (self.design, self.ids)
-    }
-
-    /// The calibrated spring coefficient.
-    pub fn kappa(&self) -> f64 {
-        self.design.spring().kappa()
-    }
-
-    /// Grabs `icon`.
-    pub fn grab(&mut self, icon: u64) -> Result<(), CommandError> {
-        let kid = self.kid(icon)?;
-        let at = self.design.icon(kid).map(|i| i.xyz).unwrap_or_default();
-        self.grabbed = Some((icon, at));
-        Ok(())
-    }
-
-    /// A drag frame; returns where the icon is on the solved curve. A load
-    /// is iterated until the spring lands in its band, as on a surface.
-    pub fn drag(&mut self, icon: u64, xyz: DVec3) -> Result<DVec3, CommandError> {
-        let kid = self.kid(icon)?;
-        if self.grabbed.map(|g| g.0) != Some(icon) {
-            self.grab(icon)?;
-        }
-        let from = self.grabbed.map(|g| g.1).unwrap_or_default();
-        let is_load = self.design.icon(kid).map(|i| i.role) == Some(CurveRole::Load);
-        let mut actual = DVec3::ZERO;
-        for _ in 0..SPRING_ITERATIONS {
-            actual = self.design.drag(kid, xyz).map_err(kernel_error)?;
-            let dx = (xyz - from).length();
-            if !is_load || dx < 1e-9 {
-                break;
-            }
-            let ratio = (actual - from).length() / dx;
-            if (SPRING_BAND.0..=SPRING_BAND.1).contains(&ratio) {
-                break;
-            }
-        }
-        Ok(actual)
-    }
-
-    /// Ends a drag.
-    pub fn release(&mut self, icon: u64) -> Result<(), CommandError> {
-        let kid = self.kid(icon)?;
-        if self.grabbed.map(|g| g.0) == Some(icon) {
-            self.design.release(kid).map_err(kernel_error)?;
-        }
-        self.grabbed = None;
-        Ok(())
-    }
-
-    /// A polyline of the curve with `density` samples per knot span, for
-    /// mesh export (positions only; a curve has no faces).
-    pub fn mesh(&self, density: usize) -> Result<MeshData, CommandError> {
-        Ok(curve_mesh(self.design.curve(), density))
     }
 }
 
@@ -226,16 +131,6 @@ pub fn curve_mesh(c: &BSplineCurve, density: usize) -> MeshData {
         positions,
         normals: Vec::new(),
         indices: Vec::new(),
-    }
-}
-
-impl SurfaceQuery for CurveEngine {
-    fn point_at(&self, anchor: &AnchorDoc) -> [f64; 3] {
-        CurveQuery(self.design.curve()).point_at(anchor)
-    }
-
-    fn current_target(&self, anchor: &AnchorDoc, role: IconRoleDoc) -> [f64; 3] {
-        CurveQuery(self.design.curve()).current_target(anchor, role)
     }
 }
 
