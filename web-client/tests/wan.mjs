@@ -24,21 +24,40 @@ export function startLink({ target, mbit, delayMs, jitterMs = 0 }) {
   const requests = [];
   const sockets = new Set();
 
-  /** Sends `chunk` to `to` as the link would: after its serialisation time and the delay. */
+  /**
+   * Sends `chunk` to `to` as the link would: after its serialisation time and
+   * the delay. Each socket direction is one FIFO drained by a single timer, so
+   * chunks leave in the order they came even when timers fire late or out of
+   * order (Node schedules a timer from its cached loop time, which lags on a
+   * loaded machine: one timer per chunk reordered the bytes of a large frame).
+   */
   function shape(lane, dir, chunk, to, state) {
     counters[dir] += chunk.length;
     const now = performance.now();
     const start = Math.max(now, lane.free);
     lane.free = start + chunk.length / bytesPerMs;
-    // In-order delivery: never earlier than the previous chunk of this socket.
     const at = Math.max(lane.free + delayMs + (jitterMs ? Math.random() * jitterMs : 0), state.last);
     state.last = at;
-    state.pending++;
-    setTimeout(() => {
-      state.pending--;
+    state.queue.push({ at, chunk });
+    drain(to, state);
+  }
+
+  /** Writes every queued chunk that is due, in order, and re-arms for the next one. */
+  function drain(to, state) {
+    if (state.timer) return;
+    const now = performance.now();
+    while (state.queue.length && state.queue[0].at <= now) {
+      const { chunk } = state.queue.shift();
       if (!to.destroyed) to.write(chunk);
-      if (state.pending === 0 && state.ended && !to.destroyed) to.end();
-    }, Math.max(0, at - now));
+    }
+    if (state.queue.length) {
+      state.timer = setTimeout(() => {
+        state.timer = null;
+        drain(to, state);
+      }, Math.max(1, state.queue[0].at - now));
+    } else if (state.ended && !to.destroyed) {
+      to.end();
+    }
   }
 
   const server = net.createServer((client) => {
@@ -47,8 +66,8 @@ export function startLink({ target, mbit, delayMs, jitterMs = 0 }) {
     upstream.setNoDelay(true);
     sockets.add(client);
     sockets.add(upstream);
-    const downState = { last: 0, pending: 0, ended: false };
-    const upState = { last: 0, pending: 0, ended: false };
+    const downState = { last: 0, queue: [], timer: null, ended: false };
+    const upState = { last: 0, queue: [], timer: null, ended: false };
     client.on('data', (c) => {
       for (const m of c.toString('latin1').matchAll(/(?:^|\r\n)(GET|HEAD|POST) (\S+) HTTP\/1\.1\r\n/g)) requests.push(`${m[1]} ${m[2]}`);
       shape(lanes.up, 'up', c, upstream, upState);
@@ -56,7 +75,7 @@ export function startLink({ target, mbit, delayMs, jitterMs = 0 }) {
     upstream.on('data', (c) => shape(lanes.down, 'down', c, client, downState));
     const finish = (state, to) => {
       state.ended = true;
-      if (state.pending === 0 && !to.destroyed) to.end();
+      if (state.queue.length === 0 && !state.timer && !to.destroyed) to.end();
     };
     client.on('end', () => finish(upState, upstream));
     upstream.on('end', () => finish(downState, client));
