@@ -6,13 +6,18 @@
 //! * [`refine`] / [`elevate`] — knot insertion, merging, splitting, degree
 //!   elevation (exact changes of basis).
 //! * [`invert`] — point inversion x → (u, v, w).
+//! * [`space`] — common spline spaces for several curves or surfaces.
+//! * [`coons`] — Coons bodies 0, 1, 2 and their exact B-spline volumes.
 
+pub mod coons;
 pub mod elevate;
 mod error;
 pub mod invert;
 pub mod refine;
+pub mod space;
 pub mod volume;
 
+pub use coons::{Body0, Body1, Body2, Edges, coons_patch, trilinear};
 pub use error::BodyError;
 pub use invert::{Inversion, Inverter};
 pub use volume::{BSplineVolume, Dir, Face, VolumeDerivs, VolumeScratch};
