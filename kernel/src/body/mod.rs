@@ -8,10 +8,16 @@
 //! * [`invert`] — point inversion x → (u, v, w).
 //! * [`space`] — common spline spaces for several curves or surfaces.
 //! * [`coons`] — Coons bodies 0, 1, 2 and their exact B-spline volumes.
+//! * [`injective`] — det J > 0 proved from its Bernstein form.
+//! * [`interior`] — interior distribution (det J), shape-preserving and checked edits.
+//! * [`ffd`] — free-form deformation of points, meshes, curves and surfaces.
 
 pub mod coons;
 pub mod elevate;
 mod error;
+pub mod ffd;
+pub mod injective;
+pub mod interior;
 pub mod invert;
 pub mod refine;
 pub mod space;
@@ -19,5 +25,7 @@ pub mod volume;
 
 pub use coons::{Body0, Body1, Body2, Edges, coons_patch, trilinear};
 pub use error::BodyError;
+pub use ffd::{Embedding, Ffd};
+pub use injective::{InjectivityReport, check_injective};
 pub use invert::{Inversion, Inverter};
 pub use volume::{BSplineVolume, Dir, Face, VolumeDerivs, VolumeScratch};
