@@ -11,14 +11,22 @@
 //! * [`injective`] — det J > 0 proved from its Bernstein form.
 //! * [`interior`] — interior distribution (det J), shape-preserving and checked edits.
 //! * [`ffd`] — free-form deformation of points, meshes, curves and surfaces.
+//! * [`lattice`] — several bodies sharing faces; continuity across them.
+//! * [`morph`] — metamorphosis: grid correspondence, paths, the body at t.
+//! * [`display`] — boundary and isoparametric surface meshes for viewers.
+//! * [`demo`] — the paper's cube, spool, cube-to-spool morph and chair.
 
 pub mod coons;
+pub mod demo;
+pub mod display;
 pub mod elevate;
 mod error;
 pub mod ffd;
 pub mod injective;
 pub mod interior;
 pub mod invert;
+pub mod lattice;
+pub mod morph;
 pub mod refine;
 pub mod space;
 pub mod volume;
@@ -28,4 +36,6 @@ pub use error::BodyError;
 pub use ffd::{Embedding, Ffd};
 pub use injective::{InjectivityReport, check_injective};
 pub use invert::{Inversion, Inverter};
+pub use lattice::{BodyLattice, Continuity, Joint};
+pub use morph::{Morph, Path};
 pub use volume::{BSplineVolume, Dir, Face, VolumeDerivs, VolumeScratch};

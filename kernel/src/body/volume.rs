@@ -234,6 +234,11 @@ impl BSplineVolume {
         Ok(())
     }
 
+    /// Mutable control points, for kernel code that keeps them finite.
+    pub(crate) fn points_mut_crate(&mut self) -> &mut [DVec3] {
+        &mut self.points
+    }
+
     /// Replaces all control points (same count, all finite).
     pub fn set_points(&mut self, points: Vec<DVec3>) -> Result<(), BodyError> {
         if points.len() != self.points.len() {
