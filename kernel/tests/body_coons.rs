@@ -2,6 +2,9 @@
 //! faces, the reductions body 2 → body 1 → body 0, and the exact B-spline
 //! volume conversion against direct evaluation of the Boolean sum.
 
+// Corner and face indices are those of the paper's formulas.
+#![allow(clippy::needless_range_loop)]
+
 use glam::DVec3;
 use vsculpt_kernel::body::elevate::elevate_surface;
 use vsculpt_kernel::body::refine::refine_surface;

@@ -30,6 +30,10 @@
 //! ([`Body2::to_volume`]). A Coons patch of four curves is built the same way
 //! ([`coons_patch`]).
 
+// The blends are written with the indices of the formulas (i, j, k ∈ {0, 1}
+// index several arrays and the λ's at once); iterators would hide that.
+#![allow(clippy::needless_range_loop)]
+
 use glam::DVec3;
 
 use super::space::{common_knots, curve_to, normalized_curve, normalized_surface, surface_to};
@@ -128,7 +132,7 @@ pub fn coons_patch(
         for j in 0..2 {
             corner[i][j] = curve_end(&cu[j], i);
             let d = (curve_end(&cv[i], j) - corner[i][j]).length();
-            if !(d <= tolerance) {
+            if d > tolerance || d.is_nan() {
                 return Err(BodyError::Incompatible {
                     what: format!("patch corner ({i}, {j})"),
                     distance: d,
@@ -210,7 +214,7 @@ impl Body1 {
                     let dv = (curve_end(&e.v[i][k], j) - c).length();
                     let dw = (curve_end(&e.w[i][j], k) - c).length();
                     let d = dv.max(dw);
-                    if !(d <= tolerance) {
+                    if d > tolerance || d.is_nan() {
                         return Err(BodyError::Incompatible {
                             what: format!("corner ({i}, {j}, {k})"),
                             distance: d,
@@ -450,7 +454,7 @@ impl Body2 {
             let src = surface_edge(&self.faces[sd][se], salong, send);
             let dst = surface_edge(&self.faces[td][te], talong, tend);
             let d = max_dist(src.points(), dst.points());
-            if !(d <= tolerance) {
+            if d > tolerance || d.is_nan() {
                 return Err(BodyError::Incompatible {
                     what,
                     distance: d,

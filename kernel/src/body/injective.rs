@@ -120,8 +120,8 @@ impl Patch {
         let mut right = self.coef.clone();
         let mut tmp = vec![0.0; n];
         for start in (0..self.coef.len()).filter(|&i| (i / stride) % n == 0) {
-            for r in 0..n {
-                tmp[r] = self.coef[start + r * stride];
+            for (r, t) in tmp.iter_mut().enumerate() {
+                *t = self.coef[start + r * stride];
             }
             // de Casteljau: left[r] = tmp after r steps at index 0, right[n-1-r] at the end.
             for r in 0..n {

@@ -110,7 +110,7 @@ impl BodyLattice {
             .zip(&ib)
             .map(|(&i, &j)| (va.points()[i] - vb.points()[j]).length())
             .fold(0.0, f64::max);
-        if !(d <= tolerance) {
+        if d > tolerance || d.is_nan() {
             return Err(BodyError::Incompatible {
                 what: format!("face of body {a} and face of body {b}"),
                 distance: d,

@@ -286,8 +286,8 @@ impl BSplineVolume {
     /// as 2) at `t`, reusing `scratch` (allocation-free once warmed up).
     pub fn eval(&self, scratch: &mut VolumeScratch, t: [f64; 3], order: usize) -> VolumeDerivs {
         let order = order.min(2);
-        for d in 0..3 {
-            basis_derivs_into(&self.knots[d], t[d], order, &mut scratch.b[d]);
+        for ((kv, &td), b) in self.knots.iter().zip(&t).zip(&mut scratch.b) {
+            basis_derivs_into(kv, td, order, b);
         }
         self.combine(&scratch.b, order)
     }
