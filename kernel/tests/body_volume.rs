@@ -212,3 +212,29 @@ fn affine_lattice_is_the_affine_map() {
         assert!((v.point(t[0], t[1], t[2]) - x).length() < 1e-13);
     }
 }
+
+#[test]
+fn face_and_edge_indices_hold_the_boundary_points() {
+    let v = wavy();
+    // The edge u = 1, v = 0 along w is the line x(1, 0, w): its control
+    // points are the curve's.
+    let e = v.edge_indices(Dir::W, true, false);
+    assert_eq!(e.len(), 6);
+    let pts: Vec<DVec3> = e.iter().map(|&i| v.points()[i]).collect();
+    let c = vsculpt_kernel::bspline::BSplineCurve::new(v.knots(Dir::W).clone(), pts).unwrap();
+    let mut rng = Rng(21);
+    for _ in 0..50 {
+        let w = rng.next();
+        assert!((c.point(w) - v.point(1.0, 0.0, w)).length() < 1e-13);
+    }
+    let f = v.face_indices(Face {
+        dir: Dir::V,
+        end: true,
+    });
+    assert_eq!(f.len(), 6 * 6);
+    assert!(
+        f.iter()
+            .all(|&i| v.ijk(i)[1] == 3 && v.is_boundary_point(i))
+    );
+    assert!(!v.is_boundary_point(v.index(2, 1, 3)));
+}

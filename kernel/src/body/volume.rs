@@ -389,6 +389,26 @@ impl BSplineVolume {
             .collect()
     }
 
+    /// The storage indices of the control points on the boundary edge along
+    /// `dir` where the two other directions (in increasing order) are at
+    /// their start (`false`) or end (`true`): e.g. `edge_indices(Dir::W,
+    /// true, false)` is the edge u = end, v = start. In order along `dir`.
+    pub fn edge_indices(&self, dir: Dir, first_end: bool, second_end: bool) -> Vec<usize> {
+        let c = self.counts();
+        let (d1, d2) = dir.others();
+        let o1 = if first_end { c[d1.index()] - 1 } else { 0 };
+        let o2 = if second_end { c[d2.index()] - 1 } else { 0 };
+        (0..c[dir.index()])
+            .map(|r| {
+                let mut ijk = [0usize; 3];
+                ijk[dir.index()] = r;
+                ijk[d1.index()] = o1;
+                ijk[d2.index()] = o2;
+                self.index(ijk[0], ijk[1], ijk[2])
+            })
+            .collect()
+    }
+
     /// Whether control point `index` lies on the outer layer of the lattice
     /// (on one of the six boundary faces).
     pub fn is_boundary_point(&self, index: usize) -> bool {
