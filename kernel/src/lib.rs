@@ -25,8 +25,11 @@
 //!   surfaces and curves bound to them, solved jointly where related.
 //! * [`dsm`] — the Density Spatial Model (paper 001): implicit shapes from primitives,
 //!   shape groups and passing-points nets, meshed by dual contouring.
+//! * [`body`] — Coons bodies (paper 002): B-spline volumes, Coons bodies 0/1/2,
+//!   lattices, interior modelling, free-form deformation, metamorphosis.
 
 pub mod analysis;
+pub mod body;
 pub mod bspline;
 pub mod curve_design;
 pub mod design;
