@@ -25,6 +25,10 @@
 //!   surfaces and curves bound to them, solved jointly where related.
 //! * [`dsm`] — the Density Spatial Model (paper 001): implicit shapes from primitives,
 //!   shape groups and passing-points nets, meshed by dual contouring.
+//! * [`network`] — styling-curve networks (paper 004): meetings and faces found
+//!   automatically, cross-boundary ribbons, G1 n-sided patches with tuning handles.
+//! * [`fairing`] — point meshes sampled from patches, curvature fairness measures
+//!   by local quadric fits, iterative fairing toward goals, B-spline refit.
 
 pub mod analysis;
 pub mod bspline;
@@ -32,7 +36,9 @@ pub mod curve_design;
 pub mod design;
 pub mod dsm;
 pub mod energy;
+pub mod fairing;
 pub mod icon;
+pub mod network;
 pub mod product;
 pub mod quadrature;
 pub mod solve;

@@ -1,0 +1,2 @@
+//! Fairing (paper 004 §3–7).
+pub mod eigen3;
