@@ -19,7 +19,10 @@ fn a_curve_that_stops_short_leaves_its_face_open() {
     let b = curves[7].points()[2].truncate();
     curves[7] = lifted_line(a, a.lerp(b, 0.9));
     let err = CurveNetwork::new(curves, NetworkOptions::default()).unwrap_err();
-    assert!(matches!(err, NetworkError::OpenEnd { curve: 7, .. }), "{err}");
+    assert!(
+        matches!(err, NetworkError::OpenEnd { curve: 7, .. }),
+        "{err}"
+    );
     assert!(err.to_string().contains("left open"), "{err}");
 }
 
@@ -123,7 +126,10 @@ fn bad_handles_are_refused() {
     assert!(net.set_scale(0, 0, 0.0).is_err());
     assert!(net.set_scale(0, 9, 1.0).is_err());
     assert!(net.set_tuning(0, vec![DVec3::ZERO; 2]).is_err());
-    assert!(net.set_tuning(0, vec![DVec3::splat(f64::INFINITY); 4]).is_err());
+    assert!(
+        net.set_tuning(0, vec![DVec3::splat(f64::INFINITY); 4])
+            .is_err()
+    );
     assert!(net.patch(17).is_err());
     assert_eq!(net.topology(), before.topology());
     assert_eq!(net.tuning(0), before.tuning(0));
@@ -137,8 +143,19 @@ fn two_curves_meeting_twice_make_a_two_sided_face() {
     let a = DVec2::new(0.0, 0.0);
     let b = DVec2::new(1.0, 0.0);
     let kv = KnotVector::clamped_uniform(2, 3).unwrap();
-    let up = BSplineCurve::new(kv.clone(), vec![a.extend(0.0), DVec3::new(0.5, 0.5, 0.0), b.extend(0.0)]).unwrap();
-    let down = BSplineCurve::new(kv, vec![a.extend(0.0), DVec3::new(0.5, -0.5, 0.0), b.extend(0.0)]).unwrap();
+    let up = BSplineCurve::new(
+        kv.clone(),
+        vec![a.extend(0.0), DVec3::new(0.5, 0.5, 0.0), b.extend(0.0)],
+    )
+    .unwrap();
+    let down = BSplineCurve::new(
+        kv,
+        vec![a.extend(0.0), DVec3::new(0.5, -0.5, 0.0), b.extend(0.0)],
+    )
+    .unwrap();
     let err = CurveNetwork::new(vec![up, down], NetworkOptions::default()).unwrap_err();
-    assert!(matches!(err, NetworkError::TooFewSides { sides: 2, .. }), "{err}");
+    assert!(
+        matches!(err, NetworkError::TooFewSides { sides: 2, .. }),
+        "{err}"
+    );
 }
