@@ -257,3 +257,43 @@ fn a_patch_from_three_arcs_faired_toward_the_sphere() {
     assert!(report.converged && d1 < d0 / 5.0);
     let _ = wheel(3);
 }
+
+#[test]
+fn global_sweeps_reach_the_same_fixed_point_in_few_sweeps() {
+    use vsculpt_kernel::fairing::fair_implicit;
+    let mut local = octant(24);
+    perturb(&mut local, 0.03, 11);
+    let mut global = local.clone();
+    let boundary: Vec<DVec3> = (0..global.len())
+        .filter(|&i| global.boundary[i])
+        .map(|i| global.points[i])
+        .collect();
+    let goals = vec![1.0; local.len()];
+    let r1 = fair(&mut local, &goals, &FairingOptions::default(), |_| {
+        Control::Continue
+    })
+    .unwrap();
+    let r2 = fair_implicit(&mut global, &goals, &FairingOptions::default(), |_| {
+        Control::Continue
+    })
+    .unwrap();
+    let diff = local
+        .points
+        .iter()
+        .zip(&global.points)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    println!(
+        "local sweeps {} vs global sweeps {}; largest difference {diff:.2e}; global distance to sphere {:.3e}",
+        r1.iterations,
+        r2.iterations,
+        sphere_distance(&global)
+    );
+    assert!(r2.converged && r2.iterations < r1.iterations / 5);
+    assert!(diff < 1e-7, "{diff}");
+    let after: Vec<DVec3> = (0..global.len())
+        .filter(|&i| global.boundary[i])
+        .map(|i| global.points[i])
+        .collect();
+    assert_eq!(boundary, after);
+}

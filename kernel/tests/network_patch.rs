@@ -216,3 +216,34 @@ fn bottle_has_six_faces_one_five_sided_joined_g1() {
     let r = (c.x * c.x + c.y * c.y).sqrt();
     assert!((r - 1.0).abs() < 0.05, "label face middle at radius {r}");
 }
+
+#[test]
+fn sampler_matches_direct_evaluation_before_and_after_a_drag() {
+    use vsculpt_kernel::network::PatchSampler;
+    let mut net = bottle().unwrap();
+    let mut samplers: Vec<PatchSampler> = net
+        .patches()
+        .iter()
+        .map(|p| PatchSampler::new(p, 9))
+        .collect();
+    for round in 0..3 {
+        let mut out = Vec::new();
+        for (f, s) in samplers.iter_mut().enumerate() {
+            let p = net.patch(f).unwrap();
+            assert!(s.evaluate(&p, &mut out));
+            for (q, x) in s.mesh().points.iter().zip(&out) {
+                assert!(
+                    (p.point(*q) - *x).length() < 1e-13,
+                    "round {round} face {f}"
+                );
+            }
+        }
+        // Drag the bottom ring's middle outwards (its meetings stay put),
+        // then a diagonal's middle (moving no meeting either).
+        let curve = if round == 0 { 0 } else { 7 };
+        let mut c = net.curves()[curve].clone();
+        let k = c.points().len() / 2;
+        c.points_mut()[k] += DVec3::new(0.03, 0.0, 0.01);
+        net.set_curve(curve, c).unwrap();
+    }
+}

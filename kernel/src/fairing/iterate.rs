@@ -88,45 +88,8 @@ pub fn fair(
     options: &FairingOptions,
     mut progress: impl FnMut(&Progress) -> Control,
 ) -> Result<FairingReport, FairingError> {
-    if goals.len() != mesh.len() || goals.iter().any(|g| !g.is_finite()) {
-        return Err(FairingError::BadValue(format!(
-            "{} goals for {} points (all finite)",
-            goals.len(),
-            mesh.len()
-        )));
-    }
-    if options.measure != Measure::Mean {
-        return Err(FairingError::BadValue(format!(
-            "fairing goals must be in mean curvature, not {:?}",
-            options.measure
-        )));
-    }
-    if !(options.relaxation > 0.0 && options.relaxation < 2.0) {
-        return Err(FairingError::BadValue(format!(
-            "relaxation {}",
-            options.relaxation
-        )));
-    }
-    if !(options.tolerance > 0.0 && options.tolerance.is_finite()) {
-        return Err(FairingError::BadValue(format!(
-            "tolerance {}",
-            options.tolerance
-        )));
-    }
-    for i in 0..mesh.len() {
-        if !mesh.boundary[i] && mesh.ring1(i).len() < 4 {
-            return Err(FairingError::TooFewNeighbours {
-                point: i,
-                neighbours: mesh.ring1(i).len(),
-                needed: 4,
-            });
-        }
-    }
-    let (lo, hi) = mesh.points.iter().fold(
-        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
-        |(a, b), p| (a.min(*p), b.max(*p)),
-    );
-    let threshold = options.tolerance * (hi - lo).length();
+    validate(mesh, goals, options)?;
+    let threshold = options.tolerance * size(mesh);
     let original = mesh.points.clone();
     let mut normals = mesh.triangle_normals();
     let mut local = Vec::with_capacity(16);
@@ -229,4 +192,56 @@ pub fn laplacian_smooth(
         converged,
         history,
     }
+}
+
+/// Checks goals, options and neighbourhoods before a run.
+pub(crate) fn validate(
+    mesh: &PointMesh,
+    goals: &[f64],
+    options: &FairingOptions,
+) -> Result<(), FairingError> {
+    if goals.len() != mesh.len() || goals.iter().any(|g| !g.is_finite()) {
+        return Err(FairingError::BadValue(format!(
+            "{} goals for {} points (all finite)",
+            goals.len(),
+            mesh.len()
+        )));
+    }
+    if options.measure != Measure::Mean {
+        return Err(FairingError::BadValue(format!(
+            "fairing goals must be in mean curvature, not {:?}",
+            options.measure
+        )));
+    }
+    if !(options.relaxation > 0.0 && options.relaxation < 2.0) {
+        return Err(FairingError::BadValue(format!(
+            "relaxation {}",
+            options.relaxation
+        )));
+    }
+    if !(options.tolerance > 0.0 && options.tolerance.is_finite()) {
+        return Err(FairingError::BadValue(format!(
+            "tolerance {}",
+            options.tolerance
+        )));
+    }
+    for i in 0..mesh.len() {
+        if !mesh.boundary[i] && mesh.ring1(i).len() < 4 {
+            return Err(FairingError::TooFewNeighbours {
+                point: i,
+                neighbours: mesh.ring1(i).len(),
+                needed: 4,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The mesh's size: its bounding box's diagonal.
+pub(crate) fn size(mesh: &PointMesh) -> f64 {
+    let (lo, hi) = mesh.points.iter().fold(
+        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+        |(a, b), p| (a.min(*p), b.max(*p)),
+    );
+    (hi - lo).length()
 }

@@ -80,7 +80,7 @@ impl PointMesh {
     /// The mesh of `patch` sampled at lattice resolution `m` (see
     /// [`crate::network::DomainMesh`]).
     pub fn from_patch(patch: &Patch, m: usize) -> Result<Self, FairingError> {
-        let sampler = PatchSampler::new(patch, m);
+        let mut sampler = PatchSampler::new(patch, m);
         let mut pts = Vec::new();
         sampler.evaluate(patch, &mut pts);
         let dm = sampler.mesh();

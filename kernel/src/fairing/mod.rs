@@ -17,6 +17,7 @@
 pub mod eigen3;
 pub mod error;
 pub mod goals;
+pub mod implicit;
 pub mod iterate;
 pub mod local_axes;
 pub mod measures;
@@ -27,6 +28,7 @@ pub mod sparse;
 
 pub use error::FairingError;
 pub use goals::{Goals, resolve};
+pub use implicit::{fair_implicit, laplacian_implicit};
 pub use iterate::{Control, FairingOptions, FairingReport, Progress, fair, laplacian_smooth};
 pub use measures::{Fairness, Neighbourhood, estimate, fairness, variation};
 pub use mesh::PointMesh;

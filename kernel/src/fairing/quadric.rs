@@ -212,3 +212,74 @@ pub fn goal_height(neighbours: &[DVec3], goal: f64) -> Option<f64> {
     }
     Some(f)
 }
+
+/// The fit of [`goal_height`] as weights: f = Σ_j α_j z_j + β for the
+/// neighbours' heights z_j (their u, v fixed). Fills `alpha`, returns β.
+pub fn goal_weights(neighbours: &[DVec3], goal: f64, alpha: &mut Vec<f64>) -> Option<f64> {
+    // Slopes from the fit itself (as goal_height's second pass).
+    let (mut d0, mut e0) = (0.0, 0.0);
+    if let Some((d, e)) = goal_slopes(neighbours, goal) {
+        (d0, e0) = (d, e);
+    }
+    let mut m = [0.0; 49];
+    let mut scale = 0.0f64;
+    for q in neighbours {
+        let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
+        for i in 0..6 {
+            for j in 0..6 {
+                m[i * 7 + j] += row[i] * row[j];
+            }
+        }
+        scale = scale.max(q.x * q.x + q.y * q.y);
+    }
+    let hold = if neighbours.len() < 6 { 1e-3 } else { 1e-9 } * scale;
+    m[8] += hold;
+    m[16] += hold;
+    let w2: f64 = 1.0 + d0 * d0 + e0 * e0;
+    let g = [1.0 + e0 * e0, -d0 * e0, 1.0 + d0 * d0];
+    for k in 0..3 {
+        m[(3 + k) * 7 + 6] = g[k];
+        m[6 * 7 + 3 + k] = g[k];
+    }
+    // y = K⁻¹ e_f (K symmetric), then f = yᵀ [Aᵀ z; r].
+    let mut y = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    if !solve_dense(&mut m, &mut y, 7) {
+        return None;
+    }
+    alpha.clear();
+    alpha.extend(neighbours.iter().map(|q| {
+        let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
+        (0..6).map(|k| y[k] * row[k]).sum::<f64>()
+    }));
+    Some(y[6] * (-goal * w2 * w2.sqrt()))
+}
+
+/// The slopes (d, e) of the goal-constrained fit with flat slopes assumed.
+fn goal_slopes(neighbours: &[DVec3], goal: f64) -> Option<(f64, f64)> {
+    let mut m = [0.0; 49];
+    let mut r = [0.0; 7];
+    let mut scale = 0.0f64;
+    for q in neighbours {
+        let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
+        for i in 0..6 {
+            for j in 0..6 {
+                m[i * 7 + j] += row[i] * row[j];
+            }
+            r[i] += row[i] * q.z;
+        }
+        scale = scale.max(q.x * q.x + q.y * q.y);
+    }
+    let hold = if neighbours.len() < 6 { 1e-3 } else { 1e-9 } * scale;
+    m[8] += hold;
+    m[16] += hold;
+    for k in 0..3 {
+        let g = [1.0, 0.0, 1.0][k];
+        m[(3 + k) * 7 + 6] = g;
+        m[6 * 7 + 3 + k] = g;
+    }
+    r[6] = -goal;
+    if !solve_dense(&mut m, &mut r, 7) {
+        return None;
+    }
+    Some((r[1], r[2]))
+}

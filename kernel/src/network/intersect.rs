@@ -3,11 +3,12 @@
 //! polylines' sampled chords (8 per knot span, at least 32 per curve); each is
 //! refined by Gauss–Newton on ½|a(s) − b(t)|² with the parameters kept in
 //! their domains (a clamped variable is held and the other re-solved), so
+//! (chord pairs are first culled by the bounding boxes of runs of 8 chords)
 //! end-to-end meetings (corners) are found as well as crossings.
 
 use glam::DVec3;
 
-use crate::bspline::BSplineCurve;
+use crate::bspline::{BSplineCurve, BasisDerivs, basis_derivs_into};
 
 /// Where two curves come closest: parameters and distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,6 +23,18 @@ pub struct CurveHit {
     pub point: DVec3,
 }
 
+/// c(t), c′(t) with a reused basis scratch.
+fn eval(c: &BSplineCurve, t: f64, b: &mut BasisDerivs) -> (DVec3, DVec3) {
+    basis_derivs_into(c.knots(), t, 1, b);
+    let pts = c.points();
+    let (mut p, mut d) = (DVec3::ZERO, DVec3::ZERO);
+    for k in 0..=c.degree() {
+        p += pts[b.first + k] * b.get(0, k);
+        d += pts[b.first + k] * b.get(1, k);
+    }
+    (p, d)
+}
+
 /// Samples of a curve: parameters and points.
 fn polyline(c: &BSplineCurve) -> (Vec<f64>, Vec<DVec3>) {
     let spans = c.knots().spans();
@@ -33,7 +46,8 @@ fn polyline(c: &BSplineCurve) -> (Vec<f64>, Vec<DVec3>) {
         }
     }
     ts.push(c.domain().1);
-    let ps = ts.iter().map(|&t| c.point(t)).collect();
+    let mut b = BasisDerivs::default();
+    let ps = ts.iter().map(|&t| eval(c, t, &mut b).0).collect();
     (ts, ps)
 }
 
@@ -80,11 +94,13 @@ pub fn refine(a: &BSplineCurve, b: &BSplineCurve, s: f64, t: f64) -> CurveHit {
     let (a0, a1) = a.domain();
     let (b0, b1) = b.domain();
     let (mut s, mut t) = (s.clamp(a0, a1), t.clamp(b0, b1));
+    let mut sc = BasisDerivs::default();
     for _ in 0..64 {
-        let (da, db) = (a.derivs(s), b.derivs(t));
-        let r = da.p - db.p;
-        let (m11, m12, m22) = (da.d1.dot(da.d1), -da.d1.dot(db.d1), db.d1.dot(db.d1));
-        let (g1, g2) = (da.d1.dot(r), -db.d1.dot(r));
+        let (pa, da1) = eval(a, s, &mut sc);
+        let (pb, db1) = eval(b, t, &mut sc);
+        let r = pa - pb;
+        let (m11, m12, m22) = (da1.dot(da1), -da1.dot(db1), db1.dot(db1));
+        let (g1, g2) = (da1.dot(r), -db1.dot(r));
         let det = m11 * m22 - m12 * m12;
         let (mut ns, mut nt) = if det > 1e-12 * m11 * m22 {
             (
@@ -101,12 +117,14 @@ pub fn refine(a: &BSplineCurve, b: &BSplineCurve, s: f64, t: f64) -> CurveHit {
         if cs != ns && ct == nt {
             // s held at its bound: t alone.
             ns = cs;
-            let (pa, dbt) = (a.point(ns), b.derivs(t));
-            nt = (t - dbt.d1.dot(dbt.p - pa) / m22.max(1e-300)).clamp(b0, b1);
+            let pa = eval(a, ns, &mut sc).0;
+            let (pbt, dbt) = eval(b, t, &mut sc);
+            nt = (t - dbt.dot(pbt - pa) / m22.max(1e-300)).clamp(b0, b1);
         } else if ct != nt && cs == ns {
             nt = ct;
-            let (pb, das) = (b.point(nt), a.derivs(s));
-            ns = (s - das.d1.dot(das.p - pb) / m11.max(1e-300)).clamp(a0, a1);
+            let pb = eval(b, nt, &mut sc).0;
+            let (pas, das) = eval(a, s, &mut sc);
+            ns = (s - das.dot(pas - pb) / m11.max(1e-300)).clamp(a0, a1);
         } else {
             ns = cs;
             nt = ct;
@@ -118,13 +136,31 @@ pub fn refine(a: &BSplineCurve, b: &BSplineCurve, s: f64, t: f64) -> CurveHit {
             break;
         }
     }
-    let (pa, pb) = (a.point(s), b.point(t));
+    let (pa, pb) = (eval(a, s, &mut sc).0, eval(b, t, &mut sc).0);
     CurveHit {
         s,
         t,
         gap: (pa - pb).length(),
         point: (pa + pb) * 0.5,
     }
+}
+
+/// Segments per bounding box of the chunked search.
+const CHUNK: usize = 8;
+
+/// Bounding boxes of runs of `CHUNK` segments, with their longest segment.
+fn chunks(ps: &[DVec3]) -> Vec<(DVec3, DVec3, f64)> {
+    (0..(ps.len() - 1).div_ceil(CHUNK))
+        .map(|c| {
+            let run = &ps[c * CHUNK..((c + 1) * CHUNK + 1).min(ps.len())];
+            let (lo, hi) = bbox(run);
+            let longest = run
+                .windows(2)
+                .map(|w| (w[1] - w[0]).length())
+                .fold(0.0, f64::max);
+            (lo, hi, longest)
+        })
+        .collect()
 }
 
 fn bbox(ps: &[DVec3]) -> (DVec3, DVec3) {
@@ -160,42 +196,53 @@ fn hits(a: &BSplineCurve, b: &BSplineCurve, tol: f64, same: bool) -> Vec<CurveHi
         return Vec::new();
     }
     let (wa, wb) = (a.domain().1 - a.domain().0, b.domain().1 - b.domain().0);
+    let (ca, cb) = (chunks(&pa), chunks(&pb));
     let mut out: Vec<CurveHit> = Vec::new();
-    for i in 0..pa.len() - 1 {
-        let la = (pa[i + 1] - pa[i]).length();
-        for j in 0..pb.len() - 1 {
-            if same && j <= i + 2 {
-                continue;
-            }
-            let lb = (pb[j + 1] - pb[j]).length();
-            let (fs, ft, d) = segment_closest(pa[i], pa[i + 1], pb[j], pb[j + 1]);
-            if d > tol + 0.25 * (la + lb) {
-                continue;
-            }
-            let s0 = ta[i] + fs * (ta[i + 1] - ta[i]);
-            let t0 = tb[j] + ft * (tb[j + 1] - tb[j]);
-            let h = refine(a, b, s0, t0);
-            if h.gap > tol {
-                continue;
-            }
-            if same {
-                // A real self-crossing: the arc between the two parameters
-                // is much longer than the gap.
-                if (h.s - h.t).abs() < 1e-3 * wa {
-                    continue;
-                }
-                let mid = a.point(0.5 * (h.s + h.t));
-                if (mid - h.point).length() <= 4.0 * tol {
-                    continue;
-                }
-            }
-            if out
-                .iter()
-                .any(|o| (o.s - h.s).abs() <= 1e-7 * wa && (o.t - h.t).abs() <= 1e-7 * wb)
+    for (ia, (la0, ha0, ma)) in ca.iter().enumerate() {
+        for (ib, (lb0, hb0, mb)) in cb.iter().enumerate() {
+            let margin = DVec3::splat(tol + 0.25 * (ma + mb));
+            if (*la0 - *hb0 - margin).cmpgt(DVec3::ZERO).any()
+                || (*lb0 - *ha0 - margin).cmpgt(DVec3::ZERO).any()
             {
                 continue;
             }
-            out.push(h);
+            for i in ia * CHUNK..((ia + 1) * CHUNK).min(pa.len() - 1) {
+                let la = (pa[i + 1] - pa[i]).length();
+                for j in ib * CHUNK..((ib + 1) * CHUNK).min(pb.len() - 1) {
+                    if same && j <= i + 2 {
+                        continue;
+                    }
+                    let lb = (pb[j + 1] - pb[j]).length();
+                    let (fs, ft, d) = segment_closest(pa[i], pa[i + 1], pb[j], pb[j + 1]);
+                    if d > tol + 0.25 * (la + lb) {
+                        continue;
+                    }
+                    let s0 = ta[i] + fs * (ta[i + 1] - ta[i]);
+                    let t0 = tb[j] + ft * (tb[j + 1] - tb[j]);
+                    let h = refine(a, b, s0, t0);
+                    if h.gap > tol {
+                        continue;
+                    }
+                    if same {
+                        // A real self-crossing: the arc between the two parameters
+                        // is much longer than the gap.
+                        if (h.s - h.t).abs() < 1e-3 * wa {
+                            continue;
+                        }
+                        let mid = a.point(0.5 * (h.s + h.t));
+                        if (mid - h.point).length() <= 4.0 * tol {
+                            continue;
+                        }
+                    }
+                    if out
+                        .iter()
+                        .any(|o| (o.s - h.s).abs() <= 1e-7 * wa && (o.t - h.t).abs() <= 1e-7 * wb)
+                    {
+                        continue;
+                    }
+                    out.push(h);
+                }
+            }
         }
     }
     out

@@ -156,9 +156,15 @@ pub struct SideRibbon {
 impl SideRibbon {
     /// c(s), c′(s) (with respect to s) and the walking tangent's frame at s.
     fn frame<S: Scalar>(&self, s: S, scratch: &mut BasisDerivs) -> (V3<S>, V3<S>, V3<S>, V3<S>) {
+        let t = self.t_start + s.val() * (self.t_end - self.t_start);
+        let derivs = curve_derivs(&self.curve, t, scratch);
+        self.frame_from(s, derivs)
+    }
+
+    /// The frame at s given c, c′, c″ (with respect to the curve's t) there.
+    fn frame_from<S: Scalar>(&self, s: S, [p, d1, d2]: [DVec3; 3]) -> (V3<S>, V3<S>, V3<S>, V3<S>) {
         let dt = self.t_end - self.t_start;
         let t = S::cst(self.t_start) + s * S::cst(dt);
-        let [p, d1, d2] = curve_derivs(&self.curve, t.val(), scratch);
         let c = V3::chain(s, p, d1 * dt);
         let cs = V3::chain(s, d1 * dt, d2 * dt * dt);
         let walk = cs.normalize();
@@ -180,7 +186,15 @@ impl SideRibbon {
 
     /// R(s, d) = c(s) + d·D(s).
     pub fn eval<S: Scalar>(&self, s: S, d: S, scratch: &mut BasisDerivs) -> V3<S> {
-        let (c, _, t, n) = self.frame(s, scratch);
+        let t = self.t_start + s.val() * (self.t_end - self.t_start);
+        let derivs = curve_derivs(&self.curve, t, scratch);
+        self.eval_from(s, d, derivs)
+    }
+
+    /// R(s, d) given c, c′, c″ at the curve parameter of s (precomputed
+    /// basis values make this a linear combination of control points).
+    pub fn eval_from<S: Scalar>(&self, s: S, d: S, derivs: [DVec3; 3]) -> V3<S> {
+        let (c, _, t, n) = self.frame_from(s, derivs);
         let bdir = n.cross(t);
         let one = S::cst(1.0);
         let a = S::cst(self.a[0]) * (one - s) + S::cst(self.a[1]) * s;

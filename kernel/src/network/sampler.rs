@@ -6,8 +6,10 @@
 //! otherwise a fan of n such lattices around the centre (shared points
 //! merged). A [`PatchSampler`] precomputes, per sample, everything that
 //! depends on the domain only — the side parameters s_i, d_i, the blends
-//! B_i and the tuning weights — so re-evaluating after a curve moves is
-//! only the ribbons at fixed (s_i, d_i) combined with fixed weights.
+//! B_i and the tuning weights — and the boundary curves' basis values at
+//! each sample, so re-evaluating after a curve moves is a linear
+//! combination of control points per side, the ribbon's frame at fixed
+//! (s_i, d_i), and fixed blend weights.
 
 use std::collections::HashMap;
 
@@ -15,7 +17,7 @@ use glam::{DVec2, DVec3};
 
 use super::domain::Domain;
 use super::patch::{Patch, PointWeights};
-use crate::bspline::BasisDerivs;
+use crate::bspline::{BasisDerivs, basis_derivs_into};
 
 /// A triangulated patch domain.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,12 +87,27 @@ impl DomainMesh {
     }
 }
 
-/// A patch's samples with their domain-only weights precomputed.
+/// A patch's samples with their domain-only weights precomputed, and per
+/// side the curve's basis values (and derivatives) at every sample's
+/// parameter, kept while the side's parameter range and knots stay the same
+/// (a drag moves control points; a side's range changes only when a meeting
+/// on it moves along the curve).
 #[derive(Clone, Debug)]
 pub struct PatchSampler {
     mesh: DomainMesh,
     weights: Vec<PointWeights>,
     sides: usize,
+    cache: Vec<SideCache>,
+}
+
+/// One side's basis values at every sample.
+#[derive(Clone, Debug, Default)]
+struct SideCache {
+    key: Option<(f64, f64, Vec<f64>)>,
+    /// First control point index per sample.
+    first: Vec<u32>,
+    /// 3 (degree + 1) values per sample: N, N′, N″.
+    values: Vec<f64>,
 }
 
 impl PatchSampler {
@@ -102,6 +119,7 @@ impl PatchSampler {
             mesh,
             weights,
             sides: patch.sides(),
+            cache: vec![SideCache::default(); patch.sides()],
         }
     }
 
@@ -123,17 +141,66 @@ impl PatchSampler {
     /// The patch at every sample, into `out` (resized). `patch` must have
     /// the number of sides the sampler was made for (else nothing is
     /// written and `false` is returned).
-    pub fn evaluate(&self, patch: &Patch, out: &mut Vec<DVec3>) -> bool {
+    pub fn evaluate(&mut self, patch: &Patch, out: &mut Vec<DVec3>) -> bool {
         if patch.sides() != self.sides {
             return false;
         }
-        out.clear();
         let mut scratch = BasisDerivs::default();
-        out.extend(
-            self.weights
-                .iter()
-                .map(|w| patch.eval_weights(w, &mut scratch)),
-        );
+        for (k, side) in patch.ribbons().iter().enumerate() {
+            let key = (
+                side.t_start,
+                side.t_end,
+                side.curve.knots().knots().to_vec(),
+            );
+            let cache = &mut self.cache[k];
+            if cache.key.as_ref() == Some(&key) {
+                continue;
+            }
+            let w = side.curve.degree() + 1;
+            cache.first.clear();
+            cache.values.clear();
+            for pw in &self.weights {
+                let s = if pw.corner.is_some() { 0.0 } else { pw.s[k] };
+                let t = side.t_start + s * (side.t_end - side.t_start);
+                basis_derivs_into(side.curve.knots(), t, 2, &mut scratch);
+                cache.first.push(scratch.first as u32);
+                for d in 0..3 {
+                    cache.values.extend((0..w).map(|j| scratch.get(d, j)));
+                }
+            }
+            cache.key = Some(key);
+        }
+        out.clear();
+        out.reserve(self.weights.len());
+        for (idx, pw) in self.weights.iter().enumerate() {
+            if let Some(c) = pw.corner {
+                out.push(patch.ribbons()[c].point(0.0));
+                continue;
+            }
+            let mut acc = DVec3::ZERO;
+            for (k, side) in patch.ribbons().iter().enumerate() {
+                let b = pw.blend[k];
+                if b == 0.0 {
+                    continue;
+                }
+                let cache = &self.cache[k];
+                let w = side.curve.degree() + 1;
+                let first = cache.first[idx] as usize;
+                let vals = &cache.values[idx * 3 * w..(idx + 1) * 3 * w];
+                let pts = &side.curve.points()[first..first + w];
+                let mut derivs = [DVec3::ZERO; 3];
+                for (d, out_d) in derivs.iter_mut().enumerate() {
+                    for (j, p) in pts.iter().enumerate() {
+                        *out_d += *p * vals[d * w + j];
+                    }
+                }
+                acc += side.eval_from(pw.s[k], pw.d[k], derivs).val() * b;
+            }
+            for (h, t) in patch.tuning().iter().zip(&pw.tuning) {
+                acc += *h * *t;
+            }
+            out.push(acc);
+        }
         true
     }
 }
