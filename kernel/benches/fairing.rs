@@ -15,6 +15,7 @@ use vsculpt_kernel::fairing::{
     Control, FairingOptions, PointMesh, fair, fair_implicit, laplacian_implicit,
 };
 
+#[allow(clippy::needless_range_loop)] // lattice indices (i, j)
 fn octant(m: usize, amount: f64) -> PointMesh {
     let mut index = vec![vec![0u32; m + 1]; m + 1];
     let mut points = Vec::new();

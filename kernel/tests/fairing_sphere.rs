@@ -27,6 +27,7 @@ impl Lcg {
 }
 
 /// The octant lattice: point (i, j, k)/|(i, j, k)|, i + j + k = m.
+#[allow(clippy::needless_range_loop)] // lattice indices (i, j)
 fn octant(m: usize) -> PointMesh {
     let mut index = vec![vec![0u32; m + 1]; m + 1];
     let mut points = Vec::new();

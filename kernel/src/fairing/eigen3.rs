@@ -5,6 +5,7 @@
 use glam::{DMat3, DVec3};
 
 /// Eigenvalues (ascending) and unit eigenvectors of the symmetric `m`.
+#[allow(clippy::needless_range_loop)] // rotations index rows and columns together
 pub fn sym3_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
     let mut a = [
         [m.x_axis.x, m.y_axis.x, m.z_axis.x],

@@ -8,8 +8,8 @@ use std::f64::consts::PI;
 
 use glam::{DVec2, DVec3};
 
+use super::curve_network::{CurveNetwork, NetworkOptions};
 use super::error::NetworkError;
-use super::network::{CurveNetwork, NetworkOptions};
 use crate::bspline::{BSplineCurve, KnotVector, interpolate_curve};
 
 /// The bottle's radius at height z: body r = 1 up to z = 1.2, a cosine

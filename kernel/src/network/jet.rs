@@ -186,7 +186,7 @@ impl<S: Scalar> V3<S> {
         DVec3::new(self.x.val(), self.y.val(), self.z.val())
     }
     /// Sum.
-    pub fn add(self, o: Self) -> Self {
+    pub fn plus(self, o: Self) -> Self {
         V3 {
             x: self.x + o.x,
             y: self.y + o.y,
@@ -194,7 +194,7 @@ impl<S: Scalar> V3<S> {
         }
     }
     /// Difference.
-    pub fn sub(self, o: Self) -> Self {
+    pub fn minus(self, o: Self) -> Self {
         V3 {
             x: self.x - o.x,
             y: self.y - o.y,

@@ -16,21 +16,21 @@
 //! * the paper's u²v² tuning terms: bubble functions Π d_i² that vanish with
 //!   their gradient on the boundary — [`patch`].
 
+pub mod curve_network;
 pub mod demo;
 pub mod domain;
 pub mod error;
 pub mod intersect;
 pub mod jet;
-pub mod network;
 pub mod patch;
 pub mod ribbon;
 pub mod sampler;
 pub mod topology;
 
+pub use curve_network::{CurveNetwork, NetworkOptions, Update};
 pub use domain::Domain;
 pub use error::NetworkError;
 pub use jet::{Jet, Scalar, V3};
-pub use network::{CurveNetwork, NetworkOptions, Update};
 pub use patch::{Patch, PointWeights};
 pub use ribbon::{NormalPiece, SideRibbon};
 pub use sampler::{DomainMesh, PatchSampler};

@@ -148,11 +148,11 @@ impl Patch {
         let mut scratch = BasisDerivs::default();
         let mut out = V3::cst(DVec3::ZERO);
         for (i, side) in self.sides.iter().enumerate() {
-            out = out.add(side.eval(prm.s[i], prm.d[i], &mut scratch).scale(blend[i]));
+            out = out.plus(side.eval(prm.s[i], prm.d[i], &mut scratch).scale(blend[i]));
         }
         for (h, w) in self.tuning.iter().zip(tuning) {
             if *h != DVec3::ZERO {
-                out = out.add(V3::cst(*h).scale(w));
+                out = out.plus(V3::cst(*h).scale(w));
             }
         }
         out

@@ -47,7 +47,7 @@ pub struct NormalPiece {
 /// (U, W) of the reference frame at the unit tangent `tangent`.
 fn reference<S: Scalar>(axis: DVec3, tangent: V3<S>) -> (V3<S>, V3<S>) {
     let a = V3::cst(axis);
-    let u = a.sub(tangent.scale(tangent.dot(a))).normalize();
+    let u = a.minus(tangent.scale(tangent.dot(a))).normalize();
     (u, tangent.cross(u))
 }
 
@@ -131,7 +131,7 @@ pub fn normal_at<S: Scalar>(pieces: &[NormalPiece], t: S, tangent: V3<S>) -> V3<
         alpha = alpha + (u * S::cst(std::f64::consts::PI)).sin() * S::cst(piece.twist);
     }
     let (uu, ww) = reference(piece.axis, tangent);
-    uu.scale(alpha.cos()).add(ww.scale(alpha.sin()))
+    uu.scale(alpha.cos()).plus(ww.scale(alpha.sin()))
 }
 
 /// A side's boundary curve and cross-boundary derivative.
@@ -199,12 +199,12 @@ impl SideRibbon {
         let one = S::cst(1.0);
         let a = S::cst(self.a[0]) * (one - s) + S::cst(self.a[1]) * s;
         let b = S::cst(self.b[0]) * (one - s) + S::cst(self.b[1]) * s;
-        let mut dvec = t.scale(a).add(bdir.scale(b));
+        let mut dvec = t.scale(a).plus(bdir.scale(b));
         if self.scale != 1.0 {
             let bump = (s * S::cst(std::f64::consts::PI)).sin();
             dvec = dvec.scale(one + S::cst(self.scale - 1.0) * bump);
         }
-        c.add(dvec.scale(d))
+        c.plus(dvec.scale(d))
     }
 
     /// c(s).

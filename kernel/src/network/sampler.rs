@@ -32,6 +32,7 @@ pub struct DomainMesh {
 
 impl DomainMesh {
     /// The mesh of `domain` with `m ≥ 1` segments per lattice side.
+    #[allow(clippy::needless_range_loop)] // lattice indices (i, j)
     pub fn new(domain: &Domain, m: usize) -> Self {
         let m = m.max(1);
         let v = domain.vertices();

@@ -125,7 +125,7 @@ impl Topology {
     /// The vertex a half-edge leaves.
     pub fn origin(&self, h: usize) -> usize {
         let e = &self.edges[h / 2];
-        if h % 2 == 0 { e.v0 } else { e.v1 }
+        if h.is_multiple_of(2) { e.v0 } else { e.v1 }
     }
 
     /// The vertex a half-edge reaches.
@@ -157,6 +157,7 @@ impl Topology {
 
     /// Builds the topology of `curves` from their meetings (`pair_hits`)
     /// with meeting tolerance `tol`.
+    #[allow(clippy::needless_range_loop)] // index arithmetic over parallel arrays
     pub fn build(
         curves: &[BSplineCurve],
         hits: &[Vec<Vec<CurveHit>>],
@@ -267,7 +268,7 @@ impl Topology {
         let out_dir = |h: usize| -> DVec3 {
             let e = &topo.edges[h / 2];
             let c = &curves[e.curve];
-            if h % 2 == 0 {
+            if h.is_multiple_of(2) {
                 c.derivs(e.t0).d1.normalize()
             } else {
                 -c.derivs(e.t1).d1.normalize()
@@ -327,7 +328,7 @@ impl Topology {
                         let c = &curves[e.curve];
                         let (nv0, nv1) = (topo.vertices[e.v0].normal, topo.vertices[e.v1].normal);
                         let piece = NormalPiece::new(c, e.t0, e.t1, nv0, nv1, 0.0);
-                        let from = if h % 2 == 0 { e.t0 } else { e.t1 };
+                        let from = if h.is_multiple_of(2) { e.t0 } else { e.t1 };
                         let carried = piece.carry(c, from, topo.vertices[v].normal);
                         if topo.vertices[w].normal.dot(carried) < 0.0 {
                             topo.vertices[w].normal = -topo.vertices[w].normal;
@@ -378,9 +379,13 @@ impl Topology {
         let walk_dir = |h: usize, at_end: bool| -> DVec3 {
             let e = &topo.edges[h / 2];
             let c = &curves[e.curve];
-            let t = if (h % 2 == 0) == at_end { e.t1 } else { e.t0 };
+            let t = if (h.is_multiple_of(2)) == at_end {
+                e.t1
+            } else {
+                e.t0
+            };
             let d = c.derivs(t).d1.normalize();
-            if h % 2 == 0 { d } else { -d }
+            if h.is_multiple_of(2) { d } else { -d }
         };
         for lp in loops {
             for &h in &lp {
@@ -409,13 +414,13 @@ impl Topology {
                 let mut prev = walk_dir(h, false);
                 for j in 1..=samples {
                     let f = j as f64 / samples as f64;
-                    let t = if h % 2 == 0 {
+                    let t = if h.is_multiple_of(2) {
                         e.t0 + f * (e.t1 - e.t0)
                     } else {
                         e.t1 - f * (e.t1 - e.t0)
                     };
                     let along = c.derivs(t).d1.normalize();
-                    let d = along * if h % 2 == 0 { 1.0 } else { -1.0 };
+                    let d = along * if h.is_multiple_of(2) { 1.0 } else { -1.0 };
                     let n = normal_at(std::slice::from_ref(&piece), t, V3::cst(along)).val();
                     turning += angle_about(n, prev, d);
                     prev = d;
@@ -469,7 +474,7 @@ impl Topology {
         for k in 0..m {
             let h = lp[(start + k) % m];
             let e = &self.edges[h / 2];
-            let (ts, te) = if h % 2 == 0 {
+            let (ts, te) = if h.is_multiple_of(2) {
                 (e.t0, e.t1)
             } else {
                 (e.t1, e.t0)
