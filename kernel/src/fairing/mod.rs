@@ -7,10 +7,14 @@
 //! Choices the paper leaves open (stated here and tested):
 //! * curvature signs: positive where the surface bends away from its normal
 //!   (a unit sphere with outward normals has H = 1, K = 1);
-//! * the curvature estimator: a quadric through the point fitted to its
-//!   2-ring (chosen by measurement against the 1-ring on irregular meshes);
-//!   the fairing step fits the 1-ring (cheap, and the goal constraint
-//!   removes one unknown);
+//! * the curvature estimator: a cubic jet through the point fitted to its
+//!   2-ring in the local axes (chosen by measurement against the 1-ring
+//!   quadric on irregular meshes); the fairing step fits the 1-ring with a
+//!   quadric (cheap, and the goal constraint removes one unknown);
+//! * goals are in mean curvature only (Gaussian goals were tried and refused,
+//!   see [`iterate`]);
+//! * the scheme: [`fair`] point by point as the paper, [`fair_implicit`] the
+//!   same equations solved per sweep for all points at once;
 //! * boundary goals: measured at the boundary points, spread harmonically;
 //! * convergence: the largest move of a sweep below 1e-10 of the mesh size.
 
