@@ -27,6 +27,10 @@
 //!   shape groups and passing-points nets, meshed by dual contouring.
 //! * [`body`] — Coons bodies (paper 002): B-spline volumes, Coons bodies 0/1/2,
 //!   lattices, interior modelling, free-form deformation, metamorphosis.
+//! * [`network`] — styling-curve networks (paper 004): meetings and faces found
+//!   automatically, cross-boundary ribbons, G1 n-sided patches with tuning handles.
+//! * [`fairing`] — point meshes sampled from patches, curvature fairness measures
+//!   by local quadric fits, iterative fairing toward goals, B-spline refit.
 
 pub mod analysis;
 pub mod body;
@@ -35,7 +39,9 @@ pub mod curve_design;
 pub mod design;
 pub mod dsm;
 pub mod energy;
+pub mod fairing;
 pub mod icon;
+pub mod network;
 pub mod product;
 pub mod quadrature;
 pub mod solve;

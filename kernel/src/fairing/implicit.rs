@@ -1,0 +1,185 @@
+//! The iterative scheme with each sweep solved globally: the same
+//! equations as [`super::iterate::fair`] — every interior point on the
+//! normal line through its pseudo-centroid (two tangential equations) at
+//! the height of its 1-ring's goal-constrained quadric (one normal
+//! equation) — but with the frames, the fits' weights and the tangential
+//! coordinates frozen at the current positions, the equations are linear
+//! in the new positions and are solved for all points at once (sparse LU,
+//! faer). The frames are then refitted and the solve repeated until no
+//! point moves more than the threshold. A local sweep only spreads a
+//! correction one ring per pass, so it needs O(n) sweeps on an n × n
+//! mesh; the global solve needs a handful. Same fixed point, same
+//! options, progress, cancellation and untouched boundary.
+//!
+//! The normal equation: the constrained fit's height at the centroid is
+//! linear in the neighbours' heights, f = Σ_j α_j z_j + β (α, β from one
+//! 7 × 7 KKT solve with the unit vector e_f), so
+//! n·q_i − Σ_j (α_j + (1 − Σα)/m) n·q_j = β.
+
+use faer::prelude::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use glam::DVec3;
+
+use super::error::FairingError;
+use super::iterate::{Control, FairingOptions, FairingReport, Progress};
+use super::local_axes::{LocalAxes, fit_axes, pseudo_centroid};
+use super::mesh::PointMesh;
+use super::quadric::{Measure, goal_weights};
+
+/// Fairs `mesh` toward `goals` (mean curvature, one per point) by global
+/// sweeps.
+pub fn fair_implicit(
+    mesh: &mut PointMesh,
+    goals: &[f64],
+    options: &FairingOptions,
+    mut progress: impl FnMut(&Progress) -> Control,
+) -> Result<FairingReport, FairingError> {
+    super::iterate::validate(mesh, goals, options)?;
+    if options.measure != Measure::Mean {
+        return Err(FairingError::BadValue(
+            "goals must be in mean curvature".into(),
+        ));
+    }
+    let threshold = options.tolerance * super::iterate::size(mesh);
+    let interior: Vec<usize> = (0..mesh.len()).filter(|&i| !mesh.boundary[i]).collect();
+    let mut index = vec![usize::MAX; mesh.len()];
+    for (k, &i) in interior.iter().enumerate() {
+        index[i] = k;
+    }
+    let original = mesh.points.clone();
+    let mut normals = mesh.triangle_normals();
+    let mut history = Vec::new();
+    let mut converged = false;
+    let dim = 3 * interior.len();
+    let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+    let mut rhs = faer::Mat::<f64>::zeros(dim, 1);
+    let mut local = Vec::new();
+    let mut alpha = Vec::new();
+    for iteration in 1..=options.max_iterations {
+        trip.clear();
+        for (k, &i) in interior.iter().enumerate() {
+            let ring = mesh.ring1(i);
+            let m = ring.len() as f64;
+            let pts = ring.iter().map(|&j| mesh.points[j as usize]);
+            let axes = fit_axes(
+                mesh.points[i],
+                pts.clone().chain(std::iter::once(mesh.points[i])),
+                normals[i],
+            );
+            normals[i] = axes.z;
+            let c = pseudo_centroid(pts.clone());
+            let at_c = LocalAxes { origin: c, ..axes };
+            local.clear();
+            local.extend(pts.map(|p| at_c.local(p)));
+            let Some(beta) = goal_weights(&local, goals[i], &mut alpha) else {
+                let neighbours = ring.len();
+                mesh.points = original;
+                return Err(FairingError::TooFewNeighbours {
+                    point: i,
+                    neighbours,
+                    needed: 4,
+                });
+            };
+            let s: f64 = alpha.iter().sum();
+            let rows = [(axes.x, 0.0), (axes.y, 0.0), (axes.z, beta)];
+            for (a, (dir, b)) in rows.iter().enumerate() {
+                let r = 3 * k + a;
+                let mut value = *b;
+                for c in 0..3 {
+                    trip.push(Triplet::new(r, 3 * k + c, dir[c]));
+                }
+                for (jj, &j) in ring.iter().enumerate() {
+                    let j = j as usize;
+                    let w = if a == 2 {
+                        alpha[jj] + (1.0 - s) / m
+                    } else {
+                        1.0 / m
+                    };
+                    if mesh.boundary[j] {
+                        value += w * dir.dot(mesh.points[j]);
+                    } else {
+                        for c in 0..3 {
+                            trip.push(Triplet::new(r, 3 * index[j] + c, -w * dir[c]));
+                        }
+                    }
+                }
+                rhs[(r, 0)] = value;
+            }
+        }
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &trip)
+            .map_err(|e| FairingError::Solve(format!("{e:?}")))?;
+        let lu = match a.sp_lu() {
+            Ok(lu) => lu,
+            Err(e) => {
+                mesh.points = original;
+                return Err(FairingError::Solve(format!("{e:?}")));
+            }
+        };
+        let x = lu.solve(&rhs);
+        let mut max_move = 0.0f64;
+        for (k, &i) in interior.iter().enumerate() {
+            let q = DVec3::new(x[(3 * k, 0)], x[(3 * k + 1, 0)], x[(3 * k + 2, 0)]);
+            max_move = max_move.max((q - mesh.points[i]).length());
+            mesh.points[i] = mesh.points[i] + (q - mesh.points[i]) * options.relaxation;
+        }
+        history.push(max_move);
+        if !max_move.is_finite() {
+            mesh.points = original;
+            return Err(FairingError::Solve(format!(
+                "diverged at sweep {iteration}"
+            )));
+        }
+        let p = Progress {
+            iteration,
+            max_move,
+            threshold,
+        };
+        if progress(&p) == Control::Cancel {
+            mesh.points = original;
+            return Err(FairingError::Cancelled {
+                iterations: iteration,
+            });
+        }
+        if max_move <= threshold {
+            converged = true;
+            break;
+        }
+    }
+    Ok(FairingReport {
+        iterations: history.len(),
+        converged,
+        history,
+    })
+}
+
+/// The baseline: uniform Laplacian smoothing solved to its fixed point in
+/// one sparse solve (each interior point the mean of its 1-ring).
+pub fn laplacian_implicit(mesh: &mut PointMesh) -> Result<(), FairingError> {
+    let interior: Vec<usize> = (0..mesh.len()).filter(|&i| !mesh.boundary[i]).collect();
+    let mut index = vec![usize::MAX; mesh.len()];
+    for (k, &i) in interior.iter().enumerate() {
+        index[i] = k;
+    }
+    let n = interior.len();
+    let mut lower = Vec::new();
+    let mut rhs = vec![vec![0.0; n]; 3];
+    for (k, &i) in interior.iter().enumerate() {
+        let ring = mesh.ring1(i);
+        lower.push((k, k, ring.len() as f64));
+        for &j in ring {
+            let j = j as usize;
+            if mesh.boundary[j] {
+                rhs[0][k] += mesh.points[j].x;
+                rhs[1][k] += mesh.points[j].y;
+                rhs[2][k] += mesh.points[j].z;
+            } else if index[j] < k {
+                lower.push((k, index[j], -1.0));
+            }
+        }
+    }
+    let x = super::sparse::solve_spd(n, &lower, &rhs)?;
+    for (k, &i) in interior.iter().enumerate() {
+        mesh.points[i] = DVec3::new(x[0][k], x[1][k], x[2][k]);
+    }
+    Ok(())
+}
