@@ -4,6 +4,7 @@
 //! Every message is a JSON object with a `type` tag and an optional `req`
 //! number that the server echoes in its `ack` or `error`.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ErrorCode, ProtocolError};
@@ -12,7 +13,7 @@ use crate::parts::{PartMaterial, PartSpec, RelationSpec};
 use crate::types::{Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Role, Vec3};
 
 /// A client message with its optional request number.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct ClientEnvelope {
     /// Echoed in the reply (`ack` or `error`) so the client can match them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -23,7 +24,7 @@ pub struct ClientEnvelope {
 }
 
 /// Everything a client may ask of the server.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ClientMessage {
     /// The first message of a connection.

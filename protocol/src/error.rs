@@ -1,11 +1,12 @@
 //! Stable error codes (serialised as snake_case strings, never renumbered)
 //! and the error type of decoding and validation.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 /// Why a request failed. Clients may match on these; they never change meaning.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ErrorCode {
     /// The hello's protocol version is not the server's.
@@ -58,6 +59,10 @@ pub enum ErrorCode {
     /// was stored, the server keeps the design in memory and retries; retry
     /// the request once space is back.
     Storage,
+    /// The client sent more messages than its rate limit allows
+    /// ([`crate::limits::CONTROL_RATE`], [`crate::limits::STREAM_RATE`]):
+    /// the message was dropped and changed nothing; slow down.
+    RateLimited,
 }
 
 /// A message that could not be decoded or failed validation.

@@ -16,6 +16,8 @@
 //! * [`server`] — server → client events ([`ServerMessage`]).
 //! * [`validate`] — checks every client message before it touches state.
 //! * [`frame`] — the binary geometry frame ([`GeometryFrame`]).
+//! * [`schema`] — the JSON Schema of every message, generated from the
+//!   types (checked in as `protocol/schema/protocol.schema.json`).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
@@ -25,6 +27,7 @@ pub mod error;
 pub mod frame;
 pub mod limits;
 pub mod parts;
+pub mod schema;
 pub mod server;
 pub mod types;
 pub mod validate;

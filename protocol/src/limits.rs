@@ -18,3 +18,18 @@ pub const MAX_GRID: usize = 2048;
 pub const MAX_FRAME_ICONS: usize = 65_536;
 /// Largest magnitude accepted for a coordinate or material parameter.
 pub const MAX_MAGNITUDE: f64 = 1e9;
+
+/// Sustained rate of control messages (everything but `drag`,
+/// `device_sample` and `presence`) one connection may send, per second.
+pub const CONTROL_RATE: u32 = 100;
+/// Control messages one connection may send in a burst above
+/// [`CONTROL_RATE`].
+pub const CONTROL_BURST: u32 = 200;
+/// Sustained rate of stream messages (`drag`, `device_sample`, `presence`)
+/// one connection may send, per second: far above any device or display.
+pub const STREAM_RATE: u32 = 1000;
+/// Stream messages one connection may send in a burst above [`STREAM_RATE`].
+pub const STREAM_BURST: u32 = 1000;
+/// Most `rate_limited` errors one connection gets per second (the rest of
+/// its excess messages are dropped without a reply).
+pub const RATE_LIMITED_ERRORS_PER_SEC: u32 = 10;

@@ -9,12 +9,13 @@
 //! [`PartShape`] (and of [`PartMaterial`] where it needs its own material);
 //! a new relation one new variant of [`RelationSpec`].
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::types::{Icon, Knots, Material, SurfaceData, Vec3};
 
 /// A clamped B-spline curve in model space.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CurveData {
     /// Degree and knots (control points + degree + 1 of them).
@@ -24,7 +25,7 @@ pub struct CurveData {
 }
 
 /// A part's geometry, tagged by its kind.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum PartShape {
     /// A tensor-product B-spline surface sculpted under the thin-plate
@@ -51,7 +52,7 @@ impl PartShape {
 }
 
 /// The kinds of part.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PartKind {
     /// A B-spline surface.
@@ -61,7 +62,7 @@ pub enum PartKind {
 }
 
 /// The material of a curve part (paper 003, eq. 1): stretch α and bend β.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CurveMaterial {
     /// Stretch (weight of |c'|²).
@@ -72,7 +73,7 @@ pub struct CurveMaterial {
 
 /// A part's material: six coefficients for a surface, two for a curve. The
 /// JSON carries no tag; the fields say which.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 pub enum PartMaterial {
     /// A surface's thin-plate material.
@@ -82,7 +83,7 @@ pub enum PartMaterial {
 }
 
 /// One part as clients see it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Part {
     /// Stable id within the design.
@@ -106,7 +107,7 @@ pub struct Part {
 }
 
 /// What a new part should be.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PartSpec {
     /// Its name (unique within the design).
@@ -123,7 +124,7 @@ pub struct PartSpec {
 
 /// A boundary edge of a surface part, named by the parameter held fixed
 /// along it (`u_min`: u = u0, running along v).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Edge {
     /// u = u0.
@@ -137,7 +138,7 @@ pub enum Edge {
 }
 
 /// An edge of a part.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EdgeRef {
     /// The part.
@@ -147,7 +148,7 @@ pub struct EdgeRef {
 }
 
 /// How two joined edges meet.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Continuity {
     /// Position: the edges coincide.
@@ -157,7 +158,7 @@ pub enum Continuity {
 }
 
 /// What a relation ties together.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum RelationSpec {
     /// Two surface edges held together by the solver; pulling either part
@@ -193,7 +194,7 @@ pub enum RelationSpec {
 }
 
 /// A parameter line of a surface part.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum IsoLine {
     /// u = this value, running along v.
@@ -203,7 +204,7 @@ pub enum IsoLine {
 }
 
 /// A relation as clients see it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Relation {
     /// Stable id within the design.
     pub id: u64,

@@ -1,6 +1,7 @@
 //! Server → client events, sent as JSON text; geometry goes in binary
 //! frames ([`crate::frame`]).
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::error::ErrorCode;
@@ -8,7 +9,7 @@ use crate::parts::{Part, PartMaterial, Relation};
 use crate::types::{Access, DesignInfo, DesignTokens, Icon, PresenceEntry, Vec3, VersionInfo};
 
 /// Everything the server tells a client.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ServerMessage {
     /// The hello was accepted.

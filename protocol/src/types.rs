@@ -1,13 +1,14 @@
 //! Value types that messages carry: surfaces, materials, icons, versions,
 //! designs and presence. Vectors are `[f64; 3]` (JSON arrays), ids are u64.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// A point or vector in model space.
 pub type Vec3 = [f64; 3];
 
 /// A clamped B-spline knot vector with its degree.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Knots {
     /// The degree (≥ 1).
@@ -18,7 +19,7 @@ pub struct Knots {
 
 /// A tensor-product B-spline surface: knots and a row-major control grid
 /// (`index = i * nv + j`, i along u).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceData {
     /// Knots along u (nu control points).
@@ -35,7 +36,7 @@ pub struct SurfaceData {
 
 /// A curve in the surface's (u,v) domain: a clamped B-spline whose control
 /// points are (u, v) pairs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct UvCurve {
     /// Degree and knots.
@@ -45,7 +46,7 @@ pub struct UvCurve {
 }
 
 /// The thin-plate material: stretch α and bend β coefficients.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
     /// Stretch along u.
@@ -64,7 +65,7 @@ pub struct Material {
 
 /// Where an icon sits on its part: `point`, `curve` and `region` on a
 /// surface, `param` and `span` on a curve.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Anchor {
     /// A point at (u, v).
@@ -107,7 +108,7 @@ pub enum Anchor {
 }
 
 /// Which derivative a derivative constraint fixes (paper 003's labels).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 pub enum Derivative {
     /// w_u.
     R,
@@ -122,7 +123,7 @@ pub enum Derivative {
 }
 
 /// What an icon does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Role {
     /// A load: dragging it applies a spring force.
@@ -139,7 +140,7 @@ pub enum Role {
 }
 
 /// An icon's state (paper 003).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum IconState {
     /// Bound to a sensor or a pointer; moving it drives the deformation.
@@ -151,7 +152,7 @@ pub enum IconState {
 }
 
 /// One icon as clients see it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Icon {
     /// Stable id within the design.
@@ -174,7 +175,7 @@ pub struct Icon {
 }
 
 /// What a new icon should be.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct IconSpec {
     /// Where it sits.
@@ -194,7 +195,7 @@ fn passive() -> IconState {
 }
 
 /// A committed version of a design.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct VersionInfo {
     /// 1, 2, 3, … per design.
@@ -208,7 +209,7 @@ pub struct VersionInfo {
 }
 
 /// A design in a listing.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignInfo {
     /// Its id.
@@ -220,7 +221,7 @@ pub struct DesignInfo {
 }
 
 /// What a connection may do.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Access {
     /// May edit.
@@ -232,7 +233,7 @@ pub enum Access {
 }
 
 /// What kind of program a client is.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ClientKind {
     /// The web client.
@@ -245,7 +246,7 @@ pub enum ClientKind {
 }
 
 /// The three access tokens of a design (256 random bits each, hex).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignTokens {
     /// Full access.
@@ -257,7 +258,7 @@ pub struct DesignTokens {
 }
 
 /// One connected client, for presence.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PresenceEntry {
     /// Its client id.
@@ -275,7 +276,7 @@ pub struct PresenceEntry {
 }
 
 /// A device's condition, as the bridge reports it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DeviceCondition {
     /// Open and streaming.

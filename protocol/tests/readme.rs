@@ -2,29 +2,13 @@
 //! to be and survives a serialise → parse round trip, and every message type
 //! has an example: the README and the code cannot drift apart.
 
+mod common;
+
 use vsculpt_protocol::client::CLIENT_TYPES;
 use vsculpt_protocol::{ServerMessage, parse_client};
 
 fn blocks(tag: &str) -> Vec<String> {
-    let text = include_str!("../README.md");
-    let open = format!("```json {tag}");
-    let mut out = Vec::new();
-    let mut current: Option<String> = None;
-    for line in text.lines() {
-        match &mut current {
-            None if line.trim() == open => current = Some(String::new()),
-            Some(body) if line.trim() == "```" => {
-                out.push(std::mem::take(body));
-                current = None;
-            }
-            Some(body) => {
-                body.push_str(line);
-                body.push('\n');
-            }
-            None => {}
-        }
-    }
-    out
+    common::readme_blocks(tag)
 }
 
 #[test]

@@ -111,6 +111,7 @@ fn code_name(code: vsculpt_protocol::ErrorCode) -> &'static str {
         C::Internal => "internal",
         C::Unavailable => "unavailable",
         C::Storage => "storage",
+        C::RateLimited => "rate_limited",
     }
 }
 

@@ -33,6 +33,13 @@ pub struct Cli {
     /// server's own whose pages may use the API and WebSocket; repeatable.
     #[arg(long = "allow-origin")]
     pub allow_origin: Vec<String>,
+    /// Serve HTTPS and WSS with this PEM certificate chain (needs
+    /// `--tls-key`).
+    #[arg(long, requires = "tls_key")]
+    pub tls_cert: Option<PathBuf>,
+    /// The PEM private key of `--tls-cert`.
+    #[arg(long, requires = "tls_cert")]
+    pub tls_key: Option<PathBuf>,
     /// Logging: `--log-file PATH` (rotated daily), `--log-format text|json`.
     #[command(flatten)]
     pub log: vsculpt_logging::LogArgs,
@@ -85,6 +92,8 @@ pub struct Config {
     /// Set `TCP_NODELAY` on accepted connections (always, except in the
     /// latency bench's same-run baseline).
     pub tcp_nodelay: bool,
+    /// Serve over TLS with these files (plain HTTP when `None`).
+    pub tls: Option<crate::tls::TlsFiles>,
 }
 
 impl Config {
@@ -100,6 +109,7 @@ impl Config {
             export_max_vertices: crate::export::DEFAULT_MAX_EXPORT_VERTICES,
             allowed_origins: Vec::new(),
             tcp_nodelay: true,
+            tls: None,
         }
     }
 }
@@ -110,6 +120,12 @@ impl From<&Cli> for Config {
         c.demo = !cli.no_demo;
         c.export_max_vertices = cli.export_max_vertices;
         c.allowed_origins = cli.allow_origin.clone();
+        if let (Some(cert), Some(key)) = (&cli.tls_cert, &cli.tls_key) {
+            c.tls = Some(crate::tls::TlsFiles {
+                cert: cert.clone(),
+                key: key.clone(),
+            });
+        }
         c
     }
 }

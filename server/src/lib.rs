@@ -20,5 +20,6 @@ pub mod rejection;
 pub mod server;
 pub mod shutdown;
 pub mod store;
+pub mod tls;
 pub mod web;
 pub mod ws;

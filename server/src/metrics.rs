@@ -20,6 +20,7 @@ pub struct Metrics {
     frames: AtomicU64,
     frame_bytes: AtomicU64,
     errors: AtomicU64,
+    rate_limited: AtomicU64,
     actor_panics: AtomicU64,
     actor_restarts: AtomicU64,
     store_write_errors: AtomicU64,
@@ -47,6 +48,7 @@ impl Metrics {
             frames: AtomicU64::new(0),
             frame_bytes: AtomicU64::new(0),
             errors: AtomicU64::new(0),
+            rate_limited: AtomicU64::new(0),
             actor_panics: AtomicU64::new(0),
             actor_restarts: AtomicU64::new(0),
             store_write_errors: AtomicU64::new(0),
@@ -101,6 +103,11 @@ impl Metrics {
     /// An error message went to a client.
     pub fn error_sent(&self) {
         self.errors.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// A client message was dropped for exceeding its rate limit.
+    pub fn rate_limited(&self) {
+        self.rate_limited.fetch_add(1, Ordering::Relaxed);
     }
 
     /// A design actor panicked.
@@ -210,6 +217,12 @@ impl Metrics {
             "counter",
             "Error messages sent to clients.",
             self.errors.load(Ordering::Relaxed).to_string(),
+        );
+        metric(
+            "vsculpt_rate_limited_total",
+            "counter",
+            "Client messages dropped for exceeding the per-connection rate limit.",
+            self.rate_limited.load(Ordering::Relaxed).to_string(),
         );
         metric(
             "vsculpt_actor_panics_total",

@@ -36,6 +36,9 @@ pub enum ServerError {
     /// Another server owns the data directory.
     #[error("{0}")]
     Locked(#[from] crate::store::lock::LockError),
+    /// The TLS certificate or key could not be loaded.
+    #[error("{0}")]
+    Tls(#[from] crate::tls::TlsError),
 }
 
 /// How long open connections get to close after the shutdown signal.
@@ -50,6 +53,7 @@ pub struct Server {
     shared: Arc<Shared>,
     listener: TcpListener,
     addr: SocketAddr,
+    tls: Option<Arc<tokio_rustls::rustls::ServerConfig>>,
 }
 
 fn read_or_create_admin_token(config: &Config) -> Result<String, ServerError> {
@@ -80,6 +84,8 @@ impl Server {
         shutdown: Shutdown,
     ) -> Result<Self, ServerError> {
         let addr = listener.local_addr()?;
+        // A bad certificate or key stops the start, before anything else.
+        let tls = config.tls.as_ref().map(crate::tls::load).transpose()?;
         let lock = crate::store::lock::DataDirLock::acquire(&config.data_dir)?;
         let dir = config.data_dir.clone();
         let store = Arc::new(
@@ -125,6 +131,7 @@ impl Server {
             shared,
             listener,
             addr,
+            tls,
         })
     }
 
@@ -150,8 +157,13 @@ impl Server {
 
     /// The start banner, one line each, exactly as API.md §4 gives it.
     pub fn links(&self) -> Result<String, ServerError> {
-        let base = format!("http://{}", self.addr);
-        let ws = format!("ws://{}", self.addr);
+        let (http, ws) = if self.tls.is_some() {
+            ("https", "wss")
+        } else {
+            ("http", "ws")
+        };
+        let base = format!("{http}://{}", self.addr);
+        let ws = format!("{ws}://{}", self.addr);
         let mut out = format!("vsculpt-server listening on {base}\nweb client: {base}/\n");
         for d in self.designs()? {
             // Escaped (quotes, line breaks, control characters) so a name
@@ -184,14 +196,33 @@ impl Server {
         // once: without TCP_NODELAY, Nagle holds each one until the peer's
         // delayed ACK (~40 ms on Linux) when a previous write is unacked.
         let nodelay = shared.config.tcp_nodelay;
-        let listener = self.listener.tap_io(move |tcp| {
-            if let Err(e) = tcp.set_nodelay(nodelay) {
-                tracing::debug!("cannot set TCP_NODELAY on an accepted connection: {e}");
-            }
-        });
-        let serving = axum::serve(listener, router)
-            .with_graceful_shutdown(async move { stop.wait().await })
-            .into_future();
+        let graceful = async move { stop.wait().await };
+        let serving: std::pin::Pin<Box<dyn Future<Output = std::io::Result<()>> + Send>> =
+            match &self.tls {
+                Some(config) => {
+                    let listener =
+                        crate::tls::TlsListener::new(self.listener, config.clone(), nodelay)?;
+                    Box::pin(
+                        axum::serve(listener, router)
+                            .with_graceful_shutdown(graceful)
+                            .into_future(),
+                    )
+                }
+                None => {
+                    let listener = self.listener.tap_io(move |tcp| {
+                        if let Err(e) = tcp.set_nodelay(nodelay) {
+                            tracing::debug!(
+                                "cannot set TCP_NODELAY on an accepted connection: {e}"
+                            );
+                        }
+                    });
+                    Box::pin(
+                        axum::serve(listener, router)
+                            .with_graceful_shutdown(graceful)
+                            .into_future(),
+                    )
+                }
+            };
         // WebSocket tasks close on the signal; clients that do not answer
         // the close get DRAIN before the server stops anyway, and the design
         // actors get STOP_ACTORS to flush: the process ends well within the

@@ -5,6 +5,7 @@
 //! edit) gets an error reply with a stable code; the connection and the
 //! server stay up and the design is unchanged.
 
+use super::rate::{self, RateLimiter};
 use super::writer::{self, Out};
 use crate::app::{AppState, Caller};
 use crate::convert::{self, Inbound, WireError};
@@ -40,6 +41,7 @@ struct Session {
     role: Role,
     handle: DesignHandle,
     out: mpsc::Sender<Out>,
+    limiter: RateLimiter,
 }
 
 /// Close code 1007: a text message that is not UTF-8 (RFC 6455 §7.4.1).
@@ -258,6 +260,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         role,
         handle,
         out: out_tx,
+        limiter: RateLimiter::new(std::time::Instant::now()),
     };
     session.read(stream).await;
     let _ = session
@@ -335,7 +338,30 @@ impl Session {
                     .await;
                 continue;
             }
-            match convert::decode(text.as_str()) {
+            let decoded = convert::decode(text.as_str());
+            let class = match &decoded {
+                Ok((
+                    _,
+                    Inbound::Command(crate::design::Command::Drag { .. })
+                    | Inbound::Pointer(_)
+                    | Inbound::DeviceSample { .. },
+                )) => rate::Class::Stream,
+                _ => rate::Class::Control,
+            };
+            match self.limiter.admit(class, std::time::Instant::now()) {
+                rate::Verdict::Admit => {}
+                verdict => {
+                    self.state.metrics.rate_limited();
+                    if verdict == rate::Verdict::Refuse {
+                        let id = match &decoded {
+                            Ok((id, _)) | Err((id, _)) => *id,
+                        };
+                        self.error(id, rate_limited(class)).await;
+                    }
+                    continue;
+                }
+            }
+            match decoded {
                 Ok((id, inbound)) => self.dispatch(id, inbound).await,
                 Err((id, e)) => self.error(id, e).await,
             }
@@ -511,6 +537,23 @@ impl Session {
             Err(e) => self.error(id, WireError::from(e)).await,
         }
     }
+}
+
+/// The reply to a message over its rate limit.
+fn rate_limited(class: rate::Class) -> WireError {
+    use vsculpt_protocol::limits::{CONTROL_BURST, CONTROL_RATE, STREAM_BURST, STREAM_RATE};
+    let (what, rate, burst) = match class {
+        rate::Class::Control => ("control messages", CONTROL_RATE, CONTROL_BURST),
+        rate::Class::Stream => (
+            "drag, device and pointer messages",
+            STREAM_RATE,
+            STREAM_BURST,
+        ),
+    };
+    WireError::new(
+        vsculpt_protocol::ErrorCode::RateLimited,
+        format!("over the limit of {rate} {what} a second (bursts of {burst}): dropped, slow down"),
+    )
 }
 
 fn forbidden(role: Role) -> CommandError {

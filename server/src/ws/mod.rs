@@ -1,9 +1,10 @@
 //! The WebSocket endpoint `/ws`: upgrade, then one task per connection
 //! ([`connection`]) that authenticates the hello, joins the design's actor
 //! and runs a reader and a writer ([`writer`]: latest-wins geometry,
-//! ordered events, resync on lag).
+//! ordered events, resync on lag; [`rate`]: per-client message limits).
 
 pub mod connection;
+pub mod rate;
 pub mod writer;
 
 use crate::app::AppState;

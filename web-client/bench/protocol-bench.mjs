@@ -1,0 +1,322 @@
+// An outside client of the vsculpt WebSocket protocol, written from
+// protocol/README.md (messages, binary frame layout) and server/README.md
+// (the start banner, POST /api/designs) alone: it shares no code with the
+// server or the web client. It starts the real server binary over a fresh
+// data directory and measures, on loopback:
+//
+//   join   hello sent → snapshot received, over sequential joins (p50/p99)
+//   own    drag sent → the dragging editor's own geometry frame (p50/p99),
+//          one drag every 1/60 s
+//   fanout 50 viewers while the editor drags at 60 Hz on 81 × 159: drag sent
+//          → each viewer's frame of that drag (matched by the revision in
+//          the editor's icon_feedback), p50/p99, and frames/s per viewer
+//   soak   300 designs; rounds of 500 clients joining (10 at a time) a random
+//          design and leaving; per round the server's RSS and join p50/p99
+//
+// Node's WebSocket (undici) acks like a browser: no early ACKs, Nagle on.
+//
+// Run (Node ≥ 20):
+//   cargo build --release -p vsculpt-server
+//   node --experimental-websocket web-client/bench/protocol-bench.mjs target/release/vsculpt-server
+// Optional: BENCH_SOAK_ROUNDS (default 6), BENCH_JOINS (200), BENCH_DRAGS (300),
+// BENCH_VIEWERS (50), BENCH_FANOUT_SECONDS (5).
+
+import { spawn } from 'node:child_process';
+import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { performance } from 'node:perf_hooks';
+
+const bin = process.argv[2] ?? 'target/release/vsculpt-server';
+const env = (k, d) => Number(process.env[k] ?? d);
+const JOINS = env('BENCH_JOINS', 200);
+const DRAGS = env('BENCH_DRAGS', 300);
+const VIEWERS = env('BENCH_VIEWERS', 50);
+const FANOUT_SECONDS = env('BENCH_FANOUT_SECONDS', 5);
+const SOAK_ROUNDS = env('BENCH_SOAK_ROUNDS', 6);
+const SOAK_DESIGNS = 300;
+const SOAK_CLIENTS = 500;
+const PROTOCOL = 2;
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const pct = (xs, p) => {
+  const s = [...xs].sort((a, b) => a - b);
+  return s[Math.min(s.length - 1, Math.ceil((p / 100) * s.length) - 1)];
+};
+const fmt = (x) => x.toFixed(2);
+
+// ---- the server ----------------------------------------------------------
+
+async function startServer() {
+  const data = mkdtempSync(join(tmpdir(), 'vsculpt-node-bench-'));
+  const child = spawn(bin, ['--listen', '127.0.0.1:0', '--data', data, '--no-demo'], {
+    stdio: ['ignore', 'pipe', 'inherit'],
+  });
+  let out = '';
+  const addr = await new Promise((resolve, reject) => {
+    child.on('exit', (c) => reject(new Error(`server exited ${c}`)));
+    child.stdout.on('data', (b) => {
+      out += b;
+      const m = out.match(/listening on http:\/\/(\S+)/);
+      if (m) resolve(m[1]);
+    });
+  });
+  const admin = readFileSync(join(data, 'admin-token'), 'utf8').trim();
+  return { child, addr, admin, data };
+}
+
+function rssMiB(pid) {
+  const s = readFileSync(`/proc/${pid}/status`, 'utf8');
+  return Number(s.match(/VmRSS:\s+(\d+)/)[1]) / 1024;
+}
+
+async function createDesign(srv, name, nu, nv) {
+  const body = nu ? { name, nu, nv } : { name };
+  const r = await fetch(`http://${srv.addr}/api/designs`, {
+    method: 'POST',
+    headers: { authorization: `Bearer ${srv.admin}`, 'content-type': 'application/json' },
+    body: JSON.stringify(body),
+  });
+  if (r.status !== 201) throw new Error(`create design: ${r.status} ${await r.text()}`);
+  return r.json();
+}
+
+// ---- a protocol client -----------------------------------------------------
+
+/** The header fields of a binary geometry frame (README, "Binary geometry frame"). */
+function frameHeader(buf) {
+  const dv = new DataView(buf);
+  const magic = String.fromCharCode(...new Uint8Array(buf, 0, 4));
+  if (magic !== 'VSGF') throw new Error('not a frame');
+  return {
+    kind: dv.getUint8(4),
+    version: dv.getUint8(5),
+    flags: dv.getUint16(6, true),
+    design: Number(dv.getBigUint64(8, true)),
+    part: Number(dv.getBigUint64(16, true)),
+    revision: Number(dv.getBigUint64(24, true)),
+    nu: dv.getUint32(32, true),
+    nv: dv.getUint32(36, true),
+  };
+}
+
+class Client {
+  constructor(addr) {
+    this.ws = new WebSocket(`ws://${addr}/ws`);
+    this.ws.binaryType = 'arraybuffer';
+    this.onText = () => {};
+    this.onFrame = () => {};
+    this.closed = false;
+    this.ws.onmessage = (ev) => {
+      const now = performance.now();
+      if (typeof ev.data === 'string') this.onText(JSON.parse(ev.data), now);
+      else this.onFrame(frameHeader(ev.data), now);
+    };
+    this.ws.onclose = () => {
+      this.closed = true;
+    };
+  }
+  open() {
+    return new Promise((resolve, reject) => {
+      this.ws.onopen = resolve;
+      this.ws.onerror = (e) => reject(new Error(`websocket error ${e.message ?? ''}`));
+    });
+  }
+  send(msg) {
+    this.ws.send(JSON.stringify(msg));
+  }
+  /** Waits for the first text message satisfying `pred`. */
+  waitText(pred) {
+    return new Promise((resolve) => {
+      const prev = this.onText;
+      this.onText = (m, t) => {
+        prev(m, t);
+        if (pred(m)) {
+          this.onText = prev;
+          resolve([m, t]);
+        }
+      };
+    });
+  }
+  /** Opens, says hello, resolves at the snapshot with [snapshot, ms from hello]. */
+  async join(design, token, name) {
+    await this.open();
+    const got = this.waitText((m) => m.type === 'snapshot' || m.type === 'error');
+    const t0 = performance.now();
+    this.send({ type: 'hello', protocol: PROTOCOL, token, design, client_name: name, client_kind: 'tool' });
+    const [m, t1] = await got;
+    if (m.type === 'error') throw new Error(`join refused: ${m.code} ${m.message}`);
+    return [m, t1 - t0];
+  }
+  close() {
+    this.ws.close();
+  }
+}
+
+// ---- the benches -------------------------------------------------------------
+
+async function benchJoin(srv, design, viewer) {
+  const times = [];
+  for (let k = 0; k < JOINS; k++) {
+    const c = new Client(srv.addr);
+    const [, ms] = await c.join(design.id, viewer, `joiner-${k}`);
+    times.push(ms);
+    c.close();
+  }
+  return times;
+}
+
+/** An editor holding a load icon at (0.5, 0.5) of part 1. */
+async function editorWithIcon(srv, design) {
+  const ed = new Client(srv.addr);
+  const [snap] = await ed.join(design.id, design.tokens.editor, 'bench-editor');
+  const part = snap.parts[0].id;
+  const ack = ed.waitText((m) => m.req === 1);
+  ed.send({ type: 'create_icon', part, req: 1, spec: { anchor: { kind: 'point', u: 0.5, v: 0.5 }, role: { kind: 'load' } } });
+  const [a] = await ack;
+  if (a.type !== 'ack') throw new Error(`create_icon: ${JSON.stringify(a)}`);
+  const grabbed = ed.waitText((m) => m.req === 2);
+  ed.send({ type: 'drag_start', part, icon: a.icon, req: 2 });
+  await grabbed;
+  return { ed, part, icon: a.icon };
+}
+
+async function benchOwnFrame(srv, design) {
+  const { ed, part, icon } = await editorWithIcon(srv, design);
+  let last = 0;
+  const times = [];
+  for (let k = 0; k < DRAGS; k++) {
+    const frame = new Promise((resolve) => {
+      ed.onFrame = (h, t) => {
+        if (h.part === part && h.revision > last && (h.flags & 1)) {
+          last = h.revision;
+          ed.onFrame = () => {};
+          resolve(t);
+        }
+      };
+    });
+    const t0 = performance.now();
+    ed.send({ type: 'drag', part, icon, xyz: [0.5, 0.5, 0.1 + 0.001 * (k % 100)] });
+    times.push((await frame) - t0);
+    await sleep(1000 / 60);
+  }
+  ed.close();
+  return times;
+}
+
+async function benchFanout(srv, design) {
+  const { ed, part, icon } = await editorWithIcon(srv, design);
+  const viewers = [];
+  for (let k = 0; k < VIEWERS; k++) {
+    const c = new Client(srv.addr);
+    await c.join(design.id, design.tokens.viewer, `viewer-${k}`);
+    viewers.push(c);
+  }
+  // Drag k asks for z = zk; icon_feedback names the revision that solved it.
+  const sentAt = new Map(); // requested z (string) → send time
+  const revisionSent = new Map(); // revision → send time
+  ed.onText = (m) => {
+    if (m.type === 'icon_feedback' && m.icon === icon) {
+      const t = sentAt.get(m.requested[2].toFixed(6));
+      if (t !== undefined) revisionSent.set(m.revision, t);
+    }
+  };
+  const arrivals = viewers.map(() => []); // [revision, time]
+  let measuring = false;
+  viewers.forEach((c, i) => {
+    c.onFrame = (h, t) => {
+      if (measuring && h.part === part) arrivals[i].push([h.revision, t]);
+    };
+  });
+  measuring = true;
+  const start = performance.now();
+  const n = Math.round(FANOUT_SECONDS * 60);
+  for (let k = 0; k < n; k++) {
+    const z = 0.1 + 0.0001 * k;
+    sentAt.set(z.toFixed(6), performance.now());
+    ed.send({ type: 'drag', part, icon, xyz: [0.5, 0.5, z] });
+    const next = start + ((k + 1) * 1000) / 60;
+    await sleep(Math.max(0, next - performance.now()));
+  }
+  await sleep(300);
+  measuring = false;
+  const seconds = (performance.now() - start - 300) / 1000;
+  const lat = [];
+  const fps = [];
+  for (const a of arrivals) {
+    fps.push(a.length / seconds);
+    for (const [rev, t] of a) {
+      const t0 = revisionSent.get(rev);
+      if (t0 !== undefined) lat.push(t - t0);
+    }
+  }
+  viewers.forEach((c) => c.close());
+  ed.close();
+  return { lat, fps, drags: n };
+}
+
+async function benchSoak(srv) {
+  const designs = [];
+  for (let k = 0; k < SOAK_DESIGNS; k++) designs.push(await createDesign(srv, `soak-${k}`));
+  const rounds = [];
+  let seed = 12345;
+  const rand = () => ((seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648);
+  for (let r = 0; r < SOAK_ROUNDS; r++) {
+    const joins = [];
+    const t0 = performance.now();
+    for (let k = 0; k < SOAK_CLIENTS; k += 10) {
+      await Promise.all(
+        Array.from({ length: 10 }, async (_, j) => {
+          const d = designs[Math.floor(rand() * designs.length)];
+          const token = (k + j) % 5 === 0 ? d.tokens.editor : d.tokens.viewer;
+          const c = new Client(srv.addr);
+          const [, ms] = await c.join(d.id, token, `soak-${r}-${k + j}`);
+          joins.push(ms);
+          // One request each, then leave.
+          const pong = c.waitText((m) => m.type === 'pong');
+          c.send({ type: 'ping', req: 1 });
+          await pong;
+          c.close();
+        }),
+      );
+    }
+    await sleep(500); // let the server drop the closed connections
+    rounds.push({
+      round: r + 1,
+      rss: rssMiB(srv.child.pid),
+      p50: pct(joins, 50),
+      p99: pct(joins, 99),
+      seconds: (performance.now() - t0) / 1000,
+    });
+  }
+  return rounds;
+}
+
+// ---- main ----------------------------------------------------------------------
+
+const srv = await startServer();
+try {
+  console.log(`server ${bin} on ${srv.addr}, pid ${srv.child.pid}`);
+  const big = await createDesign(srv, 'bench 81x159', 81, 159);
+  const join = await benchJoin(srv, big, big.tokens.viewer);
+  console.log(`join 81x159 (hello → snapshot), ${join.length} joins: p50 ${fmt(pct(join, 50))} ms, p99 ${fmt(pct(join, 99))} ms`);
+  const own = await benchOwnFrame(srv, big);
+  console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
+  const f = await benchFanout(srv, big);
+  console.log(
+    `${VIEWERS} viewers at 60 Hz on 81x159 (${f.drags} drags): drag → viewer frame p50 ${fmt(pct(f.lat, 50))} ms, ` +
+      `p99 ${fmt(pct(f.lat, 99))} ms over ${f.lat.length} frames; frames/s per viewer min ${fmt(Math.min(...f.fps))}, median ${fmt(pct(f.fps, 50))}`,
+  );
+  if (SOAK_ROUNDS > 0) {
+    const rss0 = rssMiB(srv.child.pid);
+    const rounds = await benchSoak(srv);
+    console.log(`soak: ${SOAK_DESIGNS} designs, ${SOAK_CLIENTS} clients joining and leaving per round; RSS before ${fmt(rss0)} MiB`);
+    for (const r of rounds) {
+      console.log(`  round ${r.round}: RSS ${fmt(r.rss)} MiB, join p50 ${fmt(r.p50)} ms, p99 ${fmt(r.p99)} ms, ${fmt(r.seconds)} s`);
+    }
+  }
+} finally {
+  srv.child.kill('SIGTERM');
+  await new Promise((r) => srv.child.on('exit', r));
+  rmSync(srv.data, { recursive: true, force: true });
+}
