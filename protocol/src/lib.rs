@@ -16,14 +16,18 @@
 //! * [`server`] — server → client events ([`ServerMessage`]).
 //! * [`validate`] — checks every client message before it touches state.
 //! * [`frame`] — the binary geometry frame ([`GeometryFrame`]).
+//! * [`dsm`] — a Density Spatial Model part's shape and its edits.
+//! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
 
 pub mod client;
+pub mod dsm;
 pub mod error;
 pub mod frame;
 pub mod limits;
+pub mod mesh_frame;
 pub mod parts;
 pub mod server;
 pub mod types;
@@ -31,8 +35,10 @@ pub mod validate;
 pub mod version;
 
 pub use client::{ClientEnvelope, ClientMessage, parse_client};
+pub use dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};
+pub use mesh_frame::MeshFrame;
 pub use parts::*;
 pub use server::ServerMessage;
 pub use types::*;
