@@ -259,8 +259,9 @@ pub enum ClientMessage {
     },
     /// Reshape a DSM part: add, move, resize or remove a primitive, set its
     /// density and reducing factor, move it to another group, or drag a net
-    /// node. Answered `ack` and a mesh frame (kind 3) of the part; a refused
-    /// edit changes nothing.
+    /// node. Meant to be answered `ack` and a mesh frame (kind 3) of the part;
+    /// today's server refuses it with `unsupported`. A refused edit changes
+    /// nothing.
     DsmEdit {
         /// The DSM part.
         part: u64,
