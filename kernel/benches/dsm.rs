@@ -2,10 +2,15 @@
 //! * `dsm_net_drag`: a node of a 20 × 20 passing-points net dragged → inverse
 //!   transformation (eqs. 8–11, 324 charges) → height-field mesh of h(u, v) (eq. 12) at
 //!   4 samples per net spacing (77 × 77 vertices); and the same drag meshed in 3-D by
-//!   dual contouring at 64 cells.
+//!   dual contouring at 64 cells; `drag_update_and_height_mesh_20x20`: the same drag
+//!   solved by updating the drag's first factorisation ([`NetDrag`]).
 //! * `dsm_shape_remesh`: a 20-density-primitive shape (a box rounded by 12 sector-shell
 //!   pipes and 8 octant ball shells) and a 20-primitive blobby shape, dual-contoured at
 //!   64, 128 and 256 cells along their size.
+//!
+//! * `dsm_compare`: the same fields meshed by `fast-surface-nets` (naive surface
+//!   nets, a well-kept implicit mesher) on the same grid, with Φ sampled densely at
+//!   every corner (it has no culling of its own): the baseline of the same run.
 //!
 //! Run: `cargo bench -p vsculpt-kernel --bench dsm -- --warm-up-time 1 --measurement-time 3`.
 
@@ -43,6 +48,14 @@ fn net_drag(c: &mut Criterion) {
             t = t.wrapping_add(1);
             n.set_height(node, 1.2 + 0.01 * (t % 50) as f64).unwrap();
             let (s, _) = inverse_transform(&n, &opts).unwrap();
+            black_box(s.mesh(lo, hi, 76, 76).unwrap())
+        })
+    });
+    let (mut drag, _) = NetDrag::start(net(), opts, node).unwrap();
+    g.bench_function("drag_update_and_height_mesh_20x20", |b| {
+        b.iter(|| {
+            t = t.wrapping_add(1);
+            let (s, _) = drag.set_height(1.2 + 0.01 * (t % 50) as f64).unwrap();
             black_box(s.mesh(lo, hi, 76, 76).unwrap())
         })
     });
@@ -98,5 +111,42 @@ fn shape_remesh(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, net_drag, shape_remesh);
+/// Φ at every corner of the model's grid at `cells` (x fastest), then naive
+/// surface nets on it.
+fn surface_nets_dense(m: &Model, cells: usize) -> usize {
+    use fast_surface_nets::ndshape::{RuntimeShape, Shape};
+    use fast_surface_nets::{SurfaceNetsBuffer, surface_nets};
+    let grid = Grid::for_model(m, cells).unwrap();
+    let d = (grid.dims + glam::IVec3::ONE).as_uvec3();
+    let shape = RuntimeShape::<u32, 3>::new([d.x, d.y, d.z]);
+    let act = m.all_active();
+    let mut scratch = Vec::new();
+    let mut sdf = vec![0f32; shape.usize()];
+    for (i, v) in sdf.iter_mut().enumerate() {
+        let [x, y, z] = shape.delinearize(i as u32);
+        let c = glam::IVec3::new(x as i32, y as i32, z as i32);
+        // surface nets wants negative inside.
+        *v = -(m.sample(grid.corner(c), &act, &mut scratch).phi as f32);
+    }
+    let mut buf = SurfaceNetsBuffer::default();
+    surface_nets(&sdf, &shape, [0; 3], [d.x - 1, d.y - 1, d.z - 1], &mut buf);
+    buf.indices.len() / 3
+}
+
+fn compare(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dsm_compare");
+    g.sample_size(10);
+    for (name, m) in shapes() {
+        for cells in [64usize, 128] {
+            g.bench_with_input(
+                BenchmarkId::new(format!("fast_surface_nets_dense_{name}"), cells),
+                &cells,
+                |b, &cells| b.iter(|| black_box(surface_nets_dense(&m, cells))),
+            );
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, net_drag, shape_remesh, compare);
 criterion_main!(benches);

@@ -258,6 +258,17 @@ pub enum ClientMessage {
         /// The relation.
         relation: u64,
     },
+    /// Reshape a DSM part: add, move, resize or remove a primitive, set its
+    /// density and reducing factor, move it to another group, or drag a net
+    /// node. Meant to be answered `ack` and a mesh frame (kind 3) of the part;
+    /// today's server refuses it with `unsupported`. A refused edit changes
+    /// nothing.
+    DsmEdit {
+        /// The DSM part.
+        part: u64,
+        /// What to change.
+        edit: crate::dsm::DsmEdit,
+    },
 }
 
 /// The `type` tags of every client message, for telling an unknown type
@@ -294,6 +305,7 @@ pub const CLIENT_TYPES: &[&str] = &[
     "set_part",
     "relate",
     "unrelate",
+    "dsm_edit",
 ];
 
 /// Parses and validates one text message from a client: `too_large`,

@@ -18,14 +18,18 @@
 //! * [`frame`] — the binary geometry frame ([`GeometryFrame`]).
 //! * [`schema`] — the JSON Schema of every message, generated from the
 //!   types (checked in as `protocol/schema/protocol.schema.json`).
+//! * [`dsm`] — a Density Spatial Model part's shape and its edits.
+//! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
 
 pub mod client;
+pub mod dsm;
 pub mod error;
 pub mod frame;
 pub mod limits;
+pub mod mesh_frame;
 pub mod parts;
 pub mod schema;
 pub mod server;
@@ -34,8 +38,10 @@ pub mod validate;
 pub mod version;
 
 pub use client::{ClientEnvelope, ClientMessage, parse_client};
+pub use dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};
+pub use mesh_frame::MeshFrame;
 pub use parts::*;
 pub use server::ServerMessage;
 pub use types::*;

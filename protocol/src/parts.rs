@@ -39,6 +39,12 @@ pub enum PartShape {
         /// The curve.
         curve: CurveData,
     },
+    /// A Density Spatial Model shape (paper 001): primitives in shape
+    /// groups, meshed by the server and sent as mesh frames (kind 3).
+    Dsm {
+        /// The shape.
+        dsm: crate::dsm::DsmData,
+    },
 }
 
 impl PartShape {
@@ -47,6 +53,7 @@ impl PartShape {
         match self {
             PartShape::Surface { .. } => PartKind::Surface,
             PartShape::Curve { .. } => PartKind::Curve,
+            PartShape::Dsm { .. } => PartKind::Dsm,
         }
     }
 }
@@ -59,6 +66,8 @@ pub enum PartKind {
     Surface,
     /// A deformable curve.
     Curve,
+    /// A Density Spatial Model shape.
+    Dsm,
 }
 
 /// The material of a curve part (paper 003, eq. 1): stretch α and bend β.

@@ -202,6 +202,7 @@ fn part_spec(p: &PartSpec) -> Result<(), ProtocolError> {
     match &p.shape {
         PartShape::Surface { surface: s } => surface(s)?,
         PartShape::Curve { curve: c } => curve(c)?,
+        PartShape::Dsm { dsm } => dsm.validate()?,
     }
     if let Some(m) = &p.material {
         part_material(m)?;
@@ -272,6 +273,7 @@ impl ClientMessage {
             }
             SetMaterial { material: m, .. } => part_material(m),
             CreatePart { spec } => part_spec(spec),
+            DsmEdit { edit, .. } => edit.validate(),
             Relate {
                 relation: crate::parts::RelationSpec::Binding { line, .. },
             } => match line {

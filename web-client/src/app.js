@@ -358,6 +358,8 @@ function setHistory(canUndo, canRedo) {
 
 function onFrame(f) {
   state.frames++;
+  // Mesh frames (kind 3, dsm parts) decode but are not drawn by this page yet.
+  if (f.kind === 'mesh') return;
   const known = design.parts.has(f.part);
   if (!design.applyFrame(f)) return;
   state.revision = design.revision;

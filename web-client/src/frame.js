@@ -2,13 +2,16 @@
 // "Binary geometry frame", version 2): the 48-byte header with design, part
 // and revision; a surface part (kind 1: u and v knots, nu × nv net) or a
 // curve part (kind 2: u knots only, nu control points, nv = 1, pv = 0);
-// zero-copy typed-array views, every size checked.
+// zero-copy typed-array views, every size checked. A mesh part (kind 3, a DSM
+// part meshed by the server: "Binary mesh frame (kind 3)") has its own
+// 64-byte header and quantised positions, i16 normals and u16/u32 indices.
 
 const MAGIC = [0x56, 0x53, 0x47, 0x46]; // "VSGF"
 export const PROTOCOL_VERSION = 2;
 /** Frame kinds (byte 4). */
 export const KIND_SURFACE = 1;
 export const KIND_CURVE = 2;
+export const KIND_MESH = 3;
 /** Flags (bytes 6..8): bit 0 from a drag, bit 1 the shape of the snapshot that follows (compact join). */
 export const FLAG_DRAG = 1;
 export const FLAG_SNAPSHOT = 2;
@@ -31,6 +34,7 @@ export function decodeFrame(buf) {
   const dv = new DataView(buf);
   for (let i = 0; i < 4; i++) if (dv.getUint8(i) !== MAGIC[i]) throw new Error('bad magic');
   const kind = dv.getUint8(4);
+  if (kind === KIND_MESH) return decodeMeshFrame(buf);
   if (kind !== KIND_SURFACE && kind !== KIND_CURVE) throw new Error(`unknown frame kind ${kind}`);
   if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
   const flags = dv.getUint16(6, true);
@@ -68,4 +72,49 @@ export function decodeFrame(buf) {
   const common = { part, design, revision, flags, points, icons: frameIcons };
   if (curve) return { kind: 'curve', ...common, n: nu, degree: degreeU, knots: knotsU };
   return { kind: 'surface', ...common, nu, nv, degreeU, degreeV, knotsU, knotsV: new Float64Array(buf, kv, nkv) };
+}
+
+const MESH_HEADER = 64;
+/** Size limits of protocol/src/mesh_frame.rs. */
+const MAX_MESH_VERTICES = 4 << 20;
+const MAX_MESH_TRIANGLES = 8 << 20;
+
+/**
+ * Decodes a mesh frame (kind 3) from an ArrayBuffer; throws on any malformed
+ * input. Gives { kind: 'mesh', part, design, revision, flags, origin, step,
+ * positions (Float32Array x, y, z, dequantised), normals (Float32Array, unit),
+ * indices (Uint16Array or Uint32Array) }.
+ */
+export function decodeMeshFrame(buf) {
+  if (!(buf instanceof ArrayBuffer) || buf.byteLength < MESH_HEADER) throw new Error('mesh frame too short');
+  const dv = new DataView(buf);
+  for (let i = 0; i < 4; i++) if (dv.getUint8(i) !== MAGIC[i]) throw new Error('bad magic');
+  if (dv.getUint8(4) !== KIND_MESH) throw new Error(`frame kind ${dv.getUint8(4)} is not a mesh`);
+  if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
+  const flags = dv.getUint16(6, true);
+  const design = Number(dv.getBigUint64(8, true));
+  const part = Number(dv.getBigUint64(16, true));
+  const revision = Number(dv.getBigUint64(24, true));
+  const nv = dv.getUint32(32, true);
+  const nt = dv.getUint32(36, true);
+  if (nv > MAX_MESH_VERTICES || nt > MAX_MESH_TRIANGLES) throw new Error('mesh frame sizes out of range');
+  const origin = [dv.getFloat32(40, true), dv.getFloat32(44, true), dv.getFloat32(48, true)];
+  const step = dv.getFloat32(52, true);
+  if (!origin.every(Number.isFinite) || !Number.isFinite(step) || step < 0) throw new Error('mesh frame origin or step is not finite');
+  const ib = dv.getUint8(56);
+  if (ib !== (nv <= 65535 ? 2 : 4)) throw new Error(`index width ${ib} does not fit ${nv} vertices`);
+  for (let i = 57; i < MESH_HEADER; i++) if (dv.getUint8(i) !== 0) throw new Error('mesh frame header padding is not zero');
+  const total = MESH_HEADER + 12 * nv + 3 * ib * nt;
+  if (buf.byteLength !== total) throw new Error(`mesh frame is ${buf.byteLength} bytes, header says ${total}`);
+  const q = new Uint16Array(buf, MESH_HEADER, 3 * nv);
+  const qn = new Int16Array(buf, MESH_HEADER + 6 * nv, 3 * nv);
+  const indices = ib === 2 ? new Uint16Array(buf, MESH_HEADER + 12 * nv, 3 * nt) : new Uint32Array(buf, MESH_HEADER + 12 * nv, 3 * nt);
+  for (let i = 0; i < indices.length; i++) if (indices[i] >= nv) throw new Error(`index ${indices[i]} beyond the ${nv} vertices`);
+  const positions = new Float32Array(3 * nv);
+  const normals = new Float32Array(3 * nv);
+  for (let i = 0; i < 3 * nv; i++) {
+    positions[i] = origin[i % 3] + q[i] * step;
+    normals[i] = qn[i] / 32767;
+  }
+  return { kind: 'mesh', part, design, revision, flags, origin, step, positions, normals, indices };
 }

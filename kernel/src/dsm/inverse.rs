@@ -221,6 +221,11 @@ impl PassingPointsNet {
         &self.nodes
     }
 
+    /// The surrounding nodes of node i (eq. 8's h_mk and r_mk are over them).
+    pub fn neighbours(&self, i: usize) -> &[usize] {
+        &self.neighbours[i]
+    }
+
     /// Whether node i is peripheral (carries no charge).
     pub fn is_peripheral(&self, i: usize) -> bool {
         self.peripheral[i]
@@ -367,13 +372,10 @@ pub fn inverse_transform(
     let (lo, hi) = net.uv_box();
     let m = (2.0 * (net.nodes.len() as f64).sqrt()).ceil() as usize;
     let (mut hmin, mut hmax) = (f64::INFINITY, f64::NEG_INFINITY);
-    for j in 0..=m {
-        for i in 0..=m {
-            let p = lo + (hi - lo) * DVec2::new(i as f64 / m as f64, j as f64 / m as f64);
-            let h = surface.height(p).unwrap_or(f64::NEG_INFINITY);
-            hmin = hmin.min(h);
-            hmax = hmax.max(h);
-        }
+    for h in surface.jets_on_grid(lo, hi, m, m) {
+        let h = h.map_or(f64::NEG_INFINITY, |j| j.value);
+        hmin = hmin.min(h);
+        hmax = hmax.max(h);
     }
     let report = InverseReport {
         charges: n,

@@ -11,6 +11,7 @@
 //! * [`connect`] — the surface connecting function s(u, v) (eq. 13).
 //! * [`model`] — groups, equal density solids and the object (eqs. 3–7), culling.
 //! * [`inverse`] — passing-points nets and the inverse transformation (eqs. 8–11).
+//! * [`net_drag`] — a node drag re-solved from the drag's first factorisation.
 //! * [`surface`] — the explicit equal density surface h(u, v) (eqs. 12–13) and its curvature.
 //! * [`mesh`], [`qef`] — dual contouring of the object.
 //! * [`shape_ops`] — round corners, shape mapping onto a box face or a cylinder (§4).
@@ -29,6 +30,7 @@ pub mod inverse;
 pub mod jet;
 pub mod mesh;
 pub mod model;
+pub mod net_drag;
 pub mod placement;
 pub mod qef;
 pub mod shape_ops;
@@ -43,5 +45,6 @@ pub use inverse::{InverseOptions, InverseReport, PassingPointsNet, inverse_trans
 pub use jet::{Jet, Jet2};
 pub use mesh::{Grid, Mesh, MeshOptions, MeshStats, mesh, mesh_on};
 pub use model::{Active, DEFAULT_TAU, Group, Model, Sample, Sign, Term};
+pub use net_drag::{DragStep, NetDrag};
 pub use placement::Placement;
 pub use surface::{Curvature, EqualDensitySurface, graph_curvature};

@@ -68,6 +68,38 @@ impl EqualDensitySurface {
         Some(l.scale(1.0 / self.reducing))
     }
 
+    /// h with derivatives at every node of the regular (nu + 1) × (nv + 1) grid over
+    /// [lo, hi], row by row (None where D ≤ 0): the same values as [`Self::jet`] at
+    /// each node, with D from [`Distribution::jets_on_grid`].
+    pub fn jets_on_grid(&self, lo: DVec2, hi: DVec2, nu: usize, nv: usize) -> Vec<Option<Jet2>> {
+        let ds = self.distribution.jets_on_grid(lo, hi, nu, nv);
+        let lnde = self.de.ln();
+        ds.into_iter()
+            .enumerate()
+            .map(|(k, d)| {
+                if d.value <= 0.0 {
+                    return None;
+                }
+                let mut l = d.ln();
+                l.value -= lnde;
+                let l = match &self.connect {
+                    Some(c) => {
+                        let (i, j) = (k % (nu + 1), k / (nu + 1));
+                        let p = lo
+                            + (hi - lo)
+                                * DVec2::new(
+                                    i as f64 / nu.max(1) as f64,
+                                    j as f64 / nv.max(1) as f64,
+                                );
+                        c.jet(p).times(l)
+                    }
+                    None => l,
+                };
+                Some(l.scale(1.0 / self.reducing))
+            })
+            .collect()
+    }
+
     /// Mean and Gaussian curvature and the normal at (u, v).
     pub fn curvature(&self, p: DVec2) -> Option<Curvature> {
         let j = self.jet(p)?;
@@ -97,12 +129,14 @@ impl EqualDensitySurface {
         if nu == 0 || nv == 0 || nu > 4096 || nv > 4096 {
             return Err(DsmError::BadMeshRequest("grid must be 1..=4096 per side"));
         }
+        let jets = self.jets_on_grid(lo, hi, nu, nv);
         let mut m = Mesh::default();
-        m.positions.reserve((nu + 1) * (nv + 1));
+        m.positions.reserve(jets.len());
+        m.normals.reserve(jets.len());
         for j in 0..=nv {
             for i in 0..=nu {
                 let p = lo + (hi - lo) * DVec2::new(i as f64 / nu as f64, j as f64 / nv as f64);
-                match self.jet(p) {
+                match jets[j * (nu + 1) + i] {
                     Some(h) if h.value > 0.0 => {
                         m.positions.push(DVec3::new(p.x, p.y, h.value));
                         m.normals

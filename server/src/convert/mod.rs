@@ -453,7 +453,10 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
             part,
             edit: PartEdit::SetMaterial(parts::part_material_from_wire(&material)),
         }),
-        M::CreatePart { spec } => edit(parts::create_part(&spec)),
+        M::DsmEdit { .. } => return Err((req, dsm_not_served())),
+        M::CreatePart { spec } => {
+            edit(parts::create_part(&spec).ok_or_else(|| (req, dsm_not_served()))?)
+        }
         M::DeletePart { part } => edit(Edit::DeletePart { part }),
         M::SetPart {
             part,
@@ -500,6 +503,15 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
         },
     };
     Ok((req, inbound))
+}
+
+/// DSM parts (paper 001) are in the protocol but this server does not build
+/// them yet (issue 12): refused with a clear error, nothing changes.
+fn dsm_not_served() -> WireError {
+    WireError::new(
+        ErrorCode::Unsupported,
+        "dsm parts are not served by this server yet (issue 12): the part was not created",
+    )
 }
 
 fn text(m: &ServerMessage) -> Utf8Bytes {

@@ -86,8 +86,9 @@ pub fn body_material(b: &PartBody) -> MaterialEdit {
 
 /// `create_part` as an edit: the shape with the given material (or the
 /// kind's default; a material of the other kind is refused by validation
-/// in the protocol crate).
-pub fn create_part(spec: &wire::PartSpec) -> Edit {
+/// in the protocol crate). `None` for a kind this server does not build
+/// (`dsm`).
+pub fn create_part(spec: &wire::PartSpec) -> Option<Edit> {
     let body = match &spec.shape {
         wire::PartShape::Surface { surface } => PartBody::Surface(SurfacePart {
             surface: surface_from_wire(surface),
@@ -114,12 +115,13 @@ pub fn create_part(spec: &wire::PartSpec) -> Edit {
             icons: Vec::new(),
             kappa: None,
         }),
+        wire::PartShape::Dsm { .. } => return None,
     };
-    Edit::CreatePart {
+    Some(Edit::CreatePart {
         name: spec.name.clone(),
         body: Box::new(body),
         colour: spec.colour.clone(),
-    }
+    })
 }
 
 /// A part as clients see it; icons carry their holders; control points

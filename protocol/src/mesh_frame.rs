@@ -1,0 +1,294 @@
+//! The binary mesh frame (kind 3): an indexed triangle mesh of one part whose
+//! shape the client cannot evaluate itself (a DSM part's implicit surface),
+//! sent like a geometry frame: one binary WebSocket message per re-meshed
+//! shape, latest-wins per part.
+//!
+//! Compact: positions quantised to u16 on the mesh's bounding cube (origin +
+//! q·step), unit normals as i16 snorm (q / 32767), indices u16 when the mesh
+//! has at most 65 535 vertices, else u32 — 12 bytes a vertex and 6 (or 12) a
+//! triangle, against 24 + 12 for f32 positions and normals with u32 indices.
+//! protocol/README.md gives the layout byte by byte.
+
+use crate::error::{ErrorCode, ProtocolError};
+use crate::frame::MAGIC;
+use crate::version::PROTOCOL_VERSION;
+
+/// Frame kind: an indexed, quantised triangle mesh.
+pub const KIND_MESH: u8 = 3;
+/// Size of the mesh frame's header in bytes.
+pub const MESH_HEADER_BYTES: usize = 64;
+/// Most vertices a mesh frame may carry.
+pub const MAX_MESH_VERTICES: usize = 4 << 20;
+/// Most triangles a mesh frame may carry.
+pub const MAX_MESH_TRIANGLES: usize = 8 << 20;
+
+/// One mesh of one part, quantised as it travels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshFrame {
+    /// The design.
+    pub design: u64,
+    /// The part.
+    pub part: u64,
+    /// The shape revision (increases with every change).
+    pub revision: u64,
+    /// Bit flags (as a geometry frame's: bit 0 drag, bit 1 snapshot).
+    pub flags: u16,
+    /// World position of quantised (0, 0, 0).
+    pub origin: [f32; 3],
+    /// World size of one quantum (≥ 0).
+    pub step: f32,
+    /// Quantised positions: origin + q·step.
+    pub positions: Vec<[u16; 3]>,
+    /// Unit normals, i16 snorm (q / 32767).
+    pub normals: Vec<[i16; 3]>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+fn bad(message: impl Into<String>) -> ProtocolError {
+    ProtocolError::new(ErrorCode::Malformed, message)
+}
+
+fn index_bytes(vertices: usize) -> usize {
+    if vertices <= u16::MAX as usize { 2 } else { 4 }
+}
+
+impl MeshFrame {
+    /// Quantises a mesh: positions on its bounding cube at 65 535 steps along
+    /// the longest side (the error is at most half a step), normals to i16.
+    /// Non-finite input is refused (`not_finite`).
+    pub fn quantise(
+        ids: (u64, u64, u64),
+        flags: u16,
+        positions: &[[f64; 3]],
+        normals: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+    ) -> Result<Self, ProtocolError> {
+        if positions.len() != normals.len() {
+            return Err(bad("positions and normals differ in number"));
+        }
+        let finite = |p: &[f64; 3]| p.iter().all(|x| x.is_finite());
+        if !positions.iter().all(finite) || !normals.iter().all(finite) {
+            return Err(ProtocolError::new(
+                ErrorCode::NotFinite,
+                "mesh has a non-finite coordinate",
+            ));
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in positions {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        if positions.is_empty() {
+            lo = [0.0; 3];
+            hi = [0.0; 3];
+        }
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        let origin = lo.map(|x| x as f32);
+        let step = (extent / 65535.0) as f32;
+        let q = |x: f64, a: usize| -> u16 {
+            if step == 0.0 {
+                0
+            } else {
+                ((x - origin[a] as f64) / step as f64)
+                    .round()
+                    .clamp(0.0, 65535.0) as u16
+            }
+        };
+        let frame = Self {
+            design: ids.0,
+            part: ids.1,
+            revision: ids.2,
+            flags,
+            origin,
+            step,
+            positions: positions
+                .iter()
+                .map(|p| [q(p[0], 0), q(p[1], 1), q(p[2], 2)])
+                .collect(),
+            normals: normals
+                .iter()
+                .map(|n| {
+                    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                    let s = if l > 0.0 { 32767.0 / l } else { 0.0 };
+                    n.map(|c| (c * s).round().clamp(-32767.0, 32767.0) as i16)
+                })
+                .collect(),
+            triangles: triangles.to_vec(),
+        };
+        frame.check()?;
+        Ok(frame)
+    }
+
+    /// The world position of vertex i.
+    pub fn position(&self, i: usize) -> [f64; 3] {
+        let q = self.positions[i];
+        [0, 1, 2].map(|a| self.origin[a] as f64 + q[a] as f64 * self.step as f64)
+    }
+
+    /// The unit normal of vertex i (as sent, to 1/32767).
+    pub fn normal(&self, i: usize) -> [f64; 3] {
+        self.normals[i].map(|c| c as f64 / 32767.0)
+    }
+
+    /// The encoded length in bytes.
+    pub fn byte_len(&self) -> usize {
+        let v = self.positions.len();
+        MESH_HEADER_BYTES + 12 * v + 3 * index_bytes(v) * self.triangles.len()
+    }
+
+    /// Checks sizes, numbers and indices (the checks `decode` makes).
+    pub fn check(&self) -> Result<(), ProtocolError> {
+        let v = self.positions.len();
+        if v > MAX_MESH_VERTICES || self.triangles.len() > MAX_MESH_TRIANGLES {
+            return Err(ProtocolError::new(
+                ErrorCode::TooLarge,
+                "mesh frame exceeds the size limits",
+            ));
+        }
+        if self.normals.len() != v {
+            return Err(bad("positions and normals differ in number"));
+        }
+        if !(self.origin.iter().all(|x| x.is_finite()) && self.step.is_finite()) {
+            return Err(ProtocolError::new(
+                ErrorCode::NotFinite,
+                "mesh frame has a non-finite origin or step",
+            ));
+        }
+        if self.step < 0.0 {
+            return Err(bad("mesh frame step is negative"));
+        }
+        if let Some(t) = self
+            .triangles
+            .iter()
+            .find(|t| t.iter().any(|&i| i as usize >= v))
+        {
+            return Err(bad(format!(
+                "triangle {t:?} names a vertex beyond the {v} sent"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The frame as bytes (after [`check`](Self::check)).
+    pub fn encode(&self) -> Result<Vec<u8>, ProtocolError> {
+        self.check()?;
+        let v = self.positions.len();
+        let ib = index_bytes(v);
+        let mut out = Vec::with_capacity(self.byte_len());
+        out.extend_from_slice(&MAGIC);
+        out.push(KIND_MESH);
+        out.push(PROTOCOL_VERSION as u8);
+        out.extend_from_slice(&self.flags.to_le_bytes());
+        out.extend_from_slice(&self.design.to_le_bytes());
+        out.extend_from_slice(&self.part.to_le_bytes());
+        out.extend_from_slice(&self.revision.to_le_bytes());
+        out.extend_from_slice(&(v as u32).to_le_bytes());
+        out.extend_from_slice(&(self.triangles.len() as u32).to_le_bytes());
+        for c in self.origin {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+        out.extend_from_slice(&self.step.to_le_bytes());
+        out.push(ib as u8);
+        out.resize(MESH_HEADER_BYTES, 0);
+        for p in &self.positions {
+            p.iter()
+                .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+        }
+        for n in &self.normals {
+            n.iter()
+                .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+        }
+        for t in &self.triangles {
+            for &i in t {
+                if ib == 2 {
+                    out.extend_from_slice(&(i as u16).to_le_bytes());
+                } else {
+                    out.extend_from_slice(&i.to_le_bytes());
+                }
+            }
+        }
+        debug_assert_eq!(out.len(), self.byte_len());
+        Ok(out)
+    }
+
+    /// Parses a mesh frame. Any byte string gives a frame or an error; never a panic.
+    pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
+        if bytes.len() < MESH_HEADER_BYTES {
+            return Err(bad(format!(
+                "mesh frame of {} bytes is shorter than its header",
+                bytes.len()
+            )));
+        }
+        if bytes[0..4] != MAGIC {
+            return Err(bad("not a geometry frame (bad magic)"));
+        }
+        if bytes[4] != KIND_MESH {
+            return Err(bad(format!("frame kind {} is not a mesh", bytes[4])));
+        }
+        if bytes[5] as u32 != PROTOCOL_VERSION {
+            return Err(ProtocolError::new(
+                ErrorCode::BadVersion,
+                format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
+            ));
+        }
+        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
+        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let (v, t) = (u32_at(32) as usize, u32_at(36) as usize);
+        if v > MAX_MESH_VERTICES || t > MAX_MESH_TRIANGLES {
+            return Err(ProtocolError::new(
+                ErrorCode::TooLarge,
+                "mesh frame exceeds the size limits",
+            ));
+        }
+        let ib = bytes[56] as usize;
+        if ib != index_bytes(v) {
+            return Err(bad(format!(
+                "index width {ib} does not fit {v} vertices (want {})",
+                index_bytes(v)
+            )));
+        }
+        if bytes[57..MESH_HEADER_BYTES].iter().any(|&b| b != 0) {
+            return Err(bad("mesh frame header padding is not zero"));
+        }
+        let total = MESH_HEADER_BYTES + 12 * v + 3 * ib * t;
+        if bytes.len() != total {
+            return Err(bad(format!(
+                "mesh frame has {} bytes, its header says {total}",
+                bytes.len()
+            )));
+        }
+        let pn = MESH_HEADER_BYTES;
+        let nn = pn + 6 * v;
+        let tn = nn + 6 * v;
+        let frame = Self {
+            design: u64_at(8),
+            part: u64_at(16),
+            revision: u64_at(24),
+            flags: u16_at(6),
+            origin: [f32_at(40), f32_at(44), f32_at(48)],
+            step: f32_at(52),
+            positions: (0..v)
+                .map(|k| [0, 1, 2].map(|a| u16_at(pn + 6 * k + 2 * a)))
+                .collect(),
+            normals: (0..v)
+                .map(|k| [0, 1, 2].map(|a| u16_at(nn + 6 * k + 2 * a) as i16))
+                .collect(),
+            triangles: (0..t)
+                .map(|k| {
+                    [0, 1, 2].map(|a| {
+                        let o = tn + ib * (3 * k + a);
+                        if ib == 2 { u16_at(o) as u32 } else { u32_at(o) }
+                    })
+                })
+                .collect(),
+        };
+        frame.check()?;
+        Ok(frame)
+    }
+}
