@@ -9,6 +9,7 @@
 //! [`MAX_NET_NODES`] net nodes per side. What needs the part (ids, group
 //! indices) the server checks.
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ErrorCode, ProtocolError};
@@ -25,7 +26,7 @@ pub const MAX_NET_NODES: usize = 32;
 pub const DSM_CELLS: std::ops::RangeInclusive<u32> = 8..=256;
 
 /// A DSM part's shape: D_e, the mesh resolution and its groups in order.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DsmData {
     /// The presentation density D_e (> 0).
@@ -37,7 +38,7 @@ pub struct DsmData {
 }
 
 /// How a group's equal density solid enters the object (eq. 7).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DsmOp {
     /// Added to the object.
@@ -49,7 +50,7 @@ pub enum DsmOp {
 }
 
 /// A shape group: primitives that fuse with each other only.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DsmGroup {
     /// How its solid enters the object.
@@ -62,7 +63,7 @@ pub struct DsmGroup {
 }
 
 /// One primitive: a stable id within the part, where it is, and what it is.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DsmPrimitive {
     /// Stable id within the part (the handle edits name).
@@ -79,7 +80,7 @@ pub struct DsmPrimitive {
 
 /// The kinds of primitive (paper §2): geometric ones of uniform density ±D_e,
 /// and density ones F = D·exp(−a·r).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum DsmPrimitiveShape {
     /// Rectangular solid with half extents along local x, y, z.
@@ -143,7 +144,7 @@ pub enum DsmPrimitiveShape {
 }
 
 /// One edit of a DSM part (`dsm_edit`): each names a primitive by id.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
 pub enum DsmEdit {
     /// Adds a primitive to group `group` (`group` = the number of groups
