@@ -78,7 +78,7 @@ async fn a_clamped_edge_holds_its_rows_through_a_drag() {
         json!({"type": "create_icon", "part": 1, "spec": {
             "anchor": {"kind": "edge", "edge": "v_max", "mode": "clamped"},
             "role": {"kind": "derivative", "which": "R"}}}),
-        "invalid_value",
+        "unsupported",
     )
     .await;
 
