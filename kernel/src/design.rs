@@ -22,8 +22,8 @@ use crate::analysis::{Tessellation, tessellate};
 use crate::bspline::{BSplineSurface, BasisDerivs, GeometryError, basis_derivs_into};
 use crate::energy::{MaterialError, Stiffness, StiffnessError, SurfaceMaterial};
 use crate::icon::{
-    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, capture, icon_group,
-    samples,
+    Anchor, AnchorError, Icon, IconId, IconSpec, IconState, Role, SensorId, capture, held_points,
+    icon_group, placement,
 };
 use crate::solve::{Problem, SolveError, SolveReport, Solver};
 use crate::spring::{Adaptation, Spring};
@@ -199,8 +199,16 @@ impl Design {
             Spring::new(s.kappa, d.spring.size()).map_err(|e| DesignError::Unsupported(e.0))?;
         for icon in &s.icons {
             let mut icon = icon.clone();
-            icon.samples = samples(&icon.anchor, &d.surface)?;
-            if icon.shape.len() != icon.samples.len() {
+            let placed = placement(&icon.anchor, &d.surface)?;
+            icon.samples = placed.samples;
+            icon.identity = placed.rows;
+            let rows =
+                if icon.role == Role::Position && held_points(&icon.anchor, &d.surface).is_none() {
+                    icon.identity.len()
+                } else {
+                    0
+                };
+            if icon.shape.len() != icon.samples.len() + rows {
                 return Err(DesignError::Unsupported(format!(
                     "icon {:?}: shape does not match its anchor",
                     icon.id
@@ -346,8 +354,14 @@ impl Design {
         {
             return Err(DesignError::NotFinite("target"));
         }
-        let samples = samples(&spec.anchor, &self.surface)?;
-        let shape = capture(&spec.anchor, spec.role, &samples, &self.surface);
+        let placed = placement(&spec.anchor, &self.surface)?;
+        let shape = capture(
+            &spec.anchor,
+            spec.role,
+            &placed.samples,
+            &placed.rows,
+            &self.surface,
+        );
         let id = IconId(self.next_id);
         let (hu, hv) = spec.anchor.handle_uv();
         let handle = self.surface.point(hu, hv);
@@ -361,7 +375,8 @@ impl Design {
             target: DVec3::ZERO,
             shape,
             handle,
-            samples,
+            samples: placed.samples,
+            identity: placed.rows,
         };
         icon.target = match spec.target {
             Some(t) if icon.role != Role::Load => t,
@@ -398,12 +413,13 @@ impl Design {
             .ok_or(DesignError::UnknownIcon(id))?
             .role;
         Self::check_role(&anchor, role)?;
-        let samples = samples(&anchor, &self.surface)?;
-        let shape = capture(&anchor, role, &samples, &self.surface);
+        let placed = placement(&anchor, &self.surface)?;
+        let shape = capture(&anchor, role, &placed.samples, &placed.rows, &self.surface);
         self.finish_drag_of(id);
         let mut icon = self.icons[&id].clone();
         icon.anchor = anchor;
-        icon.samples = samples;
+        icon.samples = placed.samples;
+        icon.identity = placed.rows;
         icon.shape = shape;
         let (hu, hv) = icon.handle_uv();
         icon.handle = self.surface.point(hu, hv);
@@ -574,8 +590,16 @@ impl Design {
         let mut icons = BTreeMap::new();
         for (id, icon) in &self.icons {
             let mut icon = icon.clone();
-            icon.samples = samples(&icon.anchor, &surface)?;
-            icon.shape = capture(&icon.anchor, icon.role, &icon.samples, &surface);
+            let placed = placement(&icon.anchor, &surface)?;
+            icon.samples = placed.samples;
+            icon.identity = placed.rows;
+            icon.shape = capture(
+                &icon.anchor,
+                icon.role,
+                &icon.samples,
+                &icon.identity,
+                &surface,
+            );
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
             icons.insert(*id, icon);
@@ -623,7 +647,13 @@ impl Design {
     fn rebase_shape(&mut self, id: IconId) {
         let surface = &self.surface;
         if let Some(icon) = self.icons.get_mut(&id) {
-            icon.shape = capture(&icon.anchor, icon.role, &icon.samples, surface);
+            icon.shape = capture(
+                &icon.anchor,
+                icon.role,
+                &icon.samples,
+                &icon.identity,
+                surface,
+            );
             let (hu, hv) = icon.handle_uv();
             icon.handle = surface.point(hu, hv);
         }

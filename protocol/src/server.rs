@@ -40,6 +40,11 @@ pub enum ServerMessage {
         /// The relation a `relate` created.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         relation: Option<u64>,
+        /// Set when the edit (an icon created or changed, a material) left
+        /// constraints that contradict each other: the shape is their
+        /// least-squares compromise, and this says by how much.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        warning: Option<String>,
     },
     /// A request failed and changed nothing.
     Error {

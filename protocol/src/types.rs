@@ -63,8 +63,8 @@ pub struct Material {
     pub beta22: f64,
 }
 
-/// Where an icon sits on its part: `point`, `curve` and `region` on a
-/// surface, `param` and `span` on a curve.
+/// Where an icon sits on its part: `point`, `curve`, `region` and `edge` on
+/// a surface, `param` and `span` on a curve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Anchor {
@@ -93,6 +93,15 @@ pub enum Anchor {
         /// Deformation asked inside the region (true) or outside it (false).
         inside: bool,
     },
+    /// A boundary edge of a surface part (unit parameter domain), held in
+    /// one position constraint: `simply_supported` holds the edge curve,
+    /// `clamped` also the tangent plane across it.
+    Edge {
+        /// Which edge.
+        edge: EdgeSide,
+        /// How it is held.
+        mode: EdgeMode,
+    },
     /// A point of a curve part at parameter t.
     Param {
         /// The curve parameter.
@@ -105,6 +114,30 @@ pub enum Anchor {
         /// End parameter.
         t1: f64,
     },
+}
+
+/// A boundary edge of a surface's parameter domain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeSide {
+    /// u = u_min.
+    UMin,
+    /// u = u_max.
+    UMax,
+    /// v = v_min.
+    VMin,
+    /// v = v_max.
+    VMax,
+}
+
+/// How an edge icon holds its edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeMode {
+    /// Position and tangent plane.
+    Clamped,
+    /// Position only.
+    SimplySupported,
 }
 
 /// Which derivative a derivative constraint fixes (paper 003's labels).

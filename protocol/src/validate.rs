@@ -82,6 +82,7 @@ fn anchor(a: &Anchor) -> Result<(), ProtocolError> {
         Anchor::Point { u, v } => numbers("(u,v)", &[*u, *v]),
         Anchor::Curve { curve } => uv_curve(curve),
         Anchor::Region { u0, v0, u1, v1, .. } => numbers("region corner", &[*u0, *v0, *u1, *v1]),
+        Anchor::Edge { .. } => Ok(()),
         Anchor::Param { t } => number("t", *t),
         Anchor::Span { t0, t1 } => numbers("span", &[*t0, *t1]),
     }

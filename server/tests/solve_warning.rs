@@ -1,7 +1,8 @@
 //! A drag whose constraints contradict each other (two position icons at
 //! one point of the demo's shell, one dragged away from the other) gets the
 //! least-squares answer and an `icon_feedback` that says so in `warning`; a
-//! drag that meets every constraint carries none.
+//! drag that meets every constraint carries none. An edit (create_icon,
+//! move_icon) that leaves them contradictory is acked with the warning.
 
 mod common;
 
@@ -68,5 +69,59 @@ async fn contradictory_constraints_come_back_as_a_warning() {
     );
     ed.ok(json!({"type": "drag_end", "part": 1, "icon": ids[0]}))
         .await;
+    server.stop().await;
+}
+
+/// An edit that leaves contradictory constraints (a second position icon
+/// at a held point, asked to be 5 mm above it) is applied as the
+/// least-squares compromise and its `ack` carries the warning; an edit that
+/// meets every constraint (the first icon, holding the shape where it is)
+/// has none.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_contradictory_edit_is_acked_with_a_warning() {
+    let server = TestServer::start(data_dir("edit-warning")).await;
+    let mut ed = Client::connect(server.addr, 1, &server.demo().editor, "ann").await;
+    let spec = |target: Option<[f64; 3]>| {
+        let mut s = json!({"anchor": {"kind": "point", "u": 0.45, "v": 0.7},
+            "role": {"kind": "position"}});
+        if let Some(t) = target {
+            s["target"] = json!(t);
+        }
+        json!({"type": "create_icon", "part": 1, "spec": s})
+    };
+    let r = ed.request(spec(None)).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    assert!(r.get("warning").is_none(), "{r}");
+    let first = r["icon"].as_u64().unwrap();
+    let doc = common::http::get(server.addr, "/api/designs/1", Some(&server.demo().editor))
+        .await
+        .json();
+    let p: [f64; 3] =
+        serde_json::from_value(common::parts::icon(&doc["design"], 1, first)["xyz"].clone())
+            .unwrap();
+    let r = ed.request(spec(Some([p[0], p[1], p[2] + 5.0]))).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let w = r["warning"]
+        .as_str()
+        .unwrap_or_else(|| panic!("no warning: {r}"));
+    assert!(w.contains("contradict"), "{w}");
+    let second = r["icon"].as_u64().unwrap();
+    // Moving it back onto the first one's point: met again, no warning.
+    let r = ed
+        .request(json!({"type": "move_icon", "part": 1, "icon": second, "xyz": p}))
+        .await;
+    assert_eq!(r["type"], "ack", "{r}");
+    assert!(r.get("warning").is_none(), "{r}");
+    // And away again: the move's ack warns.
+    let r = ed
+        .request(json!({"type": "move_icon", "part": 1, "icon": second,
+            "xyz": [p[0], p[1], p[2] - 4.0]}))
+        .await;
+    assert!(
+        r["warning"]
+            .as_str()
+            .is_some_and(|w| w.contains("contradict")),
+        "{r}"
+    );
     server.stop().await;
 }

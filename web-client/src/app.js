@@ -238,7 +238,7 @@ function renderPanels() {
   const part = selectedPart();
   $('target-part').textContent = part ? `on ${part.name} (${part.kind})${part.locked ? ' · locked' : ''}` : 'no part selected';
   const curve = part && part.kind === 'curve';
-  for (const o of $('create').options) o.disabled = curve && (o.value === 'curve' || o.value === 'join');
+  for (const o of $('create').options) o.disabled = curve && (o.value === 'curve' || o.value === 'join' || o.value === 'edge');
   $('create').querySelector('option[value=point]').textContent = curve ? 'param icon (t)' : 'point icon';
   $('create').querySelector('option[value=region]').textContent = curve ? 'span icon (t0…t1)' : 'region icon';
   for (const sel of [$('create-role'), $('sel-role')]) for (const o of sel.options) o.hidden = curve && !CURVE_ROLES.has(o.value);
@@ -587,7 +587,8 @@ const CURVE_ROLES = new Set(['position', 'load', 'R', 'R2']);
 
 /**
  * A click on the selected part in the current creation mode: at (u, v) on a
- * surface part (point, curve or region icon), at t (the first argument) on
+ * surface part (point, curve, region or edge icon — the edge nearest the
+ * click, clamped or simply supported as the panel says), at t (the first argument) on
  * a curve part (param or span icon).
  */
 function pick(u, v) {
@@ -613,11 +614,16 @@ function pick(u, v) {
       toast('a curve icon goes on a surface part: pick a surface, or make a param or span icon here', 'info');
     } else if (mode === 'join') {
       toast('a join ties two surface edges: pick an edge of a surface part', 'info');
+    } else if (mode === 'edge') {
+      toast('an edge clamp holds a surface edge: pick an edge of a surface part', 'info');
     }
     return;
   }
   if (mode === 'join') {
     pickEdge(part, u, v);
+  } else if (mode === 'edge') {
+    // One click: the nearest edge of the part, held as a position constraint.
+    createIcon({ kind: 'edge', edge: nearestEdge(part.geometry, u, v), mode: $('edge-mode').value }, ROLES.position);
   } else if (mode === 'point') {
     createIcon({ kind: 'point', u, v }, role);
   } else if (mode === 'curve') {

@@ -1,7 +1,8 @@
 // Icons drawn as paper 003 draws them: red sphere = position constraint,
 // green sphere = load, yellow sphere labelled R/V/R2/V2/RV = derivative
 // constraint, a 3D arrow along N = normal constraint, a polyline for a curve
-// icon (with its curvature comb), an outlined patch for a region icon; on a
+// icon (with its curvature comb), an outlined patch for a region icon, a
+// tube along a held edge (with ticks across it when clamped); on a
 // curve part, a sphere at a param icon's t and the stretch t0…t1 of a span
 // icon drawn along the curve; grey when sleeping, larger and glowing while
 // driving. A position constraint the surface does not meet shows its target
@@ -11,6 +12,7 @@
 import * as THREE from 'three';
 import { curveDerivs, surfaceDerivs } from './bspline.js';
 import { curvatureSamples, combSegments } from './comb.js';
+import { domainOf } from './design.js';
 
 const COLORS = { position: 0xe53935, load: 0x43a047, derivative: 0xfdd835, normal: 0x1e88e5 };
 const GREY = 0x8a8a8a;
@@ -171,6 +173,41 @@ export class IconLayer {
       );
       stretch.name = `span-${icon.id}`;
       g.add(stretch);
+    }
+    if (surface && icon.anchor.kind === 'edge') {
+      // The held edge, drawn along the surface; a clamped edge also shows
+      // the held strip's inner border (its tangent plane is held) as ticks.
+      const [[u0, u1], [v0, v1]] = domainOf(surface);
+      const at = (s) => ({
+        u_min: [u0, v0 + (v1 - v0) * s],
+        u_max: [u1, v0 + (v1 - v0) * s],
+        v_min: [u0 + (u1 - u0) * s, v0],
+        v_max: [u0 + (u1 - u0) * s, v1],
+      })[icon.anchor.edge];
+      const n = 48;
+      const pts = Array.from({ length: n + 1 }, (_, k) => new THREE.Vector3(...surfaceDerivs(surface, ...at(k / n)).p));
+      const held = new THREE.Mesh(
+        new THREE.TubeGeometry(new THREE.CatmullRomCurve3(pts), 64, this.size * (icon.anchor.mode === 'clamped' ? 0.6 : 0.35), 8, false),
+        new THREE.MeshStandardMaterial({ color, emissive: color, emissiveIntensity: selected ? 0.5 : 0.2 }),
+      );
+      held.name = `edge-${icon.id}`;
+      g.add(held);
+      if (icon.anchor.mode === 'clamped') {
+        const ticks = [];
+        for (let k = 0; k <= 16; k++) {
+          const p = surfaceDerivs(surface, ...at(k / 16));
+          const across = icon.anchor.edge.startsWith('u') ? p.u : p.v;
+          const len = Math.hypot(...across) || 1;
+          const sign = icon.anchor.edge.endsWith('min') ? 1 : -1;
+          const q = p.p.map((x, i) => x + (sign * 3 * this.size * across[i]) / len);
+          ticks.push(...p.p, ...q);
+        }
+        const geo = new THREE.BufferGeometry();
+        geo.setAttribute('position', new THREE.Float32BufferAttribute(ticks, 3));
+        const t = new THREE.LineSegments(geo, new THREE.LineBasicMaterial({ color }));
+        t.name = `clamp-${icon.id}`;
+        g.add(t);
+      }
     }
     if (surface && icon.anchor.kind === 'region') {
       const { u0, v0, u1, v1 } = icon.anchor;

@@ -17,6 +17,7 @@
 use glam::DVec3;
 
 use super::{Anchor, IconId, IconState, Role, SensorId};
+use crate::solve::ScalarRow;
 
 /// What a new icon should be.
 #[derive(Clone, Debug, PartialEq)]
@@ -52,13 +53,16 @@ pub struct Icon {
     pub target: DVec3,
     /// The held shape: for a position constraint, the positions its samples
     /// must keep (shifted by `target − handle`). One point per sample of the
-    /// anchor.
+    /// anchor; a curve's position constraint then one value per row of its
+    /// identity ([`super::Identity`]).
     pub shape: Vec<DVec3>,
     /// The surface point at the handle when `shape` was captured: where a
     /// load's spring is attached, and what a position constraint's target is
     /// measured from.
     pub handle: DVec3,
     pub(crate) samples: Vec<(f64, f64)>,
+    /// A curve's translation-free identity rows ([`super::Identity`]).
+    pub(crate) identity: Vec<ScalarRow>,
 }
 
 impl Icon {

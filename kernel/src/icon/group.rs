@@ -1,7 +1,9 @@
 //! Each icon becomes a [`Group`] of the solver's [`Problem`]: constraint
 //! equations or loads built from rows of the surface at its samples.
 //!
-//! * position → `Vector{row of w at sample i, shape_i + (target − handle)}`;
+//! * position → `Vector{row of w at sample i, shape_i + (target − handle)}`,
+//!   and for a curve `Projected{identity row, axis, its held value}` per
+//!   coordinate (translation-free, [`super::Identity`]);
 //!   a region or an edge pins its held control points
 //!   ([`super::held_points`]) at `shape_i + (target − handle)`; an outside
 //!   region holds them as they are;
@@ -59,6 +61,18 @@ pub fn icon_group(icon: &Icon, base: DVec3, surface: &BSplineSurface, k: f64) ->
                             row: surface_row(surface, su, sv, 0, 0),
                             target: *p + shift,
                         });
+                    }
+                    // A curve's translation-free identity rows: their values
+                    // do not move with the shift (the weights sum to zero).
+                    let values = icon.shape.iter().skip(icon.samples.len());
+                    for (row, value) in icon.identity.iter().zip(values) {
+                        for k in 0..3 {
+                            group.equations.push(Equation::Projected {
+                                row: row.clone(),
+                                direction: DVec3::AXES[k],
+                                target: value[k],
+                            });
+                        }
                     }
                 }
             }

@@ -5,34 +5,66 @@
 //! crosses a knot line of the surface) w∘c is one polynomial of degree
 //! q·(p_u + p_v) (q the curve's degree, p the surface's), so holding it at
 //! that many points plus one per piece (`sampling::collocation`) holds it
-//! on the whole piece. Those collocation equations A P = shape are
-//! dependent (neighbouring pieces share control points), so only an
-//! independent subset is kept: the rows a column-pivoted QR of Aᵀ picks
-//! before its pivot falls below [`DEPENDENT`] of the first. Every other
-//! collocation row is a combination of the kept ones (to that tolerance),
-//! and the held values come from one surface, so holding the kept samples
-//! holds them all. The kept rows are ordinary point rows (4 × 4 control
-//! points), so the solver can treat them like any point constraint.
+//! on the whole piece: the identity is A P = shape, A the collocation rows.
+//! Those rows are dependent (neighbouring pieces share control points), and
+//! a column-pivoted QR of Aᵀ = Q R Πᵀ splits their span in two:
+//!
+//! * the samples it picks first, while its pivot stays above [`POINT`] of
+//!   the first: kept as ordinary point rows (4 × 4 control points, sum 1),
+//!   which the solver can fold into its factor like any point constraint,
+//!   and which are well conditioned among themselves;
+//! * the rest of A's row space, down to [`EXACT`]: the further columns of Q,
+//!   orthonormal and orthogonal to the point rows — directions of control
+//!   points the curve barely touches (a basis function near the end of its
+//!   support). Each is made translation-free (minus its sum times one point
+//!   row) and held at its captured value as three scalar equations
+//!   (`Equation::Projected` per coordinate), so a drag that translates the
+//!   held shape leaves them as they are.
+//!
+//! Why two thresholds. Before, every direction down to a pivot of 1e-6
+//! was a point row and the rest of the span was left free. Point rows that
+//! nearly depend on each other make S = C K⁻¹ Cᵀ singular to working
+//! precision: on 20 × 15 the solver dropped 3 directions and missed the
+//! equations by 2.8e-9, the curve off by 5e-9 of the shape between
+//! samples; on 81 × 159 by 5e-8. Cut at 1e-3, the point rows are well
+//! conditioned (nothing dropped, equations met to 1e-14) and the rest of
+//! the span is held by orthonormal rows, as well conditioned. A QR column
+//! of pivot ρ is accurate to about ε/ρ in direction (ε the unit
+//! round-off), so a direction below [`EXACT`] is left out: what it leaves
+//! free moves the curve by less than 1e-9 of its control points' motion,
+//! while holding it would hold a 1e-7 tilt of it.
 
 use faer::Mat;
 
 use super::surface_row;
 use crate::bspline::BSplineSurface;
+use crate::solve::ScalarRow;
 
-/// Relative pivot of the QR below which a collocation row counts as
-/// dependent on the ones kept. Exact dependencies come out at 1e-12 and
-/// below, but the pivots of a curved curve decay smoothly down to ~1e-10
-/// (control points the curve barely touches): keeping rows below 1e-6 made
-/// S singular to working precision (rows dropped, the solve off by 3e-9 of
-/// the shape when a curve was created mid-drag). A row dropped here moves
-/// the curve by at most this fraction of the motion of its control points;
-/// measured at 10× the sample density, ≤ 1e-7 of the shape's size
-/// (`tests/held_everywhere.rs`).
-const DEPENDENT: f64 = 1e-6;
+/// Relative QR pivot down to which collocation samples are kept as point
+/// rows. At 1e-6 they made S singular to working precision (3 directions
+/// dropped under a pulling load on 20 × 15); at 1e-3 none is dropped and
+/// the held curve is the same (the rest of the span is held by the
+/// translation-free rows), on 20 × 15 and 81 × 159 alike.
+const POINT: f64 = 1e-3;
 
-/// The independent subset of the collocation `samples` on `surface`, in
-/// their original order.
-pub fn independent_samples(samples: &[(f64, f64)], surface: &BSplineSurface) -> Vec<(f64, f64)> {
+/// Relative QR pivot down to which the rest of the row space is held (as
+/// translation-free rows, see the module doc).
+const EXACT: f64 = 1e-9;
+
+/// A curve's identity on a surface: the point rows' samples and the
+/// translation-free rows that complete their span to the collocation rows'.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Identity {
+    /// The collocation samples kept as point rows, in their original order.
+    pub samples: Vec<(f64, f64)>,
+    /// Rows over the control points whose weights sum to zero, orthogonal
+    /// to the point rows' span (up to one point row each): the identity's
+    /// remaining directions.
+    pub rows: Vec<ScalarRow>,
+}
+
+/// The identity held by the collocation `samples` on `surface`.
+pub fn curve_identity(samples: &[(f64, f64)], surface: &BSplineSurface) -> Identity {
     let rows: Vec<_> = samples
         .iter()
         .map(|&(u, v)| surface_row(surface, u, v, 0, 0))
@@ -56,11 +88,35 @@ pub fn independent_samples(samples: &[(f64, f64)], surface: &BSplineSurface) -> 
     let r = qr.thin_R();
     let k = r.nrows().min(r.ncols());
     let first = if k > 0 { r[(0, 0)].abs() } else { 0.0 };
-    let rank = (0..k)
-        .take_while(|&d| r[(d, d)].abs() > DEPENDENT * first)
-        .count();
+    let rank = |tol: f64| {
+        (0..k)
+            .take_while(|&d| r[(d, d)].abs() > tol * first)
+            .count()
+    };
+    let (points, exact) = (rank(POINT), rank(EXACT));
     let (fwd, _) = qr.P().arrays();
-    let mut kept: Vec<usize> = fwd[..rank].to_vec();
+    let mut kept: Vec<usize> = fwd[..points].to_vec();
     kept.sort_unstable();
-    kept.into_iter().map(|s| samples[s]).collect()
+    let mut extra = Vec::new();
+    if exact > points {
+        let q = qr.compute_thin_Q();
+        // One point row (weights sum to 1) to take each direction's sum off.
+        let a0 = fwd[0];
+        for j in points..exact {
+            let sum: f64 = (0..touched.len()).map(|c| q[(c, j)]).sum();
+            let mut row = ScalarRow::default();
+            for (c, &index) in touched.iter().enumerate() {
+                let w = q[(c, j)] - sum * at[(c, a0)];
+                if w != 0.0 {
+                    row.indices.push(index);
+                    row.weights.push(w);
+                }
+            }
+            extra.push(row);
+        }
+    }
+    Identity {
+        samples: kept.into_iter().map(|s| samples[s]).collect(),
+        rows: extra,
+    }
 }

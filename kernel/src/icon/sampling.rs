@@ -1,9 +1,10 @@
 //! Where an icon touches the surface: the (u,v) sample points of its anchor.
 //!
-//! A point anchor is one sample. A curve is sampled at the independent
-//! subset ([`super::independent_samples`]) of its collocation points (per
-//! piece where w∘c is one polynomial, as many as determine it:
-//! `collocation`), so a constraint at its samples holds the whole curve.
+//! A point anchor is one sample. A curve is sampled at its collocation
+//! points (per piece where w∘c is one polynomial, as many as determine it:
+//! `collocation`), reduced to its identity ([`super::curve_identity`]):
+//! the independent samples plus translation-free rows for the rest, so a
+//! constraint on them holds the whole curve.
 //!
 //! Regions and edges are held exactly, by control points ([`held_points`]):
 //! their samples are the Greville points of the control points they hold,
@@ -11,9 +12,10 @@
 
 use glam::DVec3;
 
-use super::{Anchor, Edge, Role};
+use super::{Anchor, Edge, Identity, Role, curve_identity};
 use crate::bspline::{BSplineCurve, BSplineSurface, KnotVector, greville};
 use crate::quadrature::GaussLegendre;
+use crate::solve::ScalarRow;
 
 /// Why an anchor cannot be placed on a surface.
 #[derive(Clone, Debug, PartialEq)]
@@ -114,16 +116,25 @@ pub fn held_points(anchor: &Anchor, surface: &BSplineSurface) -> Option<Vec<usiz
 
 /// What a new or re-captured icon holds on `surface` at its `samples`: the
 /// surface points there, or for an icon that holds control points
-/// ([`held_points`], position constraints only) the control points.
+/// ([`held_points`], position constraints only) the control points. A
+/// curve's position constraint also holds the values of its identity's
+/// translation-free `rows` ([`Identity`]), after the samples' points.
 pub fn capture(
     anchor: &Anchor,
     role: Role,
     samples: &[(f64, f64)],
+    rows: &[ScalarRow],
     surface: &BSplineSurface,
 ) -> Vec<DVec3> {
     match held_points(anchor, surface).filter(|_| role == Role::Position) {
         Some(points) => points.iter().map(|&c| surface.points()[c]).collect(),
-        None => samples.iter().map(|&(u, v)| surface.point(u, v)).collect(),
+        None => {
+            let mut out: Vec<DVec3> = samples.iter().map(|&(u, v)| surface.point(u, v)).collect();
+            if role == Role::Position {
+                out.extend(rows.iter().map(|r| r.apply(surface.points())));
+            }
+            out
+        }
     }
 }
 
@@ -190,6 +201,17 @@ fn collocation(curve: &BSplineCurve, surface: &BSplineSurface) -> Vec<(f64, f64)
 
 /// The (u,v) samples of `anchor` on `surface`, or why it does not fit.
 pub fn samples(anchor: &Anchor, surface: &BSplineSurface) -> Result<Vec<(f64, f64)>, AnchorError> {
+    placement(anchor, surface).map(|p| p.samples)
+}
+
+/// Where `anchor` touches `surface`: its samples and, for a curve, the
+/// translation-free rows completing its identity ([`Identity`]); or why it
+/// does not fit.
+pub fn placement(anchor: &Anchor, surface: &BSplineSurface) -> Result<Identity, AnchorError> {
+    let points = |samples: Vec<(f64, f64)>| Identity {
+        samples,
+        rows: Vec::new(),
+    };
     match anchor {
         Anchor::Edge { .. } => {
             if surface.domain() != ((0.0, 1.0), (0.0, 1.0)) {
@@ -199,15 +221,17 @@ pub fn samples(anchor: &Anchor, surface: &BSplineSurface) -> Result<Vec<(f64, f6
             }
             let (gu, gv) = (greville(surface.u_knots()), greville(surface.v_knots()));
             let nv = surface.nv();
-            Ok(held_points(anchor, surface)
-                .unwrap_or_default()
-                .iter()
-                .map(|&c| (gu[c / nv], gv[c % nv]))
-                .collect())
+            Ok(points(
+                held_points(anchor, surface)
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|&c| (gu[c / nv], gv[c % nv]))
+                    .collect(),
+            ))
         }
         Anchor::Point { u, v } => {
             inside(surface, *u, *v)?;
-            Ok(vec![(*u, *v)])
+            Ok(points(vec![(*u, *v)]))
         }
         Anchor::Curve(curve) => {
             // The curve lies in the convex hull of its control points.
@@ -226,10 +250,7 @@ pub fn samples(anchor: &Anchor, surface: &BSplineSurface) -> Result<Vec<(f64, f6
             if uv_len < 1e-9 {
                 return Err(AnchorError::Degenerate("curve has no length in (u,v)"));
             }
-            Ok(super::independent_samples(
-                &collocation(curve, surface),
-                surface,
-            ))
+            Ok(curve_identity(&collocation(curve, surface), surface))
         }
         Anchor::Region {
             u0,
@@ -255,7 +276,7 @@ pub fn samples(anchor: &Anchor, surface: &BSplineSurface) -> Result<Vec<(f64, f6
             if out.is_empty() {
                 return Err(AnchorError::Degenerate("region covers the whole surface"));
             }
-            Ok(out)
+            Ok(points(out))
         }
     }
 }

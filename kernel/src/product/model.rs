@@ -33,7 +33,7 @@ use super::{
 use crate::curve_design::CurveDesign;
 use crate::design::{Design, DesignError};
 use crate::icon::IconId;
-use crate::solve::SolveReport;
+use crate::solve::{SolveReport, SolveWarning};
 
 /// The result of a drag frame on a part.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,6 +85,8 @@ pub struct Product {
     next_part: u64,
     next_join: u64,
     next_binding: u64,
+    /// The warning of the last [`Self::solve`] of a surface part.
+    last_warning: Option<SolveWarning>,
 }
 
 impl Product {
@@ -720,17 +722,27 @@ impl Product {
     }
 
     fn solve_surface(&mut self, id: PartId) -> Result<ChangedParts, ProductError> {
-        match self.group_of.get(&id) {
+        self.last_warning = None;
+        let (changed, report) = match self.group_of.get(&id) {
             None => {
-                self.surface_mut(id)?.solve()?;
-                Ok(ChangedParts::one(id))
+                let report = self.surface_mut(id)?.solve()?;
+                (ChangedParts::one(id), report)
             }
             Some(&g) => {
                 self.groups[g].refresh(&mut self.parts, &self.joins, &self.bindings)?;
-                self.groups[g].solve(&mut self.parts)?;
-                Ok(ChangedParts::shared(self.groups[g].ids.clone()))
+                let report = self.groups[g].solve(&mut self.parts)?;
+                (ChangedParts::shared(self.groups[g].ids.clone()), report)
             }
-        }
+        };
+        self.last_warning = report.warning;
+        Ok(changed)
+    }
+
+    /// The warning of the last [`Self::solve`] of a surface part (with its
+    /// group): set when the constraints are dependent and their targets
+    /// disagree, so the shape is their least-squares compromise.
+    pub fn last_warning(&self) -> Option<SolveWarning> {
+        self.last_warning
     }
 
     fn solve_curve(&mut self, id: PartId) -> Result<ChangedParts, ProductError> {

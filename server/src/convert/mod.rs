@@ -8,7 +8,8 @@ pub mod parts;
 
 use crate::design::actor::{Feedback, Presence, SnapshotView};
 use crate::design::doc::{
-    AnchorDoc, DerivativeDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, UvCurveDoc,
+    AnchorDoc, DerivativeDoc, EdgeSideDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
+    UvCurveDoc,
 };
 use crate::design::part::{PartBody, PartDoc};
 use crate::design::{Ack, Command, CommandError, DesignEvent, Edit, ErrorKind, PartEdit};
@@ -236,6 +237,15 @@ pub fn anchor_from_wire(a: &wire::Anchor) -> AnchorDoc {
             v1: *v1,
             inside: *inside,
         },
+        wire::Anchor::Edge { edge, mode } => AnchorDoc::Edge {
+            edge: match edge {
+                wire::EdgeSide::UMin => EdgeSideDoc::UMin,
+                wire::EdgeSide::UMax => EdgeSideDoc::UMax,
+                wire::EdgeSide::VMin => EdgeSideDoc::VMin,
+                wire::EdgeSide::VMax => EdgeSideDoc::VMax,
+            },
+            clamped: *mode == wire::EdgeMode::Clamped,
+        },
         wire::Anchor::Param { t } => AnchorDoc::Param { t: *t },
         wire::Anchor::Span { t0, t1 } => AnchorDoc::Span { t0: *t0, t1: *t1 },
     }
@@ -265,6 +275,19 @@ fn anchor_to_wire(a: &AnchorDoc) -> wire::Anchor {
             u1: *u1,
             v1: *v1,
             inside: *inside,
+        },
+        AnchorDoc::Edge { edge, clamped } => wire::Anchor::Edge {
+            edge: match edge {
+                EdgeSideDoc::UMin => wire::EdgeSide::UMin,
+                EdgeSideDoc::UMax => wire::EdgeSide::UMax,
+                EdgeSideDoc::VMin => wire::EdgeSide::VMin,
+                EdgeSideDoc::VMax => wire::EdgeSide::VMax,
+            },
+            mode: if *clamped {
+                wire::EdgeMode::Clamped
+            } else {
+                wire::EdgeMode::SimplySupported
+            },
         },
         AnchorDoc::Param { t } => wire::Anchor::Param { t: *t },
         AnchorDoc::Span { t0, t1 } => wire::Anchor::Span { t0: *t0, t1: *t1 },
@@ -549,6 +572,7 @@ pub fn ack(req: Option<u64>, ack: &Ack) -> Option<Utf8Bytes> {
             version: ack.version,
             part: ack.created_part,
             relation: ack.created_relation,
+            warning: ack.warning.clone(),
         })
     })
 }

@@ -1021,6 +1021,7 @@ impl Actor {
                     created_part: created.part,
                     created_relation: created.relation,
                     version: None,
+                    warning: self.model.edit_warning().map(str::to_owned),
                 })
             }
             Command::Grab { part, icon } => {

@@ -75,4 +75,7 @@ pub struct Ack {
     pub created_part: Option<u64>,
     /// The id of a relation the command created.
     pub created_relation: Option<u64>,
+    /// Set when an edit left the constraints contradicting each other: the
+    /// shape is their least-squares compromise (the text says by how much).
+    pub warning: Option<String>,
 }

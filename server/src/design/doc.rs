@@ -251,6 +251,15 @@ pub enum AnchorDoc {
         /// Deformation asked inside (true) or outside the region.
         inside: bool,
     },
+    /// A boundary edge of a surface part (unit domain), held by one
+    /// position constraint (`clamped`: also its tangent plane). Added with
+    /// issue 15; documents without edges load as before.
+    Edge {
+        /// Which edge.
+        edge: EdgeSideDoc,
+        /// Position and tangent plane (true) or position only.
+        clamped: bool,
+    },
     /// A point of a curve part at parameter t.
     Param {
         /// t.
@@ -266,13 +275,17 @@ pub enum AnchorDoc {
 }
 
 impl AnchorDoc {
-    /// A representative (u, v): the point, the curve's middle control point
-    /// or the region's centre.
+    /// A representative (u, v): the point, the curve's middle control point,
+    /// the region's centre or the edge's middle.
     pub fn centre(&self) -> [f64; 2] {
         match self {
             AnchorDoc::Point { u, v } => [*u, *v],
             AnchorDoc::Curve { curve } => curve.mid_point(),
             AnchorDoc::Region { u0, v0, u1, v1, .. } => [(u0 + u1) / 2.0, (v0 + v1) / 2.0],
+            AnchorDoc::Edge { edge, .. } => {
+                let [a, b] = edge.ends();
+                [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0]
+            }
             AnchorDoc::Param { t } => [*t, 0.0],
             AnchorDoc::Span { t0, t1 } => [(t0 + t1) / 2.0, 0.0],
         }
@@ -319,6 +332,7 @@ impl AnchorDoc {
             AnchorDoc::Point { u, v } => vec![[*u, *v]],
             AnchorDoc::Curve { curve } => curve.points.clone(),
             AnchorDoc::Region { u0, v0, u1, v1, .. } => vec![[*u0, *v0], [*u1, *v1]],
+            AnchorDoc::Edge { edge, .. } => edge.ends().to_vec(),
             AnchorDoc::Param { .. } | AnchorDoc::Span { .. } => Vec::new(),
         }
     }
@@ -327,7 +341,7 @@ impl AnchorDoc {
     pub fn validate(&self, surface: &SurfaceDoc) -> Result<(), CommandError> {
         if self.on_curve() {
             return Err(invalid(
-                "an icon on a surface part is anchored by `point`, `curve` or `region`",
+                "an icon on a surface part is anchored by `point`, `curve`, `region` or `edge`",
             ));
         }
         if let AnchorDoc::Curve { curve } = self {
@@ -361,6 +375,32 @@ impl AnchorDoc {
             return Err(invalid("a region needs two corners differing in u and v"));
         }
         Ok(())
+    }
+}
+
+/// A boundary edge of the unit parameter domain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeSideDoc {
+    /// u = 0.
+    UMin,
+    /// u = 1.
+    UMax,
+    /// v = 0.
+    VMin,
+    /// v = 1.
+    VMax,
+}
+
+impl EdgeSideDoc {
+    /// The edge's two ends in the unit parameter square.
+    pub fn ends(self) -> [[f64; 2]; 2] {
+        match self {
+            EdgeSideDoc::UMin => [[0.0, 0.0], [0.0, 1.0]],
+            EdgeSideDoc::UMax => [[1.0, 0.0], [1.0, 1.0]],
+            EdgeSideDoc::VMin => [[0.0, 0.0], [1.0, 0.0]],
+            EdgeSideDoc::VMax => [[0.0, 1.0], [1.0, 1.0]],
+        }
     }
 }
 

@@ -4,17 +4,18 @@
 //! document. Document icon ids map to kernel icon ids here; every kernel
 //! error becomes a [`CommandError`] with a stable kind.
 
-use super::doc::{AnchorDoc, DerivativeDoc, IconRoleDoc, IconStateDoc, MaterialDoc};
+use super::doc::{AnchorDoc, DerivativeDoc, EdgeSideDoc, IconRoleDoc, IconStateDoc, MaterialDoc};
 use super::edit::SurfaceQuery;
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
 use super::part::SurfacePart;
+use super::spring_band::spring_to_band;
 use glam::DVec3;
 use std::collections::BTreeMap;
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 use vsculpt_kernel::design::{Design, DesignError};
 use vsculpt_kernel::energy::SurfaceMaterial;
-use vsculpt_kernel::icon::{Anchor, Derivative, IconId, IconSpec, IconState, Role, SensorId};
+use vsculpt_kernel::icon::{Anchor, Derivative, Edge, IconId, IconSpec, IconState, Role, SensorId};
 
 /// A design's kernel state.
 pub struct Engine {
@@ -25,10 +26,7 @@ pub struct Engine {
     grabbed: Option<(u64, DVec3)>,
 }
 
-/// Most repetitions of one drag frame while the spring adapts.
-pub const SPRING_ITERATIONS: usize = 12;
-/// The band paper 003 keeps the spring's Δy/Δx in.
-pub const SPRING_BAND: (f64, f64) = (0.8, 1.2);
+pub use super::spring_band::{SPRING_BAND, SPRING_ITERATIONS};
 
 pub fn kernel_error(e: DesignError) -> CommandError {
     let kind = match &e {
@@ -86,6 +84,15 @@ fn anchor(a: &AnchorDoc) -> Result<Anchor, CommandError> {
             u1: *u1,
             v1: *v1,
             inside: *inside,
+        },
+        AnchorDoc::Edge { edge, clamped } => Anchor::Edge {
+            edge: match edge {
+                EdgeSideDoc::UMin => Edge::UMin,
+                EdgeSideDoc::UMax => Edge::UMax,
+                EdgeSideDoc::VMin => Edge::VMin,
+                EdgeSideDoc::VMax => Edge::VMax,
+            },
+            clamped: *clamped,
         },
         AnchorDoc::Param { .. } | AnchorDoc::Span { .. } => {
             return Err(CommandError::new(
@@ -270,18 +277,10 @@ impl Engine {
         }
         let from = self.grabbed.map(|g| g.1).unwrap_or_default();
         let is_load = self.design.icon(kid).map(|i| i.role) == Some(Role::Load);
-        let mut actual = DVec3::ZERO;
-        for _ in 0..SPRING_ITERATIONS {
-            actual = self.design.drag(kid, xyz).map_err(kernel_error)?.actual;
-            let dx = (xyz - from).length();
-            if !is_load || dx < 1e-9 {
-                break;
-            }
-            let ratio = (actual - from).length() / dx;
-            if (SPRING_BAND.0..=SPRING_BAND.1).contains(&ratio) {
-                break;
-            }
-        }
+        let design = &mut self.design;
+        let (actual, ()) = spring_to_band(from, xyz, is_load, || {
+            Ok((design.drag(kid, xyz).map_err(kernel_error)?.actual, ()))
+        })?;
         Ok(actual)
     }
 

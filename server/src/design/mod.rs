@@ -17,6 +17,7 @@ pub mod legacy;
 pub mod model;
 pub mod part;
 pub mod product_engine;
+pub mod spring_band;
 pub mod undo;
 
 pub use actor::{ClientInfo, DesignEvent, DesignHandle, Joined, Presence};

@@ -49,6 +49,8 @@ pub struct GeometrySet {
 pub struct DesignModel {
     doc: DesignDoc,
     engine: ProductEngine,
+    /// The solve warning of the last edit (see [`Self::edit_warning`]).
+    warning: Option<String>,
 }
 
 fn unknown_part(part: u64) -> CommandError {
@@ -65,6 +67,7 @@ impl DesignModel {
         let mut m = Self {
             doc: doc.clone(),
             engine,
+            warning: None,
         };
         m.sync();
         Ok(m)
@@ -169,6 +172,7 @@ impl DesignModel {
                 Edit::Unrelate { relation } => next.unrelate(*relation)?,
             })
         })();
+        self.warning = None;
         let moved = match outcome {
             Ok(m) => m,
             Err(e) => {
@@ -176,9 +180,19 @@ impl DesignModel {
                 return Err(e);
             }
         };
+        if let Edit::Part { .. } = edit {
+            self.warning = self.engine.solve_warning();
+        }
         self.doc = doc;
         self.sync();
         Ok((created, moved))
+    }
+
+    /// Why the last [`Self::apply`] of an edit to a part's icons or
+    /// material met its constraints only in the least-squares sense (they
+    /// contradict each other), or `None` when it met them.
+    pub fn edit_warning(&self) -> Option<&str> {
+        self.warning.as_deref()
     }
 
     /// The icon with `id` and the id of its part.

@@ -12,13 +12,11 @@
 use super::curve_engine::{CurveEngine, CurveQuery, curve_mesh, curve_readback};
 use super::doc::DesignDoc;
 use super::edit::SurfaceQuery;
-use super::engine::{
-    DesignQuery, Engine, IconReadback, SPRING_BAND, SPRING_ITERATIONS, kernel_error, readback,
-    surface_mesh,
-};
+use super::engine::{DesignQuery, Engine, IconReadback, kernel_error, readback, surface_mesh};
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
 use super::part::{ContinuityDoc, EdgeDoc, IsoLineDoc, PartBody, RelationDoc, RelationKind};
+use super::spring_band::spring_to_band;
 use glam::DVec3;
 use std::collections::BTreeMap;
 use vsculpt_kernel::icon::{IconId, Role};
@@ -27,6 +25,16 @@ use vsculpt_kernel::product::{
     PartId, Product, ProductError,
 };
 use vsculpt_kernel::solve::SolveWarning;
+
+/// What a client is told when a solve met its constraints only in the
+/// least-squares sense.
+pub fn warning_text(w: SolveWarning) -> String {
+    match w {
+        SolveWarning::Dependent { dropped, residual } => format!(
+            "the constraints contradict each other ({dropped} dependent equations): the shape misses them by up to {residual:.3e} (least-squares compromise)"
+        ),
+    }
+}
 
 /// Every part's kernel design, the relations, and the id maps.
 pub struct ProductEngine {
@@ -280,6 +288,12 @@ impl ProductEngine {
         Ok(moved)
     }
 
+    /// The warning of the last solve of a rebuilt part ([`Self::rebuild_part`]),
+    /// as the client is told it.
+    pub fn solve_warning(&self) -> Option<String> {
+        self.product.last_warning().map(warning_text)
+    }
+
     fn kid(&self, part: u64, icon: u64) -> Result<IconId, CommandError> {
         self.ids
             .get(&part)
@@ -350,30 +364,14 @@ impl ProductEngine {
             }
             None => false,
         };
-        let mut actual = DVec3::ZERO;
-        let mut changed = Vec::new();
-        let mut warning = None;
-        for _ in 0..SPRING_ITERATIONS {
-            let r = self
-                .product
+        let product = &mut self.product;
+        let (actual, (changed, warning)) = spring_to_band(from, xyz, is_load, || {
+            let r = product
                 .drag(PartId(part), kid, xyz)
                 .map_err(product_error)?;
-            actual = r.actual;
-            changed = ids_of(&r.changed);
-            warning = r.report.and_then(|r| r.warning).map(|w| match w {
-                SolveWarning::Dependent { dropped, residual } => format!(
-                    "the constraints contradict each other ({dropped} dependent equations): the shape misses them by up to {residual:.3e} (least-squares compromise)"
-                ),
-            });
-            let dx = (xyz - from).length();
-            if !is_load || dx < 1e-9 {
-                break;
-            }
-            let ratio = (actual - from).length() / dx;
-            if (SPRING_BAND.0..=SPRING_BAND.1).contains(&ratio) {
-                break;
-            }
-        }
+            let warning = r.report.and_then(|r| r.warning).map(warning_text);
+            Ok((r.actual, (ids_of(&r.changed), warning)))
+        })?;
         Ok((actual, changed, warning))
     }
 
