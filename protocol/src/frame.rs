@@ -286,6 +286,20 @@ impl GeometryFrame {
                 layout.total
             )));
         }
+        // The zero bytes (header 42..44, the padding before the icons, each
+        // icon's last four) are zero: a frame has one encoding, and a
+        // future use of them is not silently misread.
+        let points_end = layout.points + 12 * nu as usize * nv as usize;
+        let zeros = bytes[42..44]
+            .iter()
+            .chain(&bytes[points_end..layout.icons])
+            .chain((0..n_icons).flat_map(|k| {
+                let o = layout.icons + ICON_BYTES * k + 20;
+                &bytes[o..o + 4]
+            }));
+        if zeros.copied().any(|b| b != 0) {
+            return Err(bad("a frame's zero bytes (header offset 42, padding, icon records' last four) must be zero"));
+        }
         let nku = nu as usize + degree_u as usize + 1;
         let nkv = if kind == KIND_CURVE {
             0

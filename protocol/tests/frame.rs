@@ -246,3 +246,24 @@ fn a_curve_frame_with_v_knots_or_a_surface_shape_is_refused() {
     let e = GeometryFrame::decode(&m).unwrap_err();
     assert_eq!(e.code, vsculpt_protocol::ErrorCode::BadVersion);
 }
+
+/// The documented zero bytes are zero: a frame with one set (header offset 42,
+/// the padding before the icons, an icon record's last four bytes) is refused,
+/// so a frame has exactly one encoding (found by `tests/fuzz.rs`).
+#[test]
+fn a_frame_whose_zero_bytes_are_not_zero_is_refused() {
+    // 5 × 5 control points: 48 + 144 + 300 = 492 bytes, 4 bytes of padding before the icons.
+    let f = frame(5, 5, 2);
+    let bytes = f.encode().unwrap();
+    assert_eq!(GeometryFrame::decode(&bytes).unwrap(), f);
+    let icons_at = bytes.len() - 24 * 2;
+    let knots = 8 * ((5 + 3 + 1) * 2);
+    let padding = 48 + knots + 12 * 25;
+    assert!(padding < icons_at, "the test frame has padding");
+    for at in [42, 43, padding, icons_at - 1, icons_at + 20, icons_at + 24 + 23] {
+        let mut bad = bytes.clone();
+        bad[at] = 1;
+        let e = GeometryFrame::decode(&bad).unwrap_err();
+        assert!(e.message.contains("zero"), "byte {at}: {e:?}");
+    }
+}
