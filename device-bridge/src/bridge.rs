@@ -150,7 +150,8 @@ async fn drive_inner(
     flush.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
         tokio::select! {
-            _ = flush.tick(), if live => {
+            // Only while a drag waits for its slot: no wake-ups for nothing.
+            _ = flush.tick(), if live && interaction.drag_waiting() => {
                 cmds.clear();
                 interaction.flush_due(Timestamp::now(), &mut cmds);
                 if !cmds.is_empty() && let Some(l) = &link {
@@ -235,6 +236,11 @@ pub async fn run_live(
     let mut runners = Vec::new();
     for (i, d) in config.devices.iter().enumerate() {
         let mut driver = build_driver(SourceId(i as u16), d);
+        if matches!(d.kind, DeviceKind::Flock | DeviceKind::Fastrak) {
+            // A tracker streaming at up to 1 kHz is read in bulk once a drag
+            // slot: no drag could leave in between anyway.
+            driver.set_coalesce(Duration::from_micros(config.rates.drag_period_us()));
+        }
         let status_tap = recorder.as_ref().map(|r| r.tap());
         if let Some(r) = &recorder {
             driver.set_tap(r.tap());

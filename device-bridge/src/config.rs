@@ -506,7 +506,8 @@ impl Default for MenuConfig {
 pub struct RatesConfig {
     /// Drags per second per held icon at most (latest wins; the last drag before a
     /// release is always sent). A 1 kHz tracker thus costs the server 120 solves a
-    /// second, not 1000.
+    /// second, not 1000. Streaming serial trackers are also read at this rate, in
+    /// bulk (every record that arrived, decoded at once).
     pub drag_hz: f64,
 }
 

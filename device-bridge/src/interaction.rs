@@ -267,7 +267,23 @@ struct Hold {
 impl Hold {
     /// Queues the current drag: it leaves now when the rate allows (`period_us`
     /// since the last one, by sample time), else it waits as the latest.
+    ///
+    /// Records read in one chunk share its arrival time and make one slot: when
+    /// the drag just queued in `out` came from an earlier record of the same
+    /// chunk, this one takes its place, so the chunk's latest record leaves.
     fn drag_at(&mut self, time: Timestamp, period_us: u64, out: &mut Vec<Command>) {
+        if self.sent_at == Some(time) {
+            let icon = self.icon;
+            if let Some(queued) = out
+                .iter_mut()
+                .rev()
+                .find(|c| matches!(c, Command::Drag { icon: i, .. } if *i == icon))
+            {
+                *queued = self.drag();
+                self.pending = false;
+                return;
+            }
+        }
         let due = self
             .sent_at
             .is_none_or(|t| time.0.saturating_sub(t.0) >= period_us);
@@ -432,6 +448,11 @@ impl Interaction {
         for g in holds.filter(|g| g.pending) {
             g.drag_at(now, period, out);
         }
+    }
+
+    /// True when a drag waits for its slot ([`Interaction::flush_due`] has work).
+    pub fn drag_waiting(&self) -> bool {
+        self.holds().any(|g| g.pending)
     }
 
     /// The minimum time between two drags of one icon.
@@ -1035,6 +1056,37 @@ mod tests {
         assert_eq!(out, vec![release(2)]);
         // moving an open hand drags nothing
         assert!(run(&mut i, &[pose(DVec3::ZERO)]).is_empty());
+    }
+
+    #[test]
+    fn records_read_in_one_chunk_leave_as_one_drag_its_latest() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([icon(1, DVec3::ZERO, IconRole::Constraint)]);
+        let at = |us: u64, x: f64| {
+            let mut s = pose(DVec3::X * x);
+            s.time = Timestamp(us);
+            s
+        };
+        run(&mut i, &[at(0, 0.0), hand(1.0, 1.0)]);
+        // a tracker read in bulk: eight records of one chunk share its arrival time
+        let chunk = |us: u64, ks: std::ops::RangeInclusive<u64>| -> Vec<Sample> {
+            ks.map(|k| at(us, k as f64 * 1e-4)).collect()
+        };
+        let drag = |x: f64| Command::Drag {
+            icon: 1,
+            target: DVec3::X * x,
+        };
+        assert_eq!(run(&mut i, &chunk(10_000, 1..=8)), vec![drag(8e-4)]);
+        assert!(!i.drag_waiting());
+        // the next chunk one slot later: again one drag, from its latest record
+        assert_eq!(run(&mut i, &chunk(18_400, 9..=16)), vec![drag(16e-4)]);
+        // a chunk inside the slot waits as a whole, its latest record winning
+        assert!(run(&mut i, &chunk(20_000, 17..=20)).is_empty());
+        assert!(i.drag_waiting());
+        let mut out = Vec::new();
+        i.flush_due(Timestamp(26_800), &mut out);
+        assert_eq!(out, vec![drag(20e-4)]);
+        assert!(!i.drag_waiting());
     }
 
     #[test]

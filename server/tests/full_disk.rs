@@ -13,12 +13,15 @@ use common::parts::{self, load_icon};
 
 use common::http::get;
 use common::ws::Client;
-use serde_json::json;
+use serde_json::{Value, json};
+use std::path::Path;
 use std::time::Duration;
+use tokio::task::JoinHandle;
 use vsculpt_server::config::Config;
 use vsculpt_server::design::DesignDoc;
-use vsculpt_server::server::Server;
+use vsculpt_server::server::{Server, ServerError};
 use vsculpt_server::shutdown::Shutdown;
+use vsculpt_server::store::{DesignRecord, Store};
 
 async fn start(data: &std::path::Path) -> (Server, Shutdown) {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
@@ -38,6 +41,80 @@ async fn drag(c: &mut Client, icon: u64, to: [f64; 3]) {
         .await;
     c.ok(json!({"type": "drag_end", "part": 1, "icon": icon}))
         .await;
+}
+
+/// The working state as stored.
+fn stored(store: &Store, d: &DesignRecord) -> Value {
+    let bytes = store.working(d.id).unwrap().unwrap();
+    serde_json::to_value(DesignDoc::from_bytes(&bytes).unwrap()).unwrap()
+}
+
+/// While the disk refuses writes, the work done in memory is not stored
+/// (after giving the writer time to try and fail).
+async fn work_is_only_in_memory(store: &Store, d: &DesignRecord, in_memory: &Value) {
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    assert_ne!(
+        parts::icons(&stored(store, d), 1),
+        parts::icons(&in_memory["design"], 1)
+    );
+}
+
+/// A running server on `data`, its editor `ann` and what it has acked so far.
+struct Session {
+    shutdown: Shutdown,
+    serving: JoinHandle<Result<(), ServerError>>,
+    ann: Client,
+    acked: Vec<String>,
+}
+
+/// Once the disk takes writes again: the working state kept in memory is
+/// written by itself, a commit is acked, and after a restart every acked
+/// version (and nothing refused) and the in-memory design are there.
+async fn recovers(data: &Path, store: &Store, d: &DesignRecord, s: Session, in_memory: &Value) {
+    let Session {
+        shutdown,
+        serving,
+        mut ann,
+        mut acked,
+    } = s;
+    let mut saved = false;
+    for _ in 0..400 {
+        if parts::icons(&stored(store, d), 1) == parts::icons(&in_memory["design"], 1) {
+            saved = true;
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(25)).await;
+    }
+    assert!(
+        saved,
+        "the working state was never written after the disk took writes again"
+    );
+    ann.ok(json!({"type": "commit", "message": "disk is back"}))
+        .await;
+    acked.push("disk is back".into());
+    drop(ann);
+    shutdown.trigger();
+    serving.await.unwrap().unwrap();
+
+    let (server, shutdown) = start(data).await;
+    let addr = server.local_addr();
+    let serving = tokio::spawn(server.run());
+    let v = get(addr, "/api/designs/1/versions", Some(&d.tokens.viewer))
+        .await
+        .json();
+    let msgs: Vec<&str> = v["versions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v["message"].as_str().unwrap())
+        .collect();
+    assert_eq!(msgs, acked);
+    let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
+        .await
+        .json();
+    assert_eq!(now["design"]["parts"], in_memory["design"]["parts"]);
+    shutdown.trigger();
+    serving.await.unwrap().unwrap();
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -93,60 +170,19 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
         .await
         .json();
     assert_eq!(parts::icons(&in_memory["design"], 1).len(), 16);
-    let stored = |store: &vsculpt_server::store::Store| {
-        let bytes = store.working(d.id).unwrap().unwrap();
-        serde_json::to_value(DesignDoc::from_bytes(&bytes).unwrap()).unwrap()
-    };
-    // Give the writer time to try (and fail).
-    tokio::time::sleep(Duration::from_millis(400)).await;
-    assert_ne!(
-        parts::icons(&stored(&store), 1),
-        parts::icons(&in_memory["design"], 1)
-    );
+    work_is_only_in_memory(&store, &d, &in_memory).await;
     let m = get(addr, "/metrics", Some(&admin)).await.text();
     assert!(!m.contains("vsculpt_store_write_errors_total 0\n"), "{m}");
 
-    // Space comes back: the working state is written by itself.
+    // Space comes back.
     store.limit_pages(None).unwrap();
-    let mut saved = false;
-    for _ in 0..400 {
-        if parts::icons(&stored(&store), 1) == parts::icons(&in_memory["design"], 1) {
-            saved = true;
-            break;
-        }
-        tokio::time::sleep(Duration::from_millis(25)).await;
-    }
-    assert!(
-        saved,
-        "the working state was never written after space returned"
-    );
-    ann.ok(json!({"type": "commit", "message": "space is back"}))
-        .await;
-    acked.push("space is back".into());
-    drop(ann);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
-
-    // Nothing acked is lost.
-    let (server, shutdown) = start(&data).await;
-    let addr = server.local_addr();
-    let serving = tokio::spawn(server.run());
-    let v = get(addr, "/api/designs/1/versions", Some(&d.tokens.viewer))
-        .await
-        .json();
-    let msgs: Vec<&str> = v["versions"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v["message"].as_str().unwrap())
-        .collect();
-    assert_eq!(msgs, acked);
-    let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
-        .await
-        .json();
-    assert_eq!(now["design"]["parts"], in_memory["design"]["parts"]);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
+    let session = Session {
+        shutdown,
+        serving,
+        ann,
+        acked,
+    };
+    recovers(&data, &store, &d, session, &in_memory).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -194,55 +230,15 @@ async fn a_read_only_disk_refuses_every_write_keeps_the_work_and_recovers() {
     let in_memory = get(addr, "/api/designs/1", Some(&d.tokens.editor))
         .await
         .json();
-    let stored = |store: &vsculpt_server::store::Store| {
-        let bytes = store.working(d.id).unwrap().unwrap();
-        serde_json::to_value(DesignDoc::from_bytes(&bytes).unwrap()).unwrap()
-    };
-    tokio::time::sleep(Duration::from_millis(400)).await;
-    assert_ne!(
-        parts::icons(&stored(&store), 1),
-        parts::icons(&in_memory["design"], 1)
-    );
+    work_is_only_in_memory(&store, &d, &in_memory).await;
 
-    // The disk is writable again: the working state is written by itself,
-    // commits succeed.
+    // The disk is writable again.
     store.read_only(false).unwrap();
-    let mut saved = false;
-    for _ in 0..400 {
-        if parts::icons(&stored(&store), 1) == parts::icons(&in_memory["design"], 1) {
-            saved = true;
-            break;
-        }
-        tokio::time::sleep(Duration::from_millis(25)).await;
-    }
-    assert!(
-        saved,
-        "the working state was never written after the disk came back"
-    );
-    ann.ok(json!({"type": "commit", "message": "writable again"}))
-        .await;
-    drop(ann);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
-
-    // Nothing acked is lost; nothing refused was stored.
-    let (server, shutdown) = start(&data).await;
-    let addr = server.local_addr();
-    let serving = tokio::spawn(server.run());
-    let v = get(addr, "/api/designs/1/versions", Some(&d.tokens.viewer))
-        .await
-        .json();
-    let msgs: Vec<&str> = v["versions"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v["message"].as_str().unwrap())
-        .collect();
-    assert_eq!(msgs, vec!["created", "before", "writable again"]);
-    let now = get(addr, "/api/designs/1", Some(&d.tokens.editor))
-        .await
-        .json();
-    assert_eq!(now["design"]["parts"], in_memory["design"]["parts"]);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
+    let session = Session {
+        shutdown,
+        serving,
+        ann,
+        acked: vec!["created".into(), "before".into()],
+    };
+    recovers(&data, &store, &d, session, &in_memory).await;
 }
