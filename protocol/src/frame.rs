@@ -298,7 +298,9 @@ impl GeometryFrame {
                 &bytes[o..o + 4]
             }));
         if zeros.copied().any(|b| b != 0) {
-            return Err(bad("a frame's zero bytes (header offset 42, padding, icon records' last four) must be zero"));
+            return Err(bad(
+                "a frame's zero bytes (header offset 42, padding, icon records' last four) must be zero",
+            ));
         }
         let nku = nu as usize + degree_u as usize + 1;
         let nkv = if kind == KIND_CURVE {

@@ -260,7 +260,14 @@ fn a_frame_whose_zero_bytes_are_not_zero_is_refused() {
     let knots = 8 * ((5 + 3 + 1) * 2);
     let padding = 48 + knots + 12 * 25;
     assert!(padding < icons_at, "the test frame has padding");
-    for at in [42, 43, padding, icons_at - 1, icons_at + 20, icons_at + 24 + 23] {
+    for at in [
+        42,
+        43,
+        padding,
+        icons_at - 1,
+        icons_at + 20,
+        icons_at + 24 + 23,
+    ] {
         let mut bad = bytes.clone();
         bad[at] = 1;
         let e = GeometryFrame::decode(&bad).unwrap_err();
