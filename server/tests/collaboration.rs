@@ -295,15 +295,26 @@ async fn a_client_that_stops_reading_resyncs_instead_of_queueing() {
     let server = TestServer::start(common::data_dir("lag")).await;
     let d = server.demo().clone();
     let mut slow = Client::connect(server.addr, d.id, &d.viewer, "slow").await;
-    let mut fast = Client::connect(server.addr, d.id, &d.editor, "fast").await;
     // Far more events than the event channel holds (256) and than the
-    // socket buffers absorb, while the slow client reads nothing.
-    let n = 40_000;
-    for k in 0..n {
-        fast.send(json!({"type": "presence", "pointer": [k as f64, 0.0, 0.0]}))
-            .await;
+    // socket buffers absorb, while the slow client reads nothing: 45
+    // editors each send 900 presence updates, within the per-client rate
+    // limit's burst (1000), so none is refused.
+    let (editors, each) = (45, 900);
+    let mut fast = Vec::new();
+    for e in 0..editors {
+        fast.push(Client::connect(server.addr, d.id, &d.editor, &format!("fast{e}")).await);
     }
-    fast.ping().await;
+    for (e, c) in fast.iter_mut().enumerate() {
+        for k in 0..each {
+            c.send(json!({"type": "presence", "pointer": [k as f64, e as f64, 0.0]}))
+                .await;
+        }
+    }
+    // Each connection's messages reach the design in order: once the last
+    // editor's ping is answered, its last presence has been handled.
+    fast.last_mut().unwrap().ping().await;
+    let n = editors * each;
+    let last = format!("fast{}", editors - 1);
     // The slow client now reads: somewhere in its stream there is a fresh
     // snapshot (the resync), and it ends up with the final presence.
     let mut resyncs = 0;
@@ -319,7 +330,8 @@ async fn a_client_that_stops_reading_resyncs_instead_of_queueing() {
                     vec![v["client"].clone()]
                 };
                 let done = list.iter().any(|c| {
-                    c["name"] == "fast" && c["pointer"] == json!([(n - 1) as f64, 0.0, 0.0])
+                    c["name"] == last.as_str()
+                        && c["pointer"] == json!([(each - 1) as f64, (editors - 1) as f64, 0.0])
                 });
                 if done {
                     break;
