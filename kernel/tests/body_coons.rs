@@ -10,19 +10,8 @@ use vsculpt_kernel::body::elevate::elevate_surface;
 use vsculpt_kernel::body::refine::refine_surface;
 use vsculpt_kernel::body::{BSplineVolume, Body0, Body1, Body2, BodyError, Dir, Edges, Face};
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn vec(&mut self, s: f64) -> DVec3 {
-        DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
-    }
-}
+mod body_support;
+use body_support::Rng;
 
 /// Independent trilinear formula: nested linear interpolation.
 fn lerp3(c: &[[[DVec3; 2]; 2]; 2], u: f64, v: f64, w: f64) -> DVec3 {

@@ -6,19 +6,8 @@
 use glam::{DMat3, DVec3};
 use vsculpt_kernel::body::{BSplineVolume, Ffd};
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn vec(&mut self, s: f64) -> DVec3 {
-        DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
-    }
-}
+mod body_support;
+use body_support::Rng;
 
 const O: DVec3 = DVec3::new(-1.0, 0.5, 2.0);
 const AX: [DVec3; 3] = [

@@ -8,16 +8,8 @@ use glam::DVec3;
 use vsculpt_kernel::body::interior::{det_grid, det_on_plane, edit, move_keeping_shape, volume};
 use vsculpt_kernel::body::{BSplineVolume, Body1, BodyError, Dir, Edges, check_injective};
 use vsculpt_kernel::bspline::{BSplineCurve, KnotVector, greville};
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod body_support;
+use body_support::Rng;
 
 fn box_volume() -> BSplineVolume {
     BSplineVolume::affine(

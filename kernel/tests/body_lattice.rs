@@ -6,16 +6,8 @@ use glam::DVec3;
 use vsculpt_kernel::body::demo::{chair, chair_part};
 use vsculpt_kernel::body::{BSplineVolume, BodyError, BodyLattice, Dir, Face, check_injective};
 use vsculpt_kernel::bspline::KnotVector;
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod body_support;
+use body_support::Rng;
 
 /// A curved cubic volume whose u-knot 0.5 has multiplicity `mult`.
 fn with_knot(mult: usize) -> BSplineVolume {

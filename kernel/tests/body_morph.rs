@@ -10,16 +10,8 @@ use vsculpt_kernel::body::interior::volume;
 use vsculpt_kernel::body::morph::correspond;
 use vsculpt_kernel::body::{BSplineVolume, Dir, Face, Morph, Path, check_injective};
 use vsculpt_kernel::bspline::KnotVector;
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod body_support;
+use body_support::Rng;
 
 #[test]
 fn the_spool_is_a_spool_and_injective() {

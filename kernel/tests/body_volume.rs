@@ -5,17 +5,8 @@
 use glam::DVec3;
 use vsculpt_kernel::body::{BSplineVolume, Dir, Face};
 use vsculpt_kernel::bspline::KnotVector;
-
-/// A small deterministic generator (xorshift), independent of the code.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+mod body_support;
+use body_support::Rng;
 
 /// A curved cubic × quadratic × cubic volume with a double knot in w.
 fn wavy() -> BSplineVolume {

@@ -14,50 +14,13 @@
 //! `PROPTEST_CASES=20000 cargo test --release -p vsculpt-server --test fuzz_iges`.
 
 use proptest::prelude::*;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::path::PathBuf;
 use vsculpt_server::cad::iges::MAX_IGES_MAGNITUDE;
 use vsculpt_server::cad::{IgesError, read_iges, read_iges_parts};
 
-struct Tracking;
-
-thread_local! {
-    static LARGEST: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the
-// bookkeeping touches only a const-initialised thread-local `Cell`.
-unsafe impl GlobalAlloc for Tracking {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note(layout.size());
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        note(layout.size());
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note(new_size);
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-fn note(size: usize) {
-    let _ = LARGEST.try_with(|l| l.set(l.get().max(size)));
-}
-
-#[global_allocator]
-static ALLOC: Tracking = Tracking;
-
-fn measured<T>(f: impl FnOnce() -> T) -> (T, usize) {
-    LARGEST.with(|l| l.set(0));
-    let out = f();
-    (out, LARGEST.with(Cell::get))
-}
+#[path = "../../protocol/tests/largest_allocation/mod.rs"]
+mod largest_allocation;
+use largest_allocation::measured;
 
 /// No single allocation may exceed a multiple of the file size plus a
 /// constant: a header's counts cannot make the reader reserve more than
