@@ -195,11 +195,13 @@ impl SweepSolver {
             };
             let left = IdentityPrecond { dim: self.dim };
             let mat = a.as_ref();
-            let mut params = BicgParams::<f64>::default();
-            params.initial_guess = InitialGuessStatus::MaybeNonZero;
-            params.abs_tolerance = 0.0;
-            params.rel_tolerance = 1e-13;
-            params.max_iters = 200;
+            let params = BicgParams::<f64> {
+                initial_guess: InitialGuessStatus::MaybeNonZero,
+                abs_tolerance: 0.0,
+                rel_tolerance: 1e-13,
+                max_iters: 200,
+                ..Default::default()
+            };
             let mut x = guess.clone();
             let mut buf = MemBuffer::new(bicgstab_scratch(&left, &pre, mat, 1, Par::Seq));
             let r = bicgstab(
@@ -213,12 +215,12 @@ impl SweepSolver {
                 Par::Seq,
                 MemStack::new(&mut buf),
             );
-            if let Ok(info) = r {
-                if x.col(0).iter().all(|v| v.is_finite()) {
-                    self.iterations.push(info.iter_count);
-                    *guess = x;
-                    return Ok(());
-                }
+            if let Ok(info) = r
+                && x.col(0).iter().all(|v| v.is_finite())
+            {
+                self.iterations.push(info.iter_count);
+                *guess = x;
+                return Ok(());
             }
         }
         if self.symbolic_lu.is_none() {
