@@ -120,7 +120,10 @@ pub struct SweepSolver {
 
 impl SweepSolver {
     /// A solver for `interior` points whose 1-rings (interior neighbours
-    /// as interior indices) are `rings`.
+    /// as interior indices) are `rings` and whose ring sizes (boundary
+    /// neighbours included) are `degree`. Without a Cholesky factorisation
+    /// of the interior Laplacian (points cut off from the boundary) every
+    /// sweep is solved by LU.
     pub fn new(
         solve: SweepSolve,
         rings: &[Vec<usize>],
@@ -139,10 +142,9 @@ impl SweepSolver {
             }
             let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &trip)
                 .map_err(|e| FairingError::Solve(format!("{e:?}")))?;
-            Some(
-                a.sp_cholesky(Side::Lower)
-                    .map_err(|e| FairingError::Solve(format!("{e:?}")))?,
-            )
+            // Not positive definite (interior points cut off from the
+            // boundary): no preconditioner, every sweep by LU.
+            a.sp_cholesky(Side::Lower).ok()
         } else {
             None
         };
