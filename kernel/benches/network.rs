@@ -2,7 +2,12 @@
 //! ≈ 20 000 points: every frame replaces a curve (meetings re-tracked,
 //! faces re-checked), rebuilds the patches and re-evaluates every sample.
 //! `precomputed`: the samplers' domain weights (s_i, d_i, blends, tuning
-//! weights) are computed once, a frame only evaluates ribbons and combines;
+//! weights) are computed once, a frame re-evaluates the ribbons of the sides
+//! whose data changed (here the bottom side of the label face: the dragged
+//! control point's support) and recombines every sample;
+//! `all_sides`: the same samplers made to re-evaluate every side's ribbon
+//! at every sample (the worst case: a drag that changes every side, and
+//! the previous implementation);
 //! `baseline`: every sample evaluated from its domain point (Wachspress
 //! coordinates and blends recomputed). Target: ≥ 60 frames/s on one core.
 
@@ -41,6 +46,20 @@ fn bench(c: &mut Criterion) {
             net.set_curve(0, moved).unwrap();
             for (k, s) in samplers.iter_mut().enumerate() {
                 let p = net.patch(k).unwrap();
+                s.evaluate(&p, &mut out[k]);
+            }
+            out[0][0]
+        })
+    });
+    group.bench_function("all_sides", |b| {
+        b.iter(|| {
+            frame += 1;
+            let mut moved = ring.clone();
+            moved.points_mut()[18] += DVec3::new(0.02 * ((frame % 7) as f64), 0.0, 0.0);
+            net.set_curve(0, moved).unwrap();
+            for (k, s) in samplers.iter_mut().enumerate() {
+                let p = net.patch(k).unwrap();
+                s.invalidate();
                 s.evaluate(&p, &mut out[k]);
             }
             out[0][0]

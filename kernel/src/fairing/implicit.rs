@@ -15,9 +15,14 @@
 //! linear in the neighbours' heights, f = Σ_j α_j z_j + β (α, β from one
 //! 7 × 7 KKT solve with the unit vector e_f), so
 //! n·q_i − Σ_j (α_j + (1 − Σα)/m) n·q_j = β.
+//!
+//! The equations' sparsity pattern (the 1-rings) never changes, so the
+//! pattern and the order of the entries in it are computed in the first
+//! sweep and every later sweep only refills the values; the solve is a
+//! Laplacian-preconditioned BiCGSTAB warm-started from the current points
+//! ([`super::sweep_solver`]), or a sparse LU with its symbolic
+//! factorisation kept ([`SweepSolve::Direct`]).
 
-use faer::prelude::Solve;
-use faer::sparse::{SparseColMat, Triplet};
 use glam::DVec3;
 
 use super::error::FairingError;
@@ -25,13 +30,26 @@ use super::iterate::{Control, FairingOptions, FairingReport, Progress};
 use super::local_axes::{LocalAxes, fit_axes, pseudo_centroid};
 use super::mesh::PointMesh;
 use super::quadric::{Measure, goal_weights};
+use super::sweep_solver::{SweepSolve, SweepSolver};
 
 /// Fairs `mesh` toward `goals` (mean curvature, one per point) by global
-/// sweeps.
+/// sweeps (each solved iteratively, see [`super::sweep_solver`]).
 pub fn fair_implicit(
     mesh: &mut PointMesh,
     goals: &[f64],
     options: &FairingOptions,
+    progress: impl FnMut(&Progress) -> Control,
+) -> Result<FairingReport, FairingError> {
+    fair_implicit_with(mesh, goals, options, SweepSolve::Iterative, progress)
+}
+
+/// [`fair_implicit`] with the sweeps' linear solves made by `solve`
+/// (the same sweeps to round-off either way).
+pub fn fair_implicit_with(
+    mesh: &mut PointMesh,
+    goals: &[f64],
+    options: &FairingOptions,
+    solve: SweepSolve,
     mut progress: impl FnMut(&Progress) -> Control,
 ) -> Result<FairingReport, FairingError> {
     super::iterate::validate(mesh, goals, options)?;
@@ -51,12 +69,30 @@ pub fn fair_implicit(
     let mut history = Vec::new();
     let mut converged = false;
     let dim = 3 * interior.len();
-    let mut trip: Vec<Triplet<usize, usize, f64>> = Vec::new();
+    let rings: Vec<Vec<usize>> = interior
+        .iter()
+        .map(|&i| {
+            mesh.ring1(i)
+                .iter()
+                .filter(|&&j| !mesh.boundary[j as usize])
+                .map(|&j| index[j as usize])
+                .collect()
+        })
+        .collect();
+    let degree = interior
+        .iter()
+        .map(|&i| mesh.ring1(i).len() as f64)
+        .collect();
+    let mut solver = SweepSolver::new(solve, &rings, degree)?;
+    let mut values: Vec<f64> = Vec::new();
+    let mut frames = vec![[DVec3::ZERO; 3]; interior.len()];
     let mut rhs = faer::Mat::<f64>::zeros(dim, 1);
+    let mut x = faer::Mat::<f64>::zeros(dim, 1);
     let mut local = Vec::new();
     let mut alpha = Vec::new();
     for iteration in 1..=options.max_iterations {
-        trip.clear();
+        let first = solver.needs_pattern();
+        values.clear();
         for (k, &i) in interior.iter().enumerate() {
             let ring = mesh.ring1(i);
             let m = ring.len() as f64;
@@ -67,6 +103,7 @@ pub fn fair_implicit(
                 normals[i],
             );
             normals[i] = axes.z;
+            frames[k] = [axes.x, axes.y, axes.z];
             let c = pseudo_centroid(pts.clone());
             let at_c = LocalAxes { origin: c, ..axes };
             local.clear();
@@ -86,7 +123,10 @@ pub fn fair_implicit(
                 let r = 3 * k + a;
                 let mut value = *b;
                 for c in 0..3 {
-                    trip.push(Triplet::new(r, 3 * k + c, dir[c]));
+                    if first {
+                        solver.push_pair(r, 3 * k + c);
+                    }
+                    values.push(dir[c]);
                 }
                 for (jj, &j) in ring.iter().enumerate() {
                     let j = j as usize;
@@ -99,23 +139,23 @@ pub fn fair_implicit(
                         value += w * dir.dot(mesh.points[j]);
                     } else {
                         for c in 0..3 {
-                            trip.push(Triplet::new(r, 3 * index[j] + c, -w * dir[c]));
+                            if first {
+                                solver.push_pair(r, 3 * index[j] + c);
+                            }
+                            values.push(-w * dir[c]);
                         }
                     }
                 }
                 rhs[(r, 0)] = value;
             }
-        }
-        let a = SparseColMat::<usize, f64>::try_new_from_triplets(dim, dim, &trip)
-            .map_err(|e| FairingError::Solve(format!("{e:?}")))?;
-        let lu = match a.sp_lu() {
-            Ok(lu) => lu,
-            Err(e) => {
-                mesh.points = original;
-                return Err(FairingError::Solve(format!("{e:?}")));
+            for c in 0..3 {
+                x[(3 * k + c, 0)] = mesh.points[i][c];
             }
-        };
-        let x = lu.solve(&rhs);
+        }
+        if let Err(e) = solver.solve(&values, &rhs, &frames, &mut x) {
+            mesh.points = original;
+            return Err(e);
+        }
         let mut max_move = 0.0f64;
         for (k, &i) in interior.iter().enumerate() {
             let q = DVec3::new(x[(3 * k, 0)], x[(3 * k + 1, 0)], x[(3 * k + 2, 0)]);

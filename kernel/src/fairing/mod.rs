@@ -29,12 +29,14 @@ pub mod mesh;
 pub mod quadric;
 pub mod refit;
 pub mod sparse;
+pub mod sweep_solver;
 
 pub use error::FairingError;
 pub use goals::{Goals, resolve};
-pub use implicit::{fair_implicit, laplacian_implicit};
+pub use implicit::{fair_implicit, fair_implicit_with, laplacian_implicit};
 pub use iterate::{Control, FairingOptions, FairingReport, Progress, fair, laplacian_smooth};
 pub use measures::{Fairness, Neighbourhood, estimate, fairness, variation};
 pub use mesh::PointMesh;
 pub use quadric::{Curvatures, Measure};
 pub use refit::{Refit, RefitOptions, refit};
+pub use sweep_solver::SweepSolve;

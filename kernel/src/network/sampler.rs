@@ -17,6 +17,7 @@ use glam::{DVec2, DVec3};
 
 use super::domain::Domain;
 use super::patch::{Patch, PointWeights};
+use super::ribbon::SideRibbon;
 use crate::bspline::{BasisDerivs, basis_derivs_into};
 
 /// A triangulated patch domain.
@@ -93,15 +94,30 @@ impl DomainMesh {
 /// parameter, kept while the side's parameter range and knots stay the same
 /// (a drag moves control points; a side's range changes only when a meeting
 /// on it moves along the curve).
+///
+/// A frame re-evaluates only what changed. A patch point is
+/// S = Σ_i B_i R_i(s_i, d_i) + Σ_k φ_k h_k with fixed weights B_i, φ_k, but
+/// R_i is not linear in the curve: its cross derivative uses the unit
+/// tangent and the normal field's frame at s_i (normalisations, cos/sin of
+/// the normal's angle), so there is no fixed matrix from control points to
+/// samples. It is local, though: R_i at a sample depends only on the
+/// side's parameter range, knots, normal pieces, corner values, scale and
+/// the control points whose basis functions are non-zero somewhere on the
+/// side. Each side keeps its R_i per sample and the data it was computed
+/// from; a side whose data are unchanged (a drag elsewhere on the curve, or
+/// on another curve) is not re-evaluated, and the samples are recombined
+/// from the kept R_i (a few multiply-adds per sample and side).
 #[derive(Clone, Debug)]
 pub struct PatchSampler {
     mesh: DomainMesh,
     weights: Vec<PointWeights>,
     sides: usize,
     cache: Vec<SideCache>,
+    /// Whether the last `evaluate` re-evaluated each side.
+    refreshed: Vec<bool>,
 }
 
-/// One side's basis values at every sample.
+/// One side's basis values at every sample, and its ribbon values.
 #[derive(Clone, Debug, Default)]
 struct SideCache {
     key: Option<(f64, f64, Vec<f64>)>,
@@ -109,6 +125,28 @@ struct SideCache {
     first: Vec<u32>,
     /// 3 (degree + 1) values per sample: N, N′, N″.
     values: Vec<f64>,
+    /// The control points used by the samples: `lo..hi`.
+    lo: usize,
+    hi: usize,
+    /// The ribbon `ribbon_values` were computed from.
+    ribbon: Option<SideRibbon>,
+    /// R(s, d) per sample (zero where the side's blend is zero).
+    ribbon_values: Vec<DVec3>,
+}
+
+/// Whether `new` gives the same R(s, d) as `old` at every sample whose
+/// curve basis uses only control points `lo..hi`.
+fn same_ribbon(old: &SideRibbon, new: &SideRibbon, lo: usize, hi: usize) -> bool {
+    old.t_start == new.t_start
+        && old.t_end == new.t_end
+        && old.a == new.a
+        && old.b == new.b
+        && old.scale == new.scale
+        && old.pieces == new.pieces
+        && old.curve.knots() == new.curve.knots()
+        && old.curve.points().len() == new.curve.points().len()
+        && hi <= old.curve.points().len()
+        && old.curve.points()[lo..hi] == new.curve.points()[lo..hi]
 }
 
 impl PatchSampler {
@@ -121,6 +159,7 @@ impl PatchSampler {
             weights,
             sides: patch.sides(),
             cache: vec![SideCache::default(); patch.sides()],
+            refreshed: vec![false; patch.sides()],
         }
     }
 
@@ -137,6 +176,20 @@ impl PatchSampler {
     /// Whether there are no samples.
     pub fn is_empty(&self) -> bool {
         self.weights.is_empty()
+    }
+
+    /// Forgets the kept ribbon values, so the next [`Self::evaluate`]
+    /// re-evaluates every side (the basis values are kept).
+    pub fn invalidate(&mut self) {
+        for c in &mut self.cache {
+            c.ribbon = None;
+        }
+    }
+
+    /// Which sides the last [`Self::evaluate`] re-evaluated (the others'
+    /// ribbon values were unchanged and reused).
+    pub fn refreshed(&self) -> &[bool] {
+        &self.refreshed
     }
 
     /// The patch at every sample, into `out` (resized). `patch` must have
@@ -160,32 +213,41 @@ impl PatchSampler {
             let w = side.curve.degree() + 1;
             cache.first.clear();
             cache.values.clear();
+            let (mut lo, mut hi) = (usize::MAX, 0);
             for pw in &self.weights {
                 let s = if pw.corner.is_some() { 0.0 } else { pw.s[k] };
                 let t = side.t_start + s * (side.t_end - side.t_start);
                 basis_derivs_into(side.curve.knots(), t, 2, &mut scratch);
                 cache.first.push(scratch.first as u32);
+                lo = lo.min(scratch.first);
+                hi = hi.max(scratch.first + w);
                 for d in 0..3 {
                     cache.values.extend((0..w).map(|j| scratch.get(d, j)));
                 }
             }
+            cache.lo = lo.min(hi);
+            cache.hi = hi;
             cache.key = Some(key);
+            cache.ribbon = None;
         }
-        out.clear();
-        out.reserve(self.weights.len());
-        for (idx, pw) in self.weights.iter().enumerate() {
-            if let Some(c) = pw.corner {
-                out.push(patch.ribbons()[c].point(0.0));
+        for (k, side) in patch.ribbons().iter().enumerate() {
+            let cache = &mut self.cache[k];
+            let fresh = cache
+                .ribbon
+                .as_ref()
+                .is_some_and(|old| same_ribbon(old, side, cache.lo, cache.hi));
+            self.refreshed[k] = !fresh;
+            if fresh {
                 continue;
             }
-            let mut acc = DVec3::ZERO;
-            for (k, side) in patch.ribbons().iter().enumerate() {
-                let b = pw.blend[k];
-                if b == 0.0 {
+            let w = side.curve.degree() + 1;
+            cache.ribbon_values.clear();
+            cache.ribbon_values.reserve(self.weights.len());
+            for (idx, pw) in self.weights.iter().enumerate() {
+                if pw.corner.is_some() || pw.blend[k] == 0.0 {
+                    cache.ribbon_values.push(DVec3::ZERO);
                     continue;
                 }
-                let cache = &self.cache[k];
-                let w = side.curve.degree() + 1;
                 let first = cache.first[idx] as usize;
                 let vals = &cache.values[idx * 3 * w..(idx + 1) * 3 * w];
                 let pts = &side.curve.points()[first..first + w];
@@ -195,7 +257,26 @@ impl PatchSampler {
                         *out_d += *p * vals[d * w + j];
                     }
                 }
-                acc += side.eval_from(pw.s[k], pw.d[k], derivs).val() * b;
+                cache
+                    .ribbon_values
+                    .push(side.eval_from(pw.s[k], pw.d[k], derivs).val());
+            }
+            cache.ribbon = Some(side.clone());
+        }
+        out.clear();
+        out.reserve(self.weights.len());
+        for (idx, pw) in self.weights.iter().enumerate() {
+            if let Some(c) = pw.corner {
+                out.push(patch.ribbons()[c].point(0.0));
+                continue;
+            }
+            let mut acc = DVec3::ZERO;
+            for (k, cache) in self.cache.iter().enumerate() {
+                let b = pw.blend[k];
+                if b == 0.0 {
+                    continue;
+                }
+                acc += cache.ribbon_values[idx] * b;
             }
             for (h, t) in patch.tuning().iter().zip(&pw.tuning) {
                 acc += *h * *t;
