@@ -1,7 +1,9 @@
 //! Tensor-product B-spline volumes (trivariate B-spline solids) of any
 //! degree (l, m, n) with clamped knots:
 //!
-//!     x(u, v, w) = Σ_i Σ_j Σ_k N_i(u) M_j(v) L_k(w) P_ijk
+//! ```text
+//! x(u, v, w) = Σ_i Σ_j Σ_k N_i(u) M_j(v) L_k(w) P_ijk
+//! ```
 //!
 //! Evaluation with first and second derivatives, the Jacobian, the exact
 //! isoparametric surfaces at constant u, v or w (paper 002 §2.1) and the six
