@@ -5,30 +5,17 @@
 // every page draws it along the edge (a tube, with ticks across it when
 // clamped), and the held edge does not move while a load is dragged.
 
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
-import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { webDir, serverBinProblem, createDesign, startServer, stopServer, launchChromium, openClient } from './harness.mjs';
+import { webDir, createDesign, serverAndBrowser, openClient } from './harness.mjs';
 
 const artifacts = join(webDir, 'test-artifacts');
-const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-edge-'));
 let server;
 let browser;
-
-before(async () => {
-  const problem = serverBinProblem();
-  assert.equal(problem, null, problem);
-  mkdirSync(artifacts, { recursive: true });
-  server = await startServer({ dataDir });
-  browser = await launchChromium();
-});
-
-after(async () => {
-  if (browser) await browser.close();
-  await stopServer(server);
-  rmSync(dataDir, { recursive: true, force: true });
+const dataDir = serverAndBrowser('vsculpt-edge-', (s, b) => {
+  server = s;
+  browser = b;
 });
 
 async function documentOf(d) {

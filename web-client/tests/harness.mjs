@@ -3,11 +3,12 @@
 // Not a test file itself (the runner picks only *.test.mjs).
 
 import { execFileSync, execSync, spawn } from 'node:child_process';
-import { existsSync, mkdtempSync, readFileSync, rmSync, symlinkSync } from 'node:fs';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, symlinkSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
+import { before, after } from 'node:test';
 
 export const webDir = resolve(dirname(fileURLToPath(import.meta.url)), '..');
 
@@ -179,3 +180,30 @@ export function documentPoints(doc) {
   return Object.fromEntries(doc.parts.map((p) => [p.id, (p.body.kind === 'surface' ? p.body.surface.points : p.body.curve.points).flat()]));
 }
 
+
+/**
+ * The usual set-up of a browser test file: registers `before`/`after` hooks
+ * that check the server binary, create the artifacts folder, start a server
+ * on a fresh data directory (prefix `prefix`, under the system temp folder,
+ * removed afterwards) and Chromium, and hand both to `use(server, browser)`.
+ * Returns the data directory.
+ */
+export function serverAndBrowser(prefix, use) {
+  const dataDir = mkdtempSync(join(tmpdir(), prefix));
+  let server;
+  let browser;
+  before(async () => {
+    const problem = serverBinProblem();
+    if (problem) throw new Error(problem);
+    mkdirSync(join(webDir, 'test-artifacts'), { recursive: true });
+    server = await startServer({ dataDir });
+    browser = await launchChromium();
+    use(server, browser);
+  });
+  after(async () => {
+    if (browser) await browser.close();
+    await stopServer(server);
+    rmSync(dataDir, { recursive: true, force: true });
+  });
+  return dataDir;
+}

@@ -6,30 +6,17 @@
 // with `locked`); a rename reaches a second browser; an icon created after
 // selecting a part lands on that part; two plates joined draw their seam.
 
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
-import { tmpdir } from 'node:os';
 import { join } from 'node:path';
-import { webDir, serverBinProblem, createDesign, startServer, stopServer, launchChromium, openClient, documentPoints } from './harness.mjs';
+import { webDir, createDesign, serverAndBrowser, openClient, documentPoints } from './harness.mjs';
 
 const artifacts = join(webDir, 'test-artifacts');
-const dataDir = mkdtempSync(join(tmpdir(), 'vsculpt-parts-'));
 let server;
 let browser;
-
-before(async () => {
-  const problem = serverBinProblem();
-  assert.equal(problem, null, problem);
-  mkdirSync(artifacts, { recursive: true });
-  server = await startServer({ dataDir });
-  browser = await launchChromium();
-});
-
-after(async () => {
-  if (browser) await browser.close();
-  await stopServer(server);
-  rmSync(dataDir, { recursive: true, force: true });
+const dataDir = serverAndBrowser('vsculpt-parts-', (s, b) => {
+  server = s;
+  browser = b;
 });
 
 /** A fresh design (one flat plate) with its editor and viewer links. */
