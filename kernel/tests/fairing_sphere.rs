@@ -15,52 +15,8 @@ use vsculpt_kernel::fairing::{
 use vsculpt_kernel::network::demo::wheel;
 use vsculpt_kernel::network::{CurveNetwork, NetworkOptions};
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64)
-    }
-}
-
-/// The octant lattice: point (i, j, k)/|(i, j, k)|, i + j + k = m.
-#[allow(clippy::needless_range_loop)] // lattice indices (i, j)
-fn octant(m: usize) -> PointMesh {
-    let mut index = vec![vec![0u32; m + 1]; m + 1];
-    let mut points = Vec::new();
-    let mut boundary = Vec::new();
-    for i in 0..=m {
-        for j in 0..=m - i {
-            let k = m - i - j;
-            index[i][j] = points.len() as u32;
-            points.push(DVec3::new(i as f64, j as f64, k as f64).normalize());
-            boundary.push(i == 0 || j == 0 || k == 0);
-        }
-    }
-    let mut tris = Vec::new();
-    for i in 0..m {
-        for j in 0..m - i {
-            tris.push([index[i][j], index[i + 1][j], index[i][j + 1]]);
-            if i + j + 1 < m {
-                tris.push([index[i + 1][j], index[i + 1][j + 1], index[i][j + 1]]);
-            }
-        }
-    }
-    PointMesh::new(points, tris, boundary).unwrap()
-}
-
-fn perturb(mesh: &mut PointMesh, amount: f64, seed: u64) {
-    let mut rng = Lcg(seed);
-    for i in 0..mesh.len() {
-        if !mesh.boundary[i] {
-            let d = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5) * 2.0 * amount;
-            mesh.points[i] += d;
-        }
-    }
-}
+mod fairing_support;
+use fairing_support::{octant, perturb};
 
 fn sphere_distance(mesh: &PointMesh) -> f64 {
     mesh.points
