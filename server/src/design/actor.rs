@@ -1,7 +1,9 @@
 //! One task per design: it alone holds the design's kernel state (no locks
 //! around the solver), runs every command in arrival order, coalesces drag
 //! frames, keeps undo/redo, tracks presence, persists the working state at
-//! most `persist_delay` after a change, and publishes
+//! most `persist_delay` after a change — on the blocking pool, while it goes
+//! on serving drags (one write in flight at a time, settled before any other
+//! write of this design so the store sees them in order) — and publishes
 //!
 //! * geometry on a `watch` channel — latest wins, a slow client skips frames;
 //! * ordered events on a bounded `broadcast` channel — never dropped
@@ -418,6 +420,16 @@ impl Drop for OpenGauge {
     }
 }
 
+/// What woke the actor's loop.
+enum Wake {
+    /// This many requests arrived (0: every handle is gone).
+    Requests(usize),
+    /// A working-state write is due.
+    PersistDue,
+    /// The working-state write in flight landed.
+    Written(Result<Result<(), String>, tokio::task::JoinError>),
+}
+
 /// The actor's state.
 struct Actor {
     _open: OpenGauge,
@@ -439,6 +451,10 @@ struct Actor {
     persist_at: Option<Instant>,
     /// The back-off of the working-state write while it fails.
     persist_retry: Option<Duration>,
+    /// The working-state write in flight, if any: the actor keeps serving
+    /// requests while it runs (a write with its fsync takes tens of
+    /// milliseconds, which a drag must not wait for).
+    persisting: Option<tokio::task::JoinHandle<Result<(), String>>>,
     /// The (part, icon) each client is dragging.
     dragging: BTreeMap<u64, (u64, u64)>,
     /// Whether the geometry published last came from a drag.
@@ -480,6 +496,7 @@ pub fn spawn(
         rev: 0,
         persist_at: None,
         persist_retry: None,
+        persisting: None,
         dragging: BTreeMap::new(),
         drag_frame: false,
     };
@@ -491,23 +508,37 @@ impl Actor {
     async fn run(mut self, mut rx: mpsc::Receiver<Request>) {
         let mut batch: Vec<Request> = Vec::with_capacity(64);
         loop {
-            let persist_at = self.persist_at;
+            // The next write is due only once the one in flight has landed.
+            let persist_at = self.persist_at.filter(|_| self.persisting.is_none());
             let sleep = async move {
                 match persist_at {
                     Some(t) => tokio::time::sleep_until(t.into()).await,
                     None => std::future::pending().await,
                 }
             };
-            tokio::select! {
-                n = rx.recv_many(&mut batch, 256) => {
-                    if n == 0 {
-                        break;
+            let writing = self.persisting.as_mut();
+            let wake = tokio::select! {
+                n = rx.recv_many(&mut batch, 256) => Wake::Requests(n),
+                _ = sleep => Wake::PersistDue,
+                r = async move {
+                    match writing {
+                        Some(h) => h.await,
+                        None => std::future::pending().await,
                     }
+                } => Wake::Written(r),
+            };
+            match wake {
+                Wake::Requests(0) => break,
+                Wake::Requests(_) => {
                     if self.handle_batch(&mut batch).await {
                         break;
                     }
                 }
-                _ = sleep => self.persist().await,
+                Wake::PersistDue => self.start_persist(),
+                Wake::Written(r) => {
+                    self.persisting = None;
+                    self.written(r);
+                }
             }
         }
         self.persist().await;
@@ -663,6 +694,8 @@ impl Actor {
                     let _ = reply.send(out);
                 }
                 Request::Delete => {
+                    // No working-state write may land after the deletion.
+                    self.settle_persist().await;
                     self.retired
                         .store(true, std::sync::atomic::Ordering::SeqCst);
                     let _ = self.events.send(DesignEvent::Deleted(self.id));
@@ -868,21 +901,48 @@ impl Actor {
         self.drag_frame = false;
     }
 
-    /// Writes the working state if a write is due. A failed write (disk
-    /// full, read-only, I/O error) keeps the state in memory and is retried
-    /// after a back-off growing to [`PERSIST_RETRY_MAX`]; the first failure
-    /// and the recovery are logged once.
-    async fn persist(&mut self) {
-        if self.persist_at.take().is_none() {
+    /// Starts writing the working state on the blocking pool if a write is
+    /// due and none is in flight (the run loop starts the next one when the
+    /// one in flight lands).
+    fn start_persist(&mut self) {
+        if self.persisting.is_some() || self.persist_at.take().is_none() {
             return;
         }
         let bytes = self.model.to_doc().to_bytes();
         let store = self.store.clone();
         let id = self.id;
-        let failed = match tokio::task::spawn_blocking(move || store.save_working(id, &bytes)).await
-        {
+        self.persisting = Some(tokio::task::spawn_blocking(move || {
+            store.save_working(id, &bytes).map_err(|e| e.to_string())
+        }));
+    }
+
+    /// Waits for the working-state write in flight, if any, and records how
+    /// it ended: called before any other write of this design, so that an
+    /// older working state never lands after a newer one.
+    async fn settle_persist(&mut self) {
+        if let Some(h) = self.persisting.take() {
+            let r = h.await;
+            self.written(r);
+        }
+    }
+
+    /// Writes the working state now if a write is due (stop, shutdown),
+    /// after the one in flight.
+    async fn persist(&mut self) {
+        self.settle_persist().await;
+        self.start_persist();
+        self.settle_persist().await;
+    }
+
+    /// Records how a working-state write ended. A failed write (disk full,
+    /// read-only, I/O error) keeps the state in memory and is retried after
+    /// a back-off growing to [`PERSIST_RETRY_MAX`]; the first failure and
+    /// the recovery are logged once.
+    fn written(&mut self, r: Result<Result<(), String>, tokio::task::JoinError>) {
+        let id = self.id;
+        let failed = match r {
             Ok(Ok(())) => None,
-            Ok(Err(e)) => Some(e.to_string()),
+            Ok(Err(e)) => Some(e),
             Err(e) => Some(format!("writer task failed: {e}")),
         };
         match failed {
@@ -1126,6 +1186,9 @@ impl Actor {
                     .get(&client)
                     .map(|p| p.client.name.clone())
                     .unwrap_or_else(|| "rest".into());
+                // A working-state write in flight lands first: the commit's
+                // working state is the newer one.
+                self.settle_persist().await;
                 let bytes = self.model.to_doc().to_bytes();
                 let store = self.store.clone();
                 let id = self.id;

@@ -339,6 +339,23 @@ impl Store {
         Ok(())
     }
 
+    /// Test-only: stalls the store as a slow disk would. A thread takes the
+    /// database connection (every store call waits for it) before this
+    /// returns and holds it until the returned sender is dropped.
+    #[cfg(feature = "fault-injection")]
+    pub fn stall(self: &std::sync::Arc<Self>) -> std::sync::mpsc::Sender<()> {
+        let (release, held) = std::sync::mpsc::channel::<()>();
+        let (taken, wait_taken) = std::sync::mpsc::sync_channel::<()>(0);
+        let store = self.clone();
+        std::thread::spawn(move || {
+            let _conn = store.conn();
+            let _ = taken.send(());
+            let _ = held.recv();
+        });
+        let _ = wait_taken.recv();
+        release
+    }
+
     /// Test-only: the database's size in pages.
     #[cfg(feature = "fault-injection")]
     pub fn page_count(&self) -> Result<u64, StoreError> {
