@@ -21,10 +21,10 @@
 //! Durability is unchanged: the checkpoint only moves pages whose commits are
 //! already synced in the WAL, syncing the WAL before and the database after
 //! (SQLite's checkpoint protocol, crash-safe at any point: the next open
-//! recovers from the WAL). WAL growth is bounded as before: by what is
+//! recovers from the WAL). WAL growth is bounded as before by what is
 //! committed during the longest read transaction (a backup) plus one
-//! checkpoint. Should the thread be gone, the hook checkpoints inline as
-//! SQLite would.
+//! checkpoint, and under a steady stream of commits by [`WAL_CAP_FRAMES`].
+//! Should the thread be gone, the hook checkpoints inline as SQLite would.
 
 use rusqlite::hooks::Wal;
 use rusqlite::wal::CheckpointMode;
