@@ -1,17 +1,21 @@
 //! What an online backup costs the editors (issue 21): an editor drags an
 //! 81 × 159 design and commits at full rate through the real server on
 //! loopback, first alone, then while `vsculpt-server backup`'s code
-//! (`store::backup::backup`: SQLite `VACUUM INTO` from its own connection,
-//! then an integrity check of the copy) runs back to back in another
-//! thread. Reported for both phases in the same run: drag → the editor's
-//! `icon_feedback` and commit → `ack` latency (p50 / p99 / max), and the
-//! backups' count, duration and size. The store holds 40 committed versions
-//! of the design first (≈ 0.6 MB each), so a backup copies tens of MB.
+//! (`store::backup::backup`: SQLite's online backup API in paced slices from
+//! one read transaction, then an integrity check of the copy) runs back to
+//! back in another thread. Reported for both phases in the same run: drag →
+//! the editor's `icon_feedback` and commit → `ack` latency (p50 / p99 /
+//! max), the largest `vsculpt.db-wal` seen after an ack, and the backups'
+//! count, duration and size. The store holds 40 committed versions of the
+//! design first (≈ 0.6 MB each), so a backup copies tens of MB.
 //!
-//! Run: `cargo bench -p vsculpt-server --bench backup_pause`.
+//! Run: `cargo bench -p vsculpt-server --bench backup_pause` (with
+//! `VSCULPT_BENCH_TRACE=1`: the store's per-commit and per-checkpoint debug
+//! events on stderr, and a line per ack and per backup).
 
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{Value, json};
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -45,10 +49,21 @@ fn pct(v: &mut [f64], p: f64) -> f64 {
     v[((v.len() - 1) as f64 * p).round() as usize]
 }
 
+/// What one phase measured.
+#[derive(Default)]
+struct Phase {
+    /// Drag → feedback, ms.
+    drags: Vec<f64>,
+    /// Commit → ack, ms.
+    commits: Vec<f64>,
+    /// The largest WAL file seen after an ack, bytes.
+    wal_max: u64,
+}
+
 /// `n` rounds of a drag frame (waiting for its feedback) with a commit
-/// every fifth round; returns the drag and commit latencies in ms.
-async fn editor_rounds(ws: &mut Ws, icon: u64, n: usize, req: &mut u64) -> (Vec<f64>, Vec<f64>) {
-    let (mut drags, mut commits) = (Vec::new(), Vec::new());
+/// every fifth round.
+async fn editor_rounds(ws: &mut Ws, icon: u64, n: usize, req: &mut u64, wal: &Path) -> Phase {
+    let mut phase = Phase::default();
     for k in 0..n {
         let z = 2.0 + (k % 20) as f64 * 0.25;
         let t0 = Instant::now();
@@ -58,7 +73,7 @@ async fn editor_rounds(ws: &mut Ws, icon: u64, n: usize, req: &mut u64) -> (Vec<
         .await
         .unwrap();
         until(ws, |v| v["type"] == "icon_feedback").await;
-        drags.push(t0.elapsed().as_secs_f64() * 1e3);
+        phase.drags.push(t0.elapsed().as_secs_f64() * 1e3);
         if k % 5 == 4 {
             *req += 1;
             let r = *req;
@@ -70,15 +85,19 @@ async fn editor_rounds(ws: &mut Ws, icon: u64, n: usize, req: &mut u64) -> (Vec<
             .unwrap();
             let a = until(ws, |v| v["req"] == r).await;
             assert_eq!(a["type"], "ack", "{a}");
-            commits.push(t0.elapsed().as_secs_f64() * 1e3);
+            tracing::debug!(target: "vsculpt_server::store::bench", ms = t0.elapsed().as_secs_f64() * 1e3, "ack");
+            phase.commits.push(t0.elapsed().as_secs_f64() * 1e3);
+            let len = std::fs::metadata(wal).map_or(0, |m| m.len());
+            phase.wal_max = phase.wal_max.max(len);
         }
     }
-    (drags, commits)
+    phase
 }
 
 async fn run() {
-    let data = std::env::temp_dir().join(format!("vsculpt-bench-backup-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&data);
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("data");
+    let wal = data.join("vsculpt.db-wal");
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let mut config = Config::new(data.clone(), data.join("no-web"));
     config.demo = false;
@@ -121,20 +140,22 @@ async fn run() {
         .unwrap();
     let mut req = 1;
     // 40 versions first, so a backup has something to copy.
-    editor_rounds(&mut ws, icon, 200, &mut req).await;
+    editor_rounds(&mut ws, icon, 200, &mut req, &wal).await;
     let db_bytes = std::fs::metadata(data.join("vsculpt.db")).map_or(0, |m| m.len());
 
-    let (mut d0, mut c0) = editor_rounds(&mut ws, icon, 300, &mut req).await;
+    let mut alone = editor_rounds(&mut ws, icon, 300, &mut req, &wal).await;
 
     let stop = Arc::new(AtomicBool::new(false));
     let backups = {
         let (stop, data) = (stop.clone(), data.clone());
         std::thread::spawn(move || {
             let mut took = Vec::new();
-            let out = data.with_extension("backup.db");
+            let out = data.with_file_name("backup.db");
             while !stop.load(Ordering::Relaxed) {
                 let t0 = Instant::now();
+                tracing::debug!(target: "vsculpt_server::store::bench", "backup begins");
                 vsculpt_server::store::backup::backup(&data, &out, true).unwrap();
+                tracing::debug!(target: "vsculpt_server::store::bench", "backup ends");
                 took.push(t0.elapsed().as_secs_f64() * 1e3);
             }
             let size = std::fs::metadata(&out).map_or(0, |m| m.len());
@@ -142,17 +163,15 @@ async fn run() {
             (took, size)
         })
     };
-    let (mut d1, mut c1) = editor_rounds(&mut ws, icon, 300, &mut req).await;
+    let mut busy = editor_rounds(&mut ws, icon, 300, &mut req, &wal).await;
     stop.store(true, Ordering::Relaxed);
     let (mut took, size) = backups.join().unwrap();
 
     println!("store before the phases: {:.1} MB", db_bytes as f64 / 1e6);
-    for (name, d, c) in [
-        ("alone", &mut d0, &mut c0),
-        ("backups running", &mut d1, &mut c1),
-    ] {
+    for (name, p) in [("alone", &mut alone), ("backups running", &mut busy)] {
+        let (d, c) = (&mut p.drags, &mut p.commits);
         println!(
-            "{name:>16}: drag -> feedback p50 {:.2} ms p99 {:.2} ms max {:.2} ms ({} drags); commit -> ack p50 {:.2} ms p99 {:.2} ms max {:.2} ms ({} commits)",
+            "{name:>16}: drag -> feedback p50 {:.2} ms p99 {:.2} ms max {:.2} ms ({} drags); commit -> ack p50 {:.2} ms p99 {:.2} ms max {:.2} ms ({} commits); WAL up to {:.1} MB",
             pct(d, 0.5),
             pct(d, 0.99),
             pct(d, 1.0),
@@ -160,7 +179,8 @@ async fn run() {
             pct(c, 0.5),
             pct(c, 0.99),
             pct(c, 1.0),
-            c.len()
+            c.len(),
+            p.wal_max as f64 / 1e6
         );
     }
     println!(
@@ -173,10 +193,17 @@ async fn run() {
     drop(ws);
     shutdown.trigger();
     let _ = tokio::time::timeout(Duration::from_secs(10), task).await;
-    let _ = std::fs::remove_dir_all(&data);
 }
 
 fn main() {
+    // `VSCULPT_BENCH_TRACE=1`: the store's debug events (each commit's lock,
+    // write and commit times; each checkpoint's frames and time) on stderr.
+    if std::env::var_os("VSCULPT_BENCH_TRACE").is_some() {
+        tracing_subscriber::fmt()
+            .with_env_filter("vsculpt_server::store=debug")
+            .with_writer(std::io::stderr)
+            .init();
+    }
     tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()

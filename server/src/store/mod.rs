@@ -4,7 +4,8 @@
 //!
 //! Durability: every write is its own transaction, and with WAL +
 //! `synchronous=FULL` a transaction is on disk when `commit` returns, so a
-//! version is durable before the client's ack is sent. Working state is
+//! version is durable before the client's ack is sent. WAL checkpoints run
+//! on a thread of their own, never inside a commit ([`checkpoint`]). Working state is
 //! written by the design actor at most about a second after a change (and on
 //! shutdown), so a crash loses at most that last second of uncommitted work.
 //!
@@ -12,6 +13,7 @@
 //! `tokio::task::spawn_blocking`.
 
 pub mod backup;
+pub mod checkpoint;
 pub mod lock;
 pub mod token_index;
 pub mod tokens;
@@ -71,9 +73,14 @@ pub struct VersionInfo {
     pub message: String,
 }
 
-/// The database handle (one connection behind a mutex; writes are few).
+/// The database handle (one connection behind a mutex; writes are few),
+/// with its checkpointer thread.
 pub struct Store {
     conn: Mutex<Connection>,
+    /// Held for its life (dropping it stops and joins the thread); read
+    /// only by the test-only `hold_checkpoints`.
+    #[cfg_attr(not(feature = "fault-injection"), allow(dead_code))]
+    checkpointer: checkpoint::Checkpointer,
 }
 
 /// Milliseconds since the Unix epoch.
@@ -114,14 +121,17 @@ impl Store {
     /// Opens (creating when missing) `dir/vsculpt.db`.
     pub fn open(dir: &Path) -> Result<Self, StoreError> {
         std::fs::create_dir_all(dir)?;
-        let conn = Connection::open(dir.join("vsculpt.db"))?;
+        let db = dir.join(backup::DB_FILE);
+        let mut conn = Connection::open(&db)?;
         conn.pragma_update(None, "journal_mode", "WAL")?;
         conn.pragma_update(None, "synchronous", "FULL")?;
         conn.pragma_update(None, "foreign_keys", "ON")?;
         conn.busy_timeout(std::time::Duration::from_secs(5))?;
         conn.execute_batch(SCHEMA)?;
+        let checkpointer = checkpoint::Checkpointer::start(&db, &mut conn)?;
         Ok(Self {
             conn: Mutex::new(conn),
+            checkpointer,
         })
     }
 
@@ -234,8 +244,14 @@ impl Store {
         snapshot: &[u8],
     ) -> Result<VersionInfo, StoreError> {
         let time_ms = now_ms();
+        let t0 = std::time::Instant::now();
         let mut conn = self.conn();
-        let tx = conn.transaction()?;
+        let locked = t0.elapsed();
+        // IMMEDIATE: the write lock is taken with the snapshot. A deferred
+        // transaction reads first and, should the WAL have been restarted
+        // meanwhile (`checkpoint::WAL_CAP_FRAMES`), could not upgrade to a
+        // write (`SQLITE_BUSY_SNAPSHOT`, not retried by the busy handler).
+        let tx = conn.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
         let live: Option<i64> = tx
             .query_row(
                 "SELECT id FROM designs WHERE id = ?1 AND deleted = 0",
@@ -260,7 +276,16 @@ impl Store {
              ON CONFLICT(design_id) DO UPDATE SET updated_ms = excluded.updated_ms, snapshot = excluded.snapshot",
             params![id as i64, time_ms, snapshot],
         )?;
+        let written = t0.elapsed();
         tx.commit()?;
+        tracing::debug!(
+            design = id,
+            version = number,
+            lock_ms = locked.as_secs_f64() * 1e3,
+            write_ms = (written - locked).as_secs_f64() * 1e3,
+            commit_ms = (t0.elapsed() - written).as_secs_f64() * 1e3,
+            "store commit"
+        );
         Ok(VersionInfo {
             number: number as u64,
             time_ms,
@@ -354,6 +379,13 @@ impl Store {
         });
         let _ = wait_taken.recv();
         release
+    }
+
+    /// Test-only: holds the WAL checkpoints back (`true`) or lets them run,
+    /// so a test can tell whether a commit checkpoints.
+    #[cfg(feature = "fault-injection")]
+    pub fn hold_checkpoints(&self, on: bool) {
+        self.checkpointer.hold(on);
     }
 
     /// Test-only: the database's size in pages.
