@@ -614,3 +614,52 @@ fn finite(p: [f64; 3]) -> Result<DVec3, CommandError> {
 
 /// The network engines of a design's network parts, by part id.
 pub type NetworkEngines = BTreeMap<u64, NetworkEngine>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_control_point_away_from_meetings_re_samples_only_its_face() {
+        let part = super::super::network_demo::bottle_part().unwrap();
+        let mut e = NetworkEngine::build(&part).unwrap();
+        let before: Vec<Vec<DVec3>> = e.faces.iter().map(|f| f.points.clone()).collect();
+        let mut xyz = part.curves[0].points[18];
+        xyz[0] += 0.05;
+        let changed = e
+            .apply(&NetworkEditDoc::MovePoint {
+                curve: 0,
+                index: 18,
+                xyz,
+            })
+            .unwrap();
+        // The bottom ring's middle control point is under the label face
+        // only (its support ends well before the meetings at ±30°).
+        assert_eq!(changed.len(), 1, "{changed:?}");
+        let k = changed[0];
+        assert!(e.net.faces()[k].sides.iter().any(|s| s.curve == 0));
+        for (i, f) in e.faces.iter().enumerate() {
+            if i == k {
+                assert_ne!(f.points, before[i]);
+            } else {
+                assert_eq!(f.points, before[i], "face {i} was re-sampled");
+            }
+        }
+    }
+
+    #[test]
+    fn a_refused_edit_changes_nothing() {
+        let part = super::super::network_demo::bottle_part().unwrap();
+        let mut e = NetworkEngine::build(&part).unwrap();
+        // The ring's first point is a meeting: moving it loses the meeting.
+        let err = e
+            .apply(&NetworkEditDoc::MovePoint {
+                curve: 0,
+                index: 0,
+                xyz: [0.0, -1.5, 0.0],
+            })
+            .unwrap_err();
+        assert_eq!(err.kind, ErrorKind::Incompatible, "{err:?}");
+        assert_eq!(e.to_part(), part);
+    }
+}
