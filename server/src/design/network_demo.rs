@@ -54,3 +54,20 @@ pub fn bottle_design(name: &str) -> Result<DesignDoc, CommandError> {
     doc.validate()?;
     Ok(doc)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::design::DesignModel;
+
+    #[test]
+    fn the_bottle_design_loads_and_sends_one_mesh_frame() {
+        let doc = bottle_design("bottle").unwrap();
+        let m = DesignModel::load(&doc).unwrap();
+        assert_eq!(m.to_doc(), doc, "a reload is exact");
+        let set = m.geometry_set(1, 0);
+        assert_eq!(set.parts.len(), 1);
+        let frame = vsculpt_protocol::MeshFrame::decode(&set.parts[&1].frame).unwrap();
+        assert!(frame.triangles.len() > 1000, "{}", frame.triangles.len());
+    }
+}

@@ -325,10 +325,17 @@ impl NetworkEngine {
                 if p == f.patch {
                     continue;
                 }
-                f.sampler.evaluate(&p, &mut f.points);
+                // The sampler re-evaluates only the sides whose ribbon
+                // changed where this face uses it; none: the face's samples
+                // are as they were (a faired face stays faired).
+                let mut points = Vec::new();
+                f.sampler.evaluate(&p, &mut points);
                 f.patch = p;
-                f.faired = None;
-                changed.push(i);
+                if f.sampler.refreshed().iter().any(|r| *r) {
+                    f.points = points;
+                    f.faired = None;
+                    changed.push(i);
+                }
             }
         } else {
             self.faces = patches.into_iter().map(FaceMesh::new).collect();
