@@ -542,6 +542,9 @@ impl NetworkEngine {
     }
 }
 
+/// A meeting: its point and the (curve, parameter) pairs there.
+pub type MeetingView = ([f64; 3], Vec<(usize, f64)>);
+
 /// A network part with what the kernel found of it: where its curves meet
 /// and the faces they enclose (what clients are sent).
 #[derive(Clone, Debug, PartialEq)]
@@ -549,7 +552,7 @@ pub struct NetworkView {
     /// The part.
     pub part: NetworkPart,
     /// Each meeting's point and the (curve, parameter) pairs there.
-    pub meetings: Vec<([f64; 3], Vec<(usize, f64)>)>,
+    pub meetings: Vec<MeetingView>,
     /// Per face, its sides as (curve, t_start, t_end).
     pub faces: Vec<Vec<(usize, f64, f64)>>,
 }
