@@ -269,6 +269,16 @@ pub enum ClientMessage {
         /// What to change.
         edit: crate::dsm::DsmEdit,
     },
+    /// Reshape a network part (move a control point, drag a point of a
+    /// curve, add or remove a curve) or fair one of its faces: answered
+    /// `ack`, `network_changed` and a mesh frame (kind 3) of the part to
+    /// every client; a refused edit changes nothing.
+    NetworkEdit {
+        /// The network part.
+        part: u64,
+        /// What to change.
+        edit: crate::network::NetworkEdit,
+    },
 }
 
 /// The `type` tags of every client message, for telling an unknown type
@@ -306,6 +316,7 @@ pub const CLIENT_TYPES: &[&str] = &[
     "relate",
     "unrelate",
     "dsm_edit",
+    "network_edit",
 ];
 
 /// Parses and validates one text message from a client: `too_large`,

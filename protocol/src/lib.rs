@@ -19,6 +19,7 @@
 //! * [`schema`] — the JSON Schema of every message, generated from the
 //!   types (checked in as `protocol/schema/protocol.schema.json`).
 //! * [`dsm`] — a Density Spatial Model part's shape and its edits.
+//! * [`network`] — a styling-curve network part's shape and its edits.
 //! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
@@ -30,6 +31,7 @@ pub mod error;
 pub mod frame;
 pub mod limits;
 pub mod mesh_frame;
+pub mod network;
 pub mod parts;
 pub mod schema;
 pub mod server;
@@ -42,6 +44,7 @@ pub use dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};
 pub use mesh_frame::MeshFrame;
+pub use network::{FairingGoal, FairingRequest, FairnessMeasure, NetworkData, NetworkEdit};
 pub use parts::*;
 pub use server::ServerMessage;
 pub use types::*;

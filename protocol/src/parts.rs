@@ -45,6 +45,12 @@ pub enum PartShape {
         /// The shape.
         dsm: crate::dsm::DsmData,
     },
+    /// A styling-curve network (paper 004): B-spline curves whose faces the
+    /// server fills with n-sided patches, sent as mesh frames (kind 3).
+    Network {
+        /// The network.
+        network: crate::network::NetworkData,
+    },
 }
 
 impl PartShape {
@@ -54,6 +60,7 @@ impl PartShape {
             PartShape::Surface { .. } => PartKind::Surface,
             PartShape::Curve { .. } => PartKind::Curve,
             PartShape::Dsm { .. } => PartKind::Dsm,
+            PartShape::Network { .. } => PartKind::Network,
         }
     }
 }
@@ -68,6 +75,8 @@ pub enum PartKind {
     Curve,
     /// A Density Spatial Model shape.
     Dsm,
+    /// A styling-curve network.
+    Network,
 }
 
 /// The material of a curve part (paper 003, eq. 1): stretch α and bend β.

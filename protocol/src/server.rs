@@ -208,6 +208,14 @@ pub enum ServerMessage {
         /// `#rrggbb`.
         colour: String,
     },
+    /// A network part's curves, meetings, faces or faired faces changed
+    /// (its patches follow as a mesh frame).
+    NetworkChanged {
+        /// Its id.
+        part: u64,
+        /// The network as it is now.
+        network: crate::network::NetworkData,
+    },
     /// Parts were tied together.
     RelationCreated {
         /// The new relation.

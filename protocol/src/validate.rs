@@ -204,6 +204,7 @@ fn part_spec(p: &PartSpec) -> Result<(), ProtocolError> {
         PartShape::Surface { surface: s } => surface(s)?,
         PartShape::Curve { curve: c } => curve(c)?,
         PartShape::Dsm { dsm } => dsm.validate()?,
+        PartShape::Network { network } => network.validate()?,
     }
     if let Some(m) = &p.material {
         part_material(m)?;
@@ -275,6 +276,7 @@ impl ClientMessage {
             SetMaterial { material: m, .. } => part_material(m),
             CreatePart { spec } => part_spec(spec),
             DsmEdit { edit, .. } => edit.validate(),
+            NetworkEdit { edit, .. } => edit.validate(),
             Relate {
                 relation: crate::parts::RelationSpec::Binding { line, .. },
             } => match line {

@@ -288,6 +288,10 @@ pub struct CreateDesign {
     /// Control points along v (default 12).
     #[serde(default)]
     pub nv: Option<usize>,
+    /// `"bottle"`: the styling-curve bottle network (paper 004) instead of
+    /// a plate.
+    #[serde(default)]
+    pub template: Option<String>,
 }
 
 async fn create_design(
@@ -313,7 +317,17 @@ async fn create_design(
             "nu and nv must be between 4 and 200".into(),
         ));
     }
-    let doc = crate::design::demo::plate(name, nu, nv)?;
+    let doc = match req.template.as_deref() {
+        None => crate::design::demo::plate(name, nu, nv)?,
+        Some("bottle") => crate::design::network_demo::bottle_design(name)?,
+        Some(other) => {
+            return Err(ApiError(
+                StatusCode::BAD_REQUEST,
+                "out_of_range",
+                format!("no template {other:?} (known: \"bottle\")"),
+            ));
+        }
+    };
     let rec = s.hub.create(doc, "rest").await?;
     Ok((
         StatusCode::CREATED,

@@ -116,6 +116,26 @@ pub fn export_surfaces(
     }
 }
 
+/// The network parts a mesh export covers: `part` if it is one, or every
+/// visible network part when `part` is `None`.
+pub fn export_networks(
+    doc: &DesignDoc,
+    part: Option<u64>,
+) -> Vec<crate::design::part::NetworkPart> {
+    use crate::design::part::PartBody;
+    doc.parts
+        .iter()
+        .filter(|p| match part {
+            Some(id) => p.id == id,
+            None => p.visible,
+        })
+        .filter_map(|p| match &p.body {
+            PartBody::Network(n) => Some(n.clone()),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Sends what it is given to the HTTP body in [`CHUNK_BYTES`] pieces,
 /// blocking while the connection is behind; fails once the client is gone.
 struct ChunkWriter {
@@ -188,7 +208,8 @@ where
     Ok(Body::from_stream(body))
 }
 
-/// A mesh export of `doc` — one part, or every visible surface part — with
+/// A mesh export of `doc` — one part, or every visible surface and network
+/// part (a network's patches as the engine samples them) — with
 /// at most `max_vertices` vertices in all (shared among the parts by their
 /// number of knot spans), streamed.
 pub async fn mesh(
@@ -201,7 +222,12 @@ pub async fn mesh(
         Some(p) => format!("{} - {}", doc.name, p.name),
         None => doc.name.clone(),
     };
-    let surfaces = export_surfaces(&doc, part)?;
+    let networks = export_networks(&doc, part);
+    let surfaces = if networks.is_empty() || part.is_none() {
+        export_surfaces(&doc, part)?
+    } else {
+        Vec::new()
+    };
     drop(doc);
     stream(
         move || {
@@ -222,6 +248,16 @@ pub async fn mesh(
                     max_vertices * n / total,
                 );
                 let one = tessellate(surface, su, sv);
+                let base = t.positions.len() as u32;
+                t.positions.extend(one.positions);
+                t.normals.extend(one.normals);
+                t.indices.extend(one.indices.iter().map(|i| i + base));
+            }
+            // Network parts: their patches' meshes (the engine's resolution).
+            for n in &networks {
+                let one = crate::design::network_engine::NetworkEngine::build(n)
+                    .map_err(|e| ExportError::Part(e.message))?
+                    .mesh();
                 let base = t.positions.len() as u32;
                 t.positions.extend(one.positions);
                 t.normals.extend(one.normals);

@@ -17,6 +17,7 @@ import { Link } from './net.js';
 import { XRSculpt } from './xr.js';
 import { Design, domainOf, relationParts } from './design.js';
 import { PartsView } from './parts-view.js';
+import { NetworkView } from './network-view.js';
 import { PartsPanel } from './parts-panel.js';
 import { deviation, sameDomain, versionSurface } from './compare.js';
 
@@ -69,6 +70,7 @@ const design = state.design;
 const view = new View($('viewport'));
 const partsView = new PartsView(view);
 const icons = new IconLayer(view.model);
+const networkView = new NetworkView(view, { send: (m) => send(m), canEdit: () => state.access === 'editor' && state.online });
 
 function status(kind, text) {
   const el = $('status');
@@ -166,9 +168,10 @@ let pictured = false;
 function redraw() {
   perf.redraws++;
   partsView.sync(design, { hidden: state.hidden, selected: state.selectedPart });
+  networkView.sync(design, state.hidden);
   for (const id of design.parts.keys()) partShownSeq.set(id, partSeq.get(id) || 0);
   dirtyParts.clear();
-  if (partsView.drawings.size) pictured = true;
+  if (partsView.drawings.size || networkView.parts.size) pictured = true;
   const sphere = view.boundingSphere();
   icons.size = sphere ? sphere.radius * 0.025 : 0.05;
   icons.update(drawnIcons(), geometryOf, state.selected);
@@ -268,7 +271,16 @@ function escape(s) {
 }
 
 function onMessage(msg) {
+  if (msg.type === 'ack' || msg.type === 'error') networkView.answered(msg.req);
   switch (msg.type) {
+    case 'network_changed': {
+      const p = design.parts.get(msg.part);
+      if (p) {
+        p.network = msg.network;
+        networkView.setNetwork(msg.part, msg.network, p.colour);
+      }
+      break;
+    }
     case 'welcome':
       state.access = msg.access;
       break;
@@ -346,6 +358,7 @@ function onMessage(msg) {
 /** Whether a part's JSON carries its control points (a full snapshot or part_created). */
 function partHasPoints(p) {
   const s = p.shape;
+  if (s.kind === 'network') return false;
   return (s.kind === 'surface' ? s.surface.points : s.curve.points).length > 0;
 }
 
@@ -358,8 +371,11 @@ function setHistory(canUndo, canRedo) {
 
 function onFrame(f) {
   state.frames++;
-  // Mesh frames (kind 3, dsm parts) decode but are not drawn by this page yet.
-  if (f.kind === 'mesh') return;
+  // Mesh frames (kind 3): a network part's patches are drawn; dsm parts' not yet.
+  if (f.kind === 'mesh') {
+    if (networkView.mesh(f)) pictured = true;
+    return;
+  }
   const known = design.parts.has(f.part);
   if (!design.applyFrame(f)) return;
   state.revision = design.revision;
@@ -764,6 +780,10 @@ $('create').addEventListener('change', (e) => {
 });
 $('add-plane').addEventListener('click', addPlane);
 $('add-curve').addEventListener('click', addCurve);
+$('fair-network').addEventListener('click', () => {
+  const ids = [...design.parts.values()].filter((p) => p.kind === 'network' && (state.selectedPart === null || state.selectedPart === undefined || state.selectedPart === p.id)).map((p) => p.id);
+  for (const id of ids) networkView.fairAll(id);
+});
 $('finish-curve').addEventListener('click', finishCurve);
 $('sel-role').addEventListener('change', (e) => send({ type: 'set_role', icon: state.selected, role: ROLES[e.target.value] }));
 $('sel-state').addEventListener('change', (e) => send({ type: 'set_state', icon: state.selected, state: e.target.value }));
@@ -1018,4 +1038,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, send, view, partsView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, send, view, partsView, networkView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

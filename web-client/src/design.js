@@ -43,6 +43,8 @@ export function geometryFromShape(shape) {
       points: flat(c.points),
     };
   }
+  // A network's curves and patches are drawn by network-view.js (part.network).
+  if (shape.kind === 'network') return { kind: 'network', points: null };
   throw new Error(`unknown part kind ${shape.kind}`);
 }
 
@@ -129,6 +131,7 @@ export class Design {
       geometry: geometry.points ? geometry : null,
       revision: rev,
       provisional: false,
+      network: p.shape.kind === 'network' ? p.shape.network : undefined,
     };
     for (const icon of p.icons) {
       part.icons.add(icon.id);

@@ -4,6 +4,7 @@
 //! Neither the design actor nor the kernel sees a protocol type. Parts and
 //! relations are in [`parts`].
 
+pub mod network;
 pub mod parts;
 
 use crate::design::actor::{Feedback, Presence, SnapshotView};
@@ -477,6 +478,10 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
             edit: PartEdit::SetMaterial(parts::part_material_from_wire(&material)),
         }),
         M::DsmEdit { .. } => return Err((req, dsm_not_served())),
+        M::NetworkEdit { part, edit: e } => edit(Edit::Network {
+            part,
+            edit: network::edit_from_wire(&e),
+        }),
         M::CreatePart { spec } => {
             edit(parts::create_part(&spec).ok_or_else(|| (req, dsm_not_served()))?)
         }
@@ -693,6 +698,10 @@ pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
             locked: p.locked,
             colour: p.colour.clone(),
         }),
+        DesignEvent::NetworkChanged(part, v) => text(&ServerMessage::NetworkChanged {
+            part: *part,
+            network: network::network_to_wire(v),
+        }),
         DesignEvent::RelationCreated(r) => text(&ServerMessage::RelationCreated {
             relation: parts::relation_to_wire(r),
         }),
@@ -750,6 +759,10 @@ pub fn geometry_frame(
                 s.u_knots.clone(),
                 s.v_knots.clone(),
             )
+        }
+        PartBody::Network(_) => {
+            // Network parts are sent as mesh frames (`NetworkEngine::frame`).
+            return Bytes::new();
         }
         PartBody::Curve(c) => {
             let c = &c.curve;

@@ -81,6 +81,8 @@ pub fn body_material(b: &PartBody) -> MaterialEdit {
     match b {
         PartBody::Surface(s) => MaterialEdit::Surface(s.material),
         PartBody::Curve(c) => MaterialEdit::Curve(c.material),
+        // A network has no material; the wire's field shows the curve default.
+        PartBody::Network(_) => MaterialEdit::Curve(CurveMaterialDoc::default()),
     }
 }
 
@@ -116,6 +118,9 @@ pub fn create_part(spec: &wire::PartSpec) -> Option<Edit> {
             kappa: None,
         }),
         wire::PartShape::Dsm { .. } => return None,
+        wire::PartShape::Network { network } => {
+            PartBody::Network(super::network::network_from_wire(network))
+        }
     };
     Some(Edit::CreatePart {
         name: spec.name.clone(),
@@ -147,6 +152,11 @@ pub fn part_to_wire(p: &PartDoc, holders: &BTreeMap<u64, u64>, points: bool) -> 
             },
             PartBody::Curve(c) => wire::PartShape::Curve {
                 curve: curve_to_wire(&c.curve, points),
+            },
+            PartBody::Network(n) => wire::PartShape::Network {
+                network: super::network::network_to_wire(
+                    &crate::design::network_engine::NetworkView::of(n),
+                ),
             },
         },
     }

@@ -144,6 +144,9 @@ pub enum DesignEvent {
     PartDeleted(u64),
     /// A part was renamed, shown or hidden, locked or unlocked, recoloured.
     PartChanged(PartDoc),
+    /// A network part's curves or faired faces changed (with its meetings
+    /// and faces).
+    NetworkChanged(u64, Arc<super::network_engine::NetworkView>),
     /// A relation was created.
     RelationCreated(RelationDoc),
     /// A relation was removed.
@@ -829,6 +832,11 @@ impl Actor {
                 != (&part.name, part.visible, part.locked, &part.colour)
             {
                 send(DesignEvent::PartChanged(part.clone()));
+            }
+            if old.body != part.body
+                && let Some(n) = self.model.network(part.id)
+            {
+                send(DesignEvent::NetworkChanged(part.id, Arc::new(n.view())));
             }
             let old_icons = old.body.icons();
             for icon in part.body.icons() {

@@ -73,6 +73,14 @@ pub enum Edit {
         /// The relation.
         relation: u64,
     },
+    /// Changes a network part's curves or fairs one of its faces (the
+    /// document checks the part; the model's network engine applies it).
+    Network {
+        /// The network part.
+        part: u64,
+        /// The change.
+        edit: super::network_engine::NetworkEditDoc,
+    },
 }
 
 /// A part's material, by kind.
@@ -242,6 +250,28 @@ pub fn apply<'q>(
     let mut doc = doc.clone();
     let mut created = Created::default();
     match edit {
+        Edit::Network { part, .. } => {
+            let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
+            if p.locked {
+                return Err(locked(p));
+            }
+            if !matches!(p.body, PartBody::Network(_)) {
+                return Err(CommandError::new(
+                    ErrorKind::Incompatible,
+                    format!("part {part} is a {}, not a network", p.body.kind()),
+                ));
+            }
+        }
+        Edit::Part { part, .. }
+            if matches!(doc.part(*part).map(|p| &p.body), Some(PartBody::Network(_))) =>
+        {
+            return Err(CommandError::new(
+                ErrorKind::Incompatible,
+                format!(
+                    "part {part} is a network: it has no icons or material; edit its curves (network_edit)"
+                ),
+            ));
+        }
         Edit::Part { part, edit } => {
             if let Some(icon) = edit.icon()
                 && let Some((other, _)) = doc.icon(icon)
@@ -409,10 +439,14 @@ fn apply_part(
     let check_anchor = |body: &PartBody, anchor: &AnchorDoc| match body {
         PartBody::Surface(s) => anchor.validate(&s.surface),
         PartBody::Curve(c) => anchor.validate_on_curve(&c.curve),
+        PartBody::Network(_) => Err(CommandError::new(
+            ErrorKind::Incompatible,
+            "a network part has no icons",
+        )),
     };
     let check_kind_role = |body: &PartBody, role: IconRoleDoc| match body {
         PartBody::Curve(_) => super::curve_engine::curve_role(role).map(|_| ()),
-        PartBody::Surface(_) => Ok(()),
+        PartBody::Surface(_) | PartBody::Network(_) => Ok(()),
     };
     match edit {
         PartEdit::AddIcon {

@@ -1,5 +1,6 @@
 //! CAD exchange of a whole product: the parts of a design to IGES parts
-//! (every surface as an entity 128, every curve as a 126, each named) and
+//! (every surface as an entity 128, every curve — and each curve of a
+//! network part — as a 126, each named) and
 //! IGES parts into a design as new parts (names from the file, made unique;
 //! unnamed entities numbered). The byte-level IGES work is `crate::cad`'s.
 
@@ -18,18 +19,35 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             })?],
             None => doc.parts.iter().collect(),
         };
+    let curve = |c: &CurveDoc| {
+        IgesEntity::Curve(IgesCurve {
+            degree: c.degree,
+            knots: c.knots.clone(),
+            points: c.points.clone(),
+        })
+    };
     Ok(parts
         .into_iter()
-        .map(|p| IgesPart {
-            name: Some(p.name.clone()),
-            entity: match &p.body {
-                PartBody::Surface(s) => IgesEntity::Surface(s.surface.to_iges()),
-                PartBody::Curve(c) => IgesEntity::Curve(IgesCurve {
-                    degree: c.curve.degree,
-                    knots: c.curve.knots.clone(),
-                    points: c.curve.points.clone(),
-                }),
-            },
+        .flat_map(|p| match &p.body {
+            PartBody::Surface(s) => vec![IgesPart {
+                name: Some(p.name.clone()),
+                entity: IgesEntity::Surface(s.surface.to_iges()),
+            }],
+            PartBody::Curve(c) => vec![IgesPart {
+                name: Some(p.name.clone()),
+                entity: curve(&c.curve),
+            }],
+            // A network's styling curves, one entity 126 each, named
+            // "<part> curve <k>".
+            PartBody::Network(n) => n
+                .curves
+                .iter()
+                .enumerate()
+                .map(|(k, c)| IgesPart {
+                    name: Some(format!("{} curve {k}", p.name)),
+                    entity: curve(c),
+                })
+                .collect(),
         })
         .collect())
 }

@@ -15,6 +15,8 @@ pub mod exchange;
 pub mod hub;
 pub mod legacy;
 pub mod model;
+pub mod network_demo;
+pub mod network_engine;
 pub mod part;
 pub mod product_engine;
 pub mod spring_band;

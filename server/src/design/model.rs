@@ -10,6 +10,7 @@ pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
 pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
 use super::engine::Engine;
 use super::error::{CommandError, ErrorKind};
+use super::network_engine::{NetworkEngine, NetworkEngines};
 use super::part::{PartBody, SurfacePart};
 use super::product_engine::ProductEngine;
 use crate::cad::IgesSurface;
@@ -49,6 +50,8 @@ pub struct GeometrySet {
 pub struct DesignModel {
     doc: DesignDoc,
     engine: ProductEngine,
+    /// The network parts' engines (outside the kernel product).
+    networks: NetworkEngines,
     /// The solve warning of the last edit (see [`Self::edit_warning`]).
     warning: Option<String>,
 }
@@ -64,9 +67,11 @@ impl DesignModel {
     pub fn load(doc: &DesignDoc) -> Result<Self, CommandError> {
         doc.validate()?;
         let engine = ProductEngine::build_unsolved(doc)?;
+        let networks = network_engines(doc)?;
         let mut m = Self {
             doc: doc.clone(),
             engine,
+            networks,
             warning: None,
         };
         m.sync();
@@ -101,6 +106,7 @@ impl DesignModel {
                     c.curve.points = points;
                     c.kappa = kappa;
                 }
+                PartBody::Network(_) => {}
             }
             let part = p.id;
             for icon in p.body.icons_mut() {
@@ -142,8 +148,37 @@ impl DesignModel {
         // touches are rebuilt, the others keep their factorisations); if
         // the kernel refuses, it is rebuilt from the unchanged document.
         let next = &mut self.engine;
+        let networks = &mut self.networks;
         let outcome = (|| -> Result<Vec<u64>, CommandError> {
             Ok(match &edit {
+                Edit::Network { part, edit } => {
+                    let engine = networks.get_mut(part).ok_or_else(|| unknown_part(*part))?;
+                    engine.apply(edit)?;
+                    let p = doc.part_mut(*part).ok_or_else(|| unknown_part(*part))?;
+                    p.body = PartBody::Network(engine.to_part());
+                    vec![*part]
+                }
+                Edit::CreatePart { .. }
+                    if matches!(
+                        doc.part(created.part.unwrap_or_default()).map(|p| &p.body),
+                        Some(PartBody::Network(_))
+                    ) =>
+                {
+                    let id = created.part.unwrap_or_default();
+                    let p = doc.part_mut(id).ok_or_else(|| unknown_part(id))?;
+                    let PartBody::Network(n) = &p.body else {
+                        return Err(unknown_part(id));
+                    };
+                    let engine = NetworkEngine::build(n)?;
+                    // Stored as the kernel reads it back (exactly reloadable).
+                    p.body = PartBody::Network(engine.to_part());
+                    networks.insert(id, engine);
+                    vec![id]
+                }
+                Edit::DeletePart { part } if networks.contains_key(part) => {
+                    networks.remove(part);
+                    Vec::new()
+                }
                 Edit::Part { part, .. } => {
                     let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
                     next.rebuild_part(*part, &p.body)?
@@ -270,8 +305,20 @@ impl DesignModel {
         Ok(moved)
     }
 
-    /// The encoded geometry frame of `part` at revision `rev`.
+    /// The network engine of a network part.
+    pub fn network(&self, part: u64) -> Option<&NetworkEngine> {
+        self.networks.get(&part)
+    }
+
+    /// The encoded geometry frame of `part` at revision `rev` (a network
+    /// part's: a mesh frame of its patches).
     pub fn geometry(&self, design: u64, part: u64, rev: u64, drag: bool) -> Option<Geometry> {
+        if let Some(n) = self.networks.get(&part) {
+            return Some(Geometry {
+                rev,
+                frame: n.frame(design, part, rev, drag),
+            });
+        }
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;
         let icons: Vec<(u64, DVec3)> = p
@@ -306,16 +353,24 @@ impl DesignModel {
     }
 
     /// A tessellation with `density` samples per knot span: of `part`, or
-    /// of every surface part (the whole product) when `None`.
+    /// of every surface and network part (the whole product) when `None`
+    /// (a network's patches at the engine's resolution).
     pub fn mesh(&self, part: Option<u64>, density: usize) -> Result<MeshData, CommandError> {
         let density = density.clamp(1, 32);
         match part {
-            Some(id) => self.engine.mesh(id, density),
+            Some(id) => match self.networks.get(&id) {
+                Some(n) => Ok(n.mesh()),
+                None => self.engine.mesh(id, density),
+            },
             None => {
                 let mut out = MeshData::default();
                 for p in &self.doc.parts {
-                    if let PartBody::Surface(_) = &p.body {
-                        let m = self.engine.mesh(p.id, density)?;
+                    let m = match (&p.body, self.networks.get(&p.id)) {
+                        (PartBody::Surface(_), _) => Some(self.engine.mesh(p.id, density)?),
+                        (_, Some(n)) => Some(n.mesh()),
+                        _ => None,
+                    };
+                    if let Some(m) = m {
                         let base = out.positions.len() as u32;
                         out.positions.extend(m.positions);
                         out.normals.extend(m.normals);
@@ -326,6 +381,17 @@ impl DesignModel {
             }
         }
     }
+}
+
+/// The network engine of every network part of `doc`.
+fn network_engines(doc: &DesignDoc) -> Result<NetworkEngines, CommandError> {
+    doc.parts
+        .iter()
+        .filter_map(|p| match &p.body {
+            PartBody::Network(n) => Some(NetworkEngine::build(n).map(|e| (p.id, e))),
+            _ => None,
+        })
+        .collect()
 }
 
 /// `part` with its surface replaced by `s` (IGES import of one surface

@@ -128,6 +128,76 @@ pub struct CurvePart {
     pub kappa: Option<f64>,
 }
 
+/// A face of a network part whose patch a fairing run replaced by its
+/// faired point mesh (the patch's samples at the engine's resolution,
+/// interior points moved, boundary points untouched).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FairedFaceDoc {
+    /// The face (in the order the network finds its faces).
+    pub face: usize,
+    /// The faired points, one per sample of the face's mesh.
+    pub points: Vec<[f64; 3]>,
+    /// Sweeps the run took.
+    pub iterations: usize,
+    /// Whether it converged.
+    pub converged: bool,
+}
+
+/// A styling-curve network part (paper 004): its curves, the tolerance
+/// within which they meet, the side its patches face and the faces faired.
+/// Meetings and faces are derived (by the kernel) and not stored.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NetworkPart {
+    /// The styling curves.
+    pub curves: Vec<CurveDoc>,
+    /// Curves closer than this meet.
+    pub tolerance: f64,
+    /// The side the normals face.
+    pub up: [f64; 3],
+    /// Faired faces (dropped when a curve of the face changes).
+    #[serde(default)]
+    pub faired: Vec<FairedFaceDoc>,
+    /// Icons: none yet (a network is edited by its curves); always empty.
+    #[serde(default)]
+    pub icons: Vec<IconDoc>,
+}
+
+/// Most curves of a network part.
+pub const MAX_NETWORK_CURVES: usize = 64;
+
+impl NetworkPart {
+    /// Structural checks (counts, finiteness); whether the curves meet and
+    /// enclose faces is the kernel's (see `network_engine`).
+    pub fn validate(&self) -> Result<(), CommandError> {
+        if self.curves.is_empty() || self.curves.len() > MAX_NETWORK_CURVES {
+            return Err(invalid(format!(
+                "a network part has 1 to {MAX_NETWORK_CURVES} curves, not {}",
+                self.curves.len()
+            )));
+        }
+        for c in &self.curves {
+            c.validate()?;
+        }
+        if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
+            return Err(invalid("network tolerance must be finite and > 0"));
+        }
+        if !self.up.iter().all(|x| x.is_finite()) || self.up == [0.0; 3] {
+            return Err(invalid("network `up` must be finite and non-zero"));
+        }
+        if !self.icons.is_empty() {
+            return Err(invalid("a network part has no icons"));
+        }
+        if self
+            .faired
+            .iter()
+            .any(|f| f.points.iter().flatten().any(|x| !x.is_finite()))
+        {
+            return Err(invalid("non-finite faired point"));
+        }
+        Ok(())
+    }
+}
+
 /// A part's shape model, by kind.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -136,6 +206,8 @@ pub enum PartBody {
     Surface(SurfacePart),
     /// A deformable curve (paper 003, eq. 1).
     Curve(CurvePart),
+    /// A styling-curve network filled with n-sided patches (paper 004).
+    Network(NetworkPart),
 }
 
 impl PartBody {
@@ -144,6 +216,7 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &s.icons,
             PartBody::Curve(c) => &c.icons,
+            PartBody::Network(n) => &n.icons,
         }
     }
 
@@ -152,6 +225,7 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &mut s.icons,
             PartBody::Curve(c) => &mut c.icons,
+            PartBody::Network(n) => &mut n.icons,
         }
     }
 
@@ -160,14 +234,16 @@ impl PartBody {
         match self {
             PartBody::Surface(_) => "surface",
             PartBody::Curve(_) => "curve",
+            PartBody::Network(_) => "network",
         }
     }
 
-    /// Every control point.
+    /// Every control point (none for a network part: its curves hold them).
     pub fn points(&self) -> &[[f64; 3]] {
         match self {
             PartBody::Surface(s) => &s.surface.points,
             PartBody::Curve(c) => &c.curve.points,
+            PartBody::Network(_) => &[],
         }
     }
 
@@ -189,6 +265,7 @@ impl PartBody {
                     i.anchor.validate_on_curve(&c.curve)?;
                 }
             }
+            PartBody::Network(n) => n.validate()?,
         }
         if self
             .icons()

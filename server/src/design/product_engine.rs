@@ -136,6 +136,12 @@ fn kernel_part(body: &PartBody) -> Result<(Part, BTreeMap<u64, IconId>), Command
             let (d, ids) = CurveEngine::build_unsolved(c)?.into_parts();
             (Part::Curve(d), ids)
         }
+        PartBody::Network(_) => {
+            return Err(CommandError::new(
+                ErrorKind::Incompatible,
+                "a network part is not a product part (see network_engine)",
+            ));
+        }
     })
 }
 
@@ -146,6 +152,9 @@ impl ProductEngine {
         let mut product = Product::new();
         let mut ids = BTreeMap::new();
         for p in &doc.parts {
+            if let PartBody::Network(_) = p.body {
+                continue; // the model's network engines hold networks
+            }
             let (part, map) = kernel_part(&p.body)?;
             product
                 .insert_part(PartId(p.id), part)

@@ -1,0 +1,111 @@
+//! Network parts between the wire (`vsculpt_protocol::network`) and the
+//! design (`design::part::NetworkPart`, `design::network_engine`): decoding
+//! a network shape and `network_edit`, encoding a network with its
+//! meetings and faces for snapshots, `part_created` and `network_changed`.
+
+use crate::design::network_engine::{
+    DEFAULT_FAIRING_ITERATIONS, FairingDoc, GoalDoc, MeasureDoc, NetworkEditDoc, NetworkView,
+};
+use crate::design::part::{CurveDoc, NetworkPart};
+use vsculpt_protocol as wire;
+use vsculpt_protocol::network::{
+    FaceSide, FairingGoal, FairnessMeasure, Meeting, NetworkData, NetworkEdit, NetworkFace,
+};
+
+fn curve_from_wire(c: &wire::CurveData) -> CurveDoc {
+    CurveDoc {
+        degree: c.knots.degree as usize,
+        knots: c.knots.knots.clone(),
+        points: c.points.clone(),
+    }
+}
+
+fn curve_to_wire(c: &CurveDoc) -> wire::CurveData {
+    wire::CurveData {
+        knots: wire::Knots {
+            degree: c.degree as u32,
+            knots: c.knots.clone(),
+        },
+        points: c.points.clone(),
+    }
+}
+
+/// A wire network as a new part's body (meetings, faces and faired faces
+/// are the server's and ignored).
+pub fn network_from_wire(n: &NetworkData) -> NetworkPart {
+    NetworkPart {
+        curves: n.curves.iter().map(curve_from_wire).collect(),
+        tolerance: n.tolerance,
+        up: n.up,
+        faired: Vec::new(),
+        icons: Vec::new(),
+    }
+}
+
+/// A network with its meetings and faces on the wire.
+pub fn network_to_wire(v: &NetworkView) -> NetworkData {
+    NetworkData {
+        curves: v.part.curves.iter().map(curve_to_wire).collect(),
+        tolerance: v.part.tolerance,
+        up: v.part.up,
+        meetings: v
+            .meetings
+            .iter()
+            .map(|(p, inc)| Meeting {
+                point: *p,
+                curves: inc.iter().map(|&(c, t)| (c as u32, t)).collect(),
+            })
+            .collect(),
+        faces: v
+            .faces
+            .iter()
+            .map(|sides| NetworkFace {
+                sides: sides
+                    .iter()
+                    .map(|&(curve, t_start, t_end)| FaceSide {
+                        curve: curve as u32,
+                        t_start,
+                        t_end,
+                    })
+                    .collect(),
+            })
+            .collect(),
+        faired: v.part.faired.iter().map(|f| f.face as u32).collect(),
+    }
+}
+
+/// A `network_edit` as the engine's edit (defaults filled in).
+pub fn edit_from_wire(e: &NetworkEdit) -> NetworkEditDoc {
+    match e {
+        NetworkEdit::MovePoint { curve, index, xyz } => NetworkEditDoc::MovePoint {
+            curve: *curve as usize,
+            index: *index as usize,
+            xyz: *xyz,
+        },
+        NetworkEdit::DragPoint { curve, t, xyz } => NetworkEditDoc::DragPoint {
+            curve: *curve as usize,
+            t: *t,
+            xyz: *xyz,
+        },
+        NetworkEdit::AddCurve { curve } => NetworkEditDoc::AddCurve(curve_from_wire(curve)),
+        NetworkEdit::RemoveCurve { curve } => NetworkEditDoc::RemoveCurve(*curve as usize),
+        NetworkEdit::Fair(f) => NetworkEditDoc::Fair(FairingDoc {
+            face: f.face as usize,
+            measure: match f.measure {
+                FairnessMeasure::Mean => MeasureDoc::Mean,
+                FairnessMeasure::Gaussian => MeasureDoc::Gaussian,
+                FairnessMeasure::MaxPrincipal => MeasureDoc::MaxPrincipal,
+                FairnessMeasure::MinPrincipal => MeasureDoc::MinPrincipal,
+            },
+            goal: match f.goal {
+                FairingGoal::Constant(g) => GoalDoc::Constant(g),
+                FairingGoal::FromBoundary => GoalDoc::FromBoundary,
+            },
+            relaxation: f.relaxation.unwrap_or(1.0),
+            tolerance: f.tolerance.unwrap_or(1e-10),
+            max_iterations: f
+                .max_iterations
+                .map_or(DEFAULT_FAIRING_ITERATIONS, |n| n as usize),
+        }),
+    }
+}

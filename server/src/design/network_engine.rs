@@ -1,0 +1,675 @@
+//! The kernel side of a styling-curve network part (paper 004): a
+//! `vsculpt_kernel::network::CurveNetwork` built from a [`NetworkPart`],
+//! one patch sampler per face, and each face's sampled (or faired) mesh.
+//!
+//! An edit ([`NetworkEditDoc`]) changes the engine in place only when the
+//! kernel accepts it (a refused edit changes nothing): a moved curve keeps
+//! the faces and re-evaluates only the faces whose patch changed (the
+//! samplers re-evaluate only the sides whose ribbons changed); an added or
+//! removed curve re-derives the faces. A faired face keeps its faired mesh
+//! until its patch changes. The meshes of every face, one after another,
+//! make the part's mesh frame (kind 3).
+
+use super::error::{CommandError, ErrorKind};
+use super::model::MeshData;
+use super::part::{CurveDoc, FairedFaceDoc, NetworkPart};
+use glam::DVec3;
+use std::collections::BTreeMap;
+use vsculpt_kernel::bspline::{BSplineCurve, KnotVector, basis_derivs};
+use vsculpt_kernel::fairing::quadric::solve_dense;
+use vsculpt_kernel::fairing::{
+    Control, FairingError, FairingOptions, Goals, Measure, PointMesh, fair_implicit, resolve,
+};
+use vsculpt_kernel::network::{CurveNetwork, NetworkError, NetworkOptions, Patch, PatchSampler};
+
+/// Lattice segments per side of each face's sample mesh (the display and
+/// fairing resolution): a five-sided face has 5·(m+1)(m+2)/2 − shared
+/// points ≈ 400 at m = 12.
+pub const MESH_RESOLUTION: usize = 12;
+/// Default sweeps of a fairing run.
+pub const DEFAULT_FAIRING_ITERATIONS: usize = 200;
+/// Most sweeps of a fairing run.
+pub const MAX_FAIRING_ITERATIONS: usize = 100_000;
+
+/// The measure fairing goals are given in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeasureDoc {
+    /// Mean curvature.
+    Mean,
+    /// Gaussian curvature (the kernel refuses it).
+    Gaussian,
+    /// Larger principal curvature (the kernel refuses it).
+    MaxPrincipal,
+    /// Smaller principal curvature (the kernel refuses it).
+    MinPrincipal,
+}
+
+/// Where fairing goals come from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GoalDoc {
+    /// One value everywhere.
+    Constant(f64),
+    /// Harmonic interpolation of the boundary's values.
+    FromBoundary,
+}
+
+/// A fairing run as the kernel takes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FairingDoc {
+    /// The face.
+    pub face: usize,
+    /// The goals' measure.
+    pub measure: MeasureDoc,
+    /// The goals.
+    pub goal: GoalDoc,
+    /// Relaxation ω in (0, 2).
+    pub relaxation: f64,
+    /// Convergence threshold relative to the mesh size.
+    pub tolerance: f64,
+    /// Most sweeps.
+    pub max_iterations: usize,
+}
+
+/// One undoable edit of a network part.
+#[derive(Clone, Debug, PartialEq)]
+pub enum NetworkEditDoc {
+    /// Move a control point.
+    MovePoint {
+        /// Curve index.
+        curve: usize,
+        /// Control point index.
+        index: usize,
+        /// Where to.
+        xyz: [f64; 3],
+    },
+    /// Drag the point at `t` of a curve, keeping its meetings.
+    DragPoint {
+        /// Curve index.
+        curve: usize,
+        /// Parameter.
+        t: f64,
+        /// Where to.
+        xyz: [f64; 3],
+    },
+    /// Add a curve.
+    AddCurve(CurveDoc),
+    /// Remove a curve.
+    RemoveCurve(usize),
+    /// Fair a face.
+    Fair(FairingDoc),
+}
+
+fn invalid(msg: impl Into<String>) -> CommandError {
+    CommandError::new(ErrorKind::InvalidValue, msg)
+}
+
+/// A kernel network refusal as a command error: unknown indices and bad
+/// values are `InvalidValue`, a network that no longer closes is
+/// `Incompatible`.
+pub fn network_error(e: NetworkError) -> CommandError {
+    match e {
+        NetworkError::Unknown { .. }
+        | NetworkError::BadValue(_)
+        | NetworkError::BadTolerance(_) => invalid(e.to_string()),
+        other => CommandError::new(ErrorKind::Incompatible, other.to_string()),
+    }
+}
+
+fn fairing_error(e: FairingError) -> CommandError {
+    invalid(format!("fairing: {e}"))
+}
+
+/// The kernel curve of a document curve.
+pub fn kernel_curve(c: &CurveDoc) -> Result<BSplineCurve, CommandError> {
+    c.validate()?;
+    let knots =
+        KnotVector::new(c.degree, c.knots.clone()).map_err(|e| invalid(format!("curve: {e}")))?;
+    BSplineCurve::new(knots, c.points.iter().map(|p| DVec3::from(*p)).collect())
+        .map_err(|e| invalid(format!("curve: {e}")))
+}
+
+fn curve_doc(c: &BSplineCurve) -> CurveDoc {
+    CurveDoc {
+        degree: c.degree(),
+        knots: c.knots().knots().to_vec(),
+        points: c.points().iter().map(|p| p.to_array()).collect(),
+    }
+}
+
+/// One face's samples: the sampler, its patch, where the samples are.
+#[derive(Clone)]
+struct FaceMesh {
+    sampler: PatchSampler,
+    patch: Patch,
+    points: Vec<DVec3>,
+    /// The fairing run's sweeps and convergence, when faired.
+    faired: Option<(usize, bool)>,
+    /// Whether the domain's counter-clockwise triangles face away from the
+    /// patch normal (then they are flipped for drawing).
+    flip: bool,
+}
+
+impl FaceMesh {
+    fn new(patch: Patch) -> Self {
+        let mut sampler = PatchSampler::new(&patch, MESH_RESOLUTION);
+        let mut points = Vec::new();
+        sampler.evaluate(&patch, &mut points);
+        // Orientation: the first interior triangle's normal against the
+        // patch's normal at the domain centre.
+        let tri = sampler
+            .mesh()
+            .triangles
+            .first()
+            .copied()
+            .unwrap_or([0, 0, 0]);
+        let [a, b, c] = tri.map(|i| points.get(i as usize).copied().unwrap_or_default());
+        let flip = (b - a).cross(c - a).dot(patch.normal(glam::DVec2::ZERO)) < 0.0;
+        Self {
+            sampler,
+            patch,
+            points,
+            faired: None,
+            flip,
+        }
+    }
+
+    fn triangles(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        self.sampler
+            .mesh()
+            .triangles
+            .iter()
+            .map(move |&[a, b, c]| if self.flip { [a, c, b] } else { [a, b, c] })
+    }
+}
+
+/// A network part's kernel state and sample meshes.
+#[derive(Clone)]
+pub struct NetworkEngine {
+    net: CurveNetwork,
+    faces: Vec<FaceMesh>,
+}
+
+impl NetworkEngine {
+    /// The engine of `part`: the network (its meetings and faces), every
+    /// face's patch sampled, faired faces restored. Refused: curves that
+    /// do not close their faces or enclose none, faired meshes that do not
+    /// fit their face.
+    pub fn build(part: &NetworkPart) -> Result<Self, CommandError> {
+        part.validate()?;
+        let curves = part
+            .curves
+            .iter()
+            .map(kernel_curve)
+            .collect::<Result<Vec<_>, _>>()?;
+        let net = CurveNetwork::new(
+            curves,
+            NetworkOptions {
+                tolerance: part.tolerance,
+                up: DVec3::from(part.up),
+            },
+        )
+        .map_err(network_error)?;
+        if net.faces().is_empty() {
+            return Err(network_error(NetworkError::NoFaces));
+        }
+        let mut faces: Vec<FaceMesh> = net.patches().into_iter().map(FaceMesh::new).collect();
+        let mut seen = std::collections::BTreeSet::new();
+        for f in &part.faired {
+            let face = faces
+                .get_mut(f.face)
+                .ok_or_else(|| invalid(format!("faired face {} does not exist", f.face)))?;
+            if !seen.insert(f.face) || f.points.len() != face.points.len() {
+                return Err(invalid(format!(
+                    "faired face {} has {} points, its mesh {}",
+                    f.face,
+                    f.points.len(),
+                    face.points.len()
+                )));
+            }
+            face.points = f.points.iter().map(|p| DVec3::from(*p)).collect();
+            face.faired = Some((f.iterations, f.converged));
+        }
+        Ok(Self { net, faces })
+    }
+
+    /// The network.
+    pub fn network(&self) -> &CurveNetwork {
+        &self.net
+    }
+
+    /// The part as the document keeps it.
+    pub fn to_part(&self) -> NetworkPart {
+        NetworkPart {
+            curves: self.net.curves().iter().map(curve_doc).collect(),
+            tolerance: self.net.options().tolerance,
+            up: self.net.options().up.to_array(),
+            faired: self
+                .faces
+                .iter()
+                .enumerate()
+                .filter_map(|(k, f)| {
+                    let (iterations, converged) = f.faired?;
+                    Some(FairedFaceDoc {
+                        face: k,
+                        points: f.points.iter().map(|p| p.to_array()).collect(),
+                        iterations,
+                        converged,
+                    })
+                })
+                .collect(),
+            icons: Vec::new(),
+        }
+    }
+
+    /// Applies `edit`; returns the faces whose mesh changed. On an error
+    /// nothing changes.
+    pub fn apply(&mut self, edit: &NetworkEditDoc) -> Result<Vec<usize>, CommandError> {
+        match edit {
+            NetworkEditDoc::MovePoint { curve, index, xyz } => {
+                let mut c = self.curve(*curve)?.clone();
+                let p = c.points_mut().get_mut(*index).ok_or_else(|| {
+                    invalid(format!("curve {curve} has no control point {index}"))
+                })?;
+                *p = finite(*xyz)?;
+                self.set_curve(*curve, c)
+            }
+            NetworkEditDoc::DragPoint { curve, t, xyz } => {
+                let c = self.dragged(*curve, *t, finite(*xyz)?)?;
+                self.set_curve(*curve, c)
+            }
+            NetworkEditDoc::AddCurve(c) => {
+                let mut curves = self.net.curves().to_vec();
+                if curves.len() >= super::part::MAX_NETWORK_CURVES {
+                    return Err(invalid(format!(
+                        "a network part has at most {} curves",
+                        super::part::MAX_NETWORK_CURVES
+                    )));
+                }
+                curves.push(kernel_curve(c)?);
+                self.rebuild(curves)
+            }
+            NetworkEditDoc::RemoveCurve(k) => {
+                self.curve(*k)?;
+                let mut curves = self.net.curves().to_vec();
+                curves.remove(*k);
+                self.rebuild(curves)
+            }
+            NetworkEditDoc::Fair(f) => self.fair(f).map(|()| vec![f.face]),
+        }
+    }
+
+    fn curve(&self, k: usize) -> Result<&BSplineCurve, CommandError> {
+        self.net
+            .curves()
+            .get(k)
+            .ok_or_else(|| invalid(format!("no curve {k}")))
+    }
+
+    /// Curve `k` changed: faces keep their structure (only changed patches
+    /// are re-sampled) or are re-derived.
+    fn set_curve(&mut self, k: usize, c: BSplineCurve) -> Result<Vec<usize>, CommandError> {
+        let mut net = self.net.clone();
+        net.set_curve(k, c).map_err(network_error)?;
+        if net.faces().is_empty() {
+            return Err(network_error(NetworkError::NoFaces));
+        }
+        let patches = net.patches();
+        let mut changed = Vec::new();
+        if patches.len() == self.faces.len()
+            && patches
+                .iter()
+                .zip(&self.faces)
+                .all(|(p, f)| p.sides() == f.patch.sides())
+        {
+            for (i, (p, f)) in patches.into_iter().zip(&mut self.faces).enumerate() {
+                if p == f.patch {
+                    continue;
+                }
+                // The sampler re-evaluates only the sides whose ribbon
+                // changed where this face uses it; none: the face's samples
+                // are as they were (a faired face stays faired).
+                let mut points = Vec::new();
+                f.sampler.evaluate(&p, &mut points);
+                f.patch = p;
+                if f.sampler.refreshed().iter().any(|r| *r) {
+                    f.points = points;
+                    f.faired = None;
+                    changed.push(i);
+                }
+            }
+        } else {
+            self.faces = patches.into_iter().map(FaceMesh::new).collect();
+            changed = (0..self.faces.len()).collect();
+        }
+        self.net = net;
+        Ok(changed)
+    }
+
+    fn rebuild(&mut self, curves: Vec<BSplineCurve>) -> Result<Vec<usize>, CommandError> {
+        let net = CurveNetwork::new(curves, *self.net.options()).map_err(network_error)?;
+        if net.faces().is_empty() {
+            return Err(network_error(NetworkError::NoFaces));
+        }
+        self.faces = net.patches().into_iter().map(FaceMesh::new).collect();
+        self.net = net;
+        Ok((0..self.faces.len()).collect())
+    }
+
+    /// Curve `k` with the point at `t` taken to `to` by the smallest change
+    /// of its control points (least norm) that keeps c(t_m) fixed at every
+    /// meeting parameter t_m of the curve.
+    fn dragged(&self, k: usize, t: f64, to: DVec3) -> Result<BSplineCurve, CommandError> {
+        let c = self.curve(k)?;
+        let (a, b) = c.domain();
+        if !(t.is_finite() && t >= a && t <= b) {
+            return Err(invalid(format!(
+                "t = {t} is outside curve {k}'s [{a}, {b}]"
+            )));
+        }
+        let mut fixed: Vec<f64> = self
+            .net
+            .topology()
+            .vertices
+            .iter()
+            .flat_map(|v| v.incidences.iter())
+            .filter(|(c, _)| *c == k)
+            .map(|(_, tm)| *tm)
+            .collect();
+        fixed.sort_by(f64::total_cmp);
+        fixed.dedup();
+        let near = 1e-3 * (b - a);
+        if let Some(tm) = fixed.iter().find(|tm| (*tm - t).abs() < near) {
+            return Err(invalid(format!(
+                "t = {t} is at curve {k}'s meeting at t = {tm}: drag a point between meetings"
+            )));
+        }
+        let n = c.points().len();
+        let row = |s: f64| {
+            let d = basis_derivs(c.knots(), s, 0);
+            let mut r = vec![0.0; n];
+            for (j, v) in d.row(0).iter().enumerate() {
+                if let Some(slot) = r.get_mut(d.first + j) {
+                    *slot = *v;
+                }
+            }
+            r
+        };
+        let mut rows = vec![row(t)];
+        rows.extend(fixed.iter().map(|tm| row(*tm)));
+        let m = rows.len();
+        // (A Aᵀ) y = r, Δ = Aᵀ y, per coordinate.
+        let mut gram = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                gram[i * m + j] = rows[i].iter().zip(&rows[j]).map(|(x, y)| x * y).sum();
+            }
+        }
+        let delta = to - c.point(t);
+        let mut moved = c.clone();
+        for axis in 0..3 {
+            let mut g = gram.clone();
+            let mut y = vec![0.0; m];
+            y[0] = delta[axis];
+            if !solve_dense(&mut g, &mut y, m) {
+                return Err(invalid(format!(
+                    "t = {t} on curve {k} is pinned by its meetings: drag another point"
+                )));
+            }
+            for (j, p) in moved.points_mut().iter_mut().enumerate() {
+                p[axis] += rows.iter().zip(&y).map(|(r, yi)| r[j] * yi).sum::<f64>();
+            }
+        }
+        let change = moved
+            .points()
+            .iter()
+            .zip(c.points())
+            .map(|(p, q)| p.distance(*q))
+            .fold(0.0, f64::max);
+        if change > 100.0 * delta.length().max(1e-12) || !change.is_finite() {
+            return Err(invalid(format!(
+                "t = {t} on curve {k} is too close to its meetings: drag a point further from them"
+            )));
+        }
+        Ok(moved)
+    }
+
+    fn fair(&mut self, f: &FairingDoc) -> Result<(), CommandError> {
+        let face = self
+            .faces
+            .get(f.face)
+            .ok_or_else(|| invalid(format!("no face {}", f.face)))?;
+        if !(1..=MAX_FAIRING_ITERATIONS).contains(&f.max_iterations) {
+            return Err(invalid(format!(
+                "max_iterations must be 1 ..= {MAX_FAIRING_ITERATIONS}"
+            )));
+        }
+        let dm = face.sampler.mesh();
+        let mut mesh = PointMesh::new(
+            face.points.clone(),
+            dm.triangles.clone(),
+            dm.boundary.clone(),
+        )
+        .map_err(fairing_error)?;
+        let measure = match f.measure {
+            MeasureDoc::Mean => Measure::Mean,
+            MeasureDoc::Gaussian => Measure::Gaussian,
+            MeasureDoc::MaxPrincipal => Measure::MaxPrincipal,
+            MeasureDoc::MinPrincipal => Measure::MinPrincipal,
+        };
+        if measure != Measure::Mean {
+            return Err(invalid(format!(
+                "fairing toward {measure:?} curvature goals is refused: the kernel fairs toward mean-curvature goals only"
+            )));
+        }
+        let goals = match f.goal {
+            GoalDoc::Constant(g) => Goals::Constant(g),
+            GoalDoc::FromBoundary => Goals::FromBoundary,
+        };
+        let goals = resolve(&mesh, measure, &goals).map_err(fairing_error)?;
+        let options = FairingOptions {
+            measure,
+            relaxation: f.relaxation,
+            tolerance: f.tolerance,
+            max_iterations: f.max_iterations,
+        };
+        let report = fair_implicit(&mut mesh, &goals, &options, |_| Control::Continue)
+            .map_err(fairing_error)?;
+        let face = &mut self.faces[f.face];
+        face.points = mesh.points;
+        face.faired = Some((report.iterations, report.converged));
+        Ok(())
+    }
+
+    /// Every face's mesh, faces one after another, with area-weighted
+    /// vertex normals.
+    pub fn mesh(&self) -> MeshData {
+        let mut out = MeshData::default();
+        for f in &self.faces {
+            let base = out.positions.len() as u32;
+            let mut normals = vec![DVec3::ZERO; f.points.len()];
+            for [a, b, c] in f.triangles() {
+                let (pa, pb, pc) = (
+                    f.points[a as usize],
+                    f.points[b as usize],
+                    f.points[c as usize],
+                );
+                let n = (pb - pa).cross(pc - pa);
+                for i in [a, b, c] {
+                    normals[i as usize] += n;
+                }
+                out.indices.extend([a + base, b + base, c + base]);
+            }
+            out.positions
+                .extend(f.points.iter().map(|p| p.as_vec3().to_array()));
+            out.normals.extend(
+                normals
+                    .iter()
+                    .map(|n| n.try_normalize().unwrap_or(DVec3::Z).as_vec3().to_array()),
+            );
+        }
+        out
+    }
+
+    /// The mesh frame (kind 3) of every face of part `part`.
+    pub fn frame(&self, design: u64, part: u64, rev: u64, drag: bool) -> axum::body::Bytes {
+        let m = self.mesh();
+        let pos: Vec<[f64; 3]> = m.positions.iter().map(|p| p.map(f64::from)).collect();
+        let nor: Vec<[f64; 3]> = m.normals.iter().map(|p| p.map(f64::from)).collect();
+        let tris: Vec<[u32; 3]> = m
+            .indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        let flags = if drag {
+            vsculpt_protocol::frame::FLAG_DRAG
+        } else {
+            0
+        };
+        match vsculpt_protocol::MeshFrame::quantise((design, part, rev), flags, &pos, &nor, &tris)
+            .and_then(|f| f.encode())
+        {
+            Ok(b) => axum::body::Bytes::from(b),
+            Err(e) => {
+                tracing::error!(design, part, "cannot encode network mesh frame: {e}");
+                axum::body::Bytes::new()
+            }
+        }
+    }
+
+    /// The part with its meetings and faces.
+    pub fn view(&self) -> NetworkView {
+        NetworkView::from_network(self.to_part(), &self.net)
+    }
+}
+
+/// A meeting: its point and the (curve, parameter) pairs there.
+pub type MeetingView = ([f64; 3], Vec<(usize, f64)>);
+
+/// A network part with what the kernel found of it: where its curves meet
+/// and the faces they enclose (what clients are sent).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NetworkView {
+    /// The part.
+    pub part: NetworkPart,
+    /// Each meeting's point and the (curve, parameter) pairs there.
+    pub meetings: Vec<MeetingView>,
+    /// Per face, its sides as (curve, t_start, t_end).
+    pub faces: Vec<Vec<(usize, f64, f64)>>,
+}
+
+impl NetworkView {
+    fn from_network(part: NetworkPart, net: &CurveNetwork) -> Self {
+        Self {
+            part,
+            meetings: net
+                .topology()
+                .vertices
+                .iter()
+                .map(|v| (v.point.to_array(), v.incidences.clone()))
+                .collect(),
+            faces: net
+                .faces()
+                .iter()
+                .map(|f| {
+                    f.sides
+                        .iter()
+                        .map(|s| (s.curve, s.t_start, s.t_end))
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+
+    /// The view of a stored part (its network built, no patch sampled);
+    /// a part the kernel refuses (it cannot be stored) shows no meetings
+    /// or faces.
+    pub fn of(part: &NetworkPart) -> Self {
+        let net = part
+            .curves
+            .iter()
+            .map(kernel_curve)
+            .collect::<Result<Vec<_>, _>>()
+            .ok()
+            .and_then(|curves| {
+                CurveNetwork::new(
+                    curves,
+                    NetworkOptions {
+                        tolerance: part.tolerance,
+                        up: DVec3::from(part.up),
+                    },
+                )
+                .ok()
+            });
+        match net {
+            Some(net) => Self::from_network(part.clone(), &net),
+            None => Self {
+                part: part.clone(),
+                meetings: Vec::new(),
+                faces: Vec::new(),
+            },
+        }
+    }
+}
+
+fn finite(p: [f64; 3]) -> Result<DVec3, CommandError> {
+    if p.iter().all(|x| x.is_finite()) {
+        Ok(DVec3::from(p))
+    } else {
+        Err(CommandError::new(
+            ErrorKind::NotFinite,
+            "coordinates must be finite (no NaN or ∞)",
+        ))
+    }
+}
+
+/// The network engines of a design's network parts, by part id.
+pub type NetworkEngines = BTreeMap<u64, NetworkEngine>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_control_point_away_from_meetings_re_samples_only_its_face() {
+        let part = super::super::network_demo::bottle_part().unwrap();
+        let mut e = NetworkEngine::build(&part).unwrap();
+        let before: Vec<Vec<DVec3>> = e.faces.iter().map(|f| f.points.clone()).collect();
+        let mut xyz = part.curves[0].points[18];
+        xyz[0] += 0.05;
+        let changed = e
+            .apply(&NetworkEditDoc::MovePoint {
+                curve: 0,
+                index: 18,
+                xyz,
+            })
+            .unwrap();
+        // The bottom ring's middle control point is under the label face
+        // only (its support ends well before the meetings at ±30°).
+        assert_eq!(changed.len(), 1, "{changed:?}");
+        let k = changed[0];
+        assert!(e.net.faces()[k].sides.iter().any(|s| s.curve == 0));
+        for (i, f) in e.faces.iter().enumerate() {
+            if i == k {
+                assert_ne!(f.points, before[i]);
+            } else {
+                assert_eq!(f.points, before[i], "face {i} was re-sampled");
+            }
+        }
+    }
+
+    #[test]
+    fn a_refused_edit_changes_nothing() {
+        let part = super::super::network_demo::bottle_part().unwrap();
+        let mut e = NetworkEngine::build(&part).unwrap();
+        // The ring's first point is a meeting: moving it loses the meeting.
+        let err = e
+            .apply(&NetworkEditDoc::MovePoint {
+                curve: 0,
+                index: 0,
+                xyz: [0.0, -1.5, 0.0],
+            })
+            .unwrap_err();
+        assert_eq!(err.kind, ErrorKind::Incompatible, "{err:?}");
+        assert_eq!(e.to_part(), part);
+    }
+}

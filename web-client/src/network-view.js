@@ -1,0 +1,243 @@
+// Styling-curve network parts (paper 004): their curves drawn as lines from
+// the part's `network` (snapshot, part_created, network_changed), their
+// filled patches from the server's mesh frames (kind 3), and the mouse drag
+// of a point of a curve (`network_edit` drag_point: the server keeps the
+// curve's meetings where they are). One drag message in flight at a time;
+// the newest pointer position goes next. Fairing a part's faces is
+// `fairAll` (one `network_edit` fair per face).
+
+import * as THREE from 'three';
+import { curveDerivs } from './bspline.js';
+
+/** Samples per curve for drawing and picking. */
+const SAMPLES = 200;
+/** How near (pixels) the pointer must be to a curve to grab it. */
+const GRAB_PX = 12;
+
+/** The curve of a wire `CurveData` as bspline.js evaluates it. */
+function curveOf(c) {
+  return { degree: c.knots.degree, knots: Float64Array.from(c.knots.knots), n: c.points.length, points: Float64Array.from(c.points.flat()) };
+}
+
+/** Points of `c` at SAMPLES + 1 parameters: { t: Float64Array, xyz: Float32Array }. */
+function sample(c) {
+  const [a, b] = [c.knots[c.degree], c.knots[c.n]];
+  const t = new Float64Array(SAMPLES + 1);
+  const xyz = new Float32Array(3 * (SAMPLES + 1));
+  for (let k = 0; k <= SAMPLES; k++) {
+    t[k] = a + ((b - a) * k) / SAMPLES;
+    const p = curveDerivs(c, t[k]).p;
+    xyz.set(p, 3 * k);
+  }
+  return { t, xyz };
+}
+
+export class NetworkView {
+  /**
+   * `view`: the View (scene, camera, canvas, controls); `send(msg)` sends a
+   * message and returns its req (null when offline); `canEdit()` whether
+   * this page may edit.
+   */
+  constructor(view, { send, canEdit }) {
+    this.view = view;
+    this.send = send;
+    this.canEdit = canEdit;
+    this.group = new THREE.Group();
+    this.group.name = 'networks';
+    view.model.add(this.group);
+    /** Per network part id: { network, curves: [{ curve, samples, line }], mesh, frame }. */
+    this.parts = new Map();
+    /** Mesh frames of parts not known yet, by part id. */
+    this.pending = new Map();
+    /** The drag under way: { part, curve, t, plane, pending, inFlight }. */
+    this.drag = null;
+    const previous = view.bounds;
+    view.bounds = () => {
+      const box = previous() || new THREE.Box3();
+      for (const p of this.parts.values()) for (const c of p.curves) box.expandByObject(c.line);
+      return box.isEmpty() ? null : box;
+    };
+    const canvas = view.renderer.domElement;
+    canvas.addEventListener('pointerdown', (e) => this.down(e), { capture: true });
+    canvas.addEventListener('pointermove', (e) => this.move(e));
+    window.addEventListener('pointerup', () => this.up());
+  }
+
+  /** Follows the design's network parts (after a snapshot or part events): drawings added, replaced, removed. */
+  sync(design, hidden = new Set()) {
+    for (const id of [...this.parts.keys()]) {
+      const part = design.parts.get(id);
+      if (!part || part.kind !== 'network') this.remove(id);
+    }
+    for (const part of design.parts.values()) {
+      if (part.kind !== 'network' || !part.network) continue;
+      const d = this.parts.get(part.id);
+      if (!d || d.network !== part.network) this.setNetwork(part.id, part.network, part.colour);
+      const shown = part.visible && !hidden.has(part.id);
+      this.parts.get(part.id).root.visible = shown;
+    }
+  }
+
+  remove(id) {
+    const d = this.parts.get(id);
+    if (!d) return;
+    this.group.remove(d.root);
+    d.root.traverse((o) => o.geometry && o.geometry.dispose());
+    this.parts.delete(id);
+  }
+
+  /** Part `id`'s curves are now those of `network` (the wire's NetworkData). */
+  setNetwork(id, network, colour = '#5b8bd9') {
+    let d = this.parts.get(id);
+    if (!d) {
+      const root = new THREE.Group();
+      root.name = `network-${id}`;
+      this.group.add(root);
+      d = { id, root, curves: [], mesh: null, frame: null, colour };
+      this.parts.set(id, d);
+    }
+    for (const c of d.curves) {
+      d.root.remove(c.line);
+      c.line.geometry.dispose();
+    }
+    d.network = network;
+    d.curves = network.curves.map((wire, k) => {
+      const curve = curveOf(wire);
+      const samples = sample(curve);
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', new THREE.BufferAttribute(samples.xyz, 3));
+      const line = new THREE.Line(g, new THREE.LineBasicMaterial({ color: 0xffd24a }));
+      line.name = `network-${id}-curve-${k}`;
+      line.renderOrder = 2;
+      d.root.add(line);
+      return { curve, samples, line };
+    });
+    const waiting = this.pending.get(id);
+    if (waiting) {
+      this.pending.delete(id);
+      this.mesh(waiting);
+    }
+    this.view.drawn();
+  }
+
+  /** A mesh frame of part `f.part`: its patches. False when the part is not a network drawn here. */
+  mesh(f) {
+    const d = this.parts.get(f.part);
+    if (!d) {
+      // The compact join sends frames before the snapshot: kept until the part is known.
+      this.pending.set(f.part, f);
+      return false;
+    }
+    if (d.frame && d.frame.revision > f.revision) return true;
+    d.frame = f;
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.BufferAttribute(f.positions, 3));
+    g.setAttribute('normal', new THREE.BufferAttribute(f.normals, 3));
+    g.setIndex(new THREE.BufferAttribute(f.indices, 1));
+    g.computeBoundingSphere();
+    if (d.mesh) {
+      d.mesh.geometry.dispose();
+      d.mesh.geometry = g;
+    } else {
+      const material = new THREE.MeshStandardMaterial({ color: d.colour, metalness: 0.1, roughness: 0.5, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1 });
+      d.mesh = new THREE.Mesh(g, material);
+      d.mesh.name = `network-${f.part}-patches`;
+      d.root.add(d.mesh);
+    }
+    // Zebra stripes (the view's shared material) show tangent-plane continuity across the curves.
+    if (!d.shaded) d.shaded = d.mesh.material;
+    d.mesh.material = this.view.mode === 'zebra' ? this.view.zebra : d.shaded;
+    this.view.drawn();
+    return true;
+  }
+
+  /** Pointer position in pixels of the canvas. */
+  pixel(e) {
+    const r = this.view.renderer.domElement.getBoundingClientRect();
+    return [e.clientX - r.left, e.clientY - r.top, r.width, r.height];
+  }
+
+  /** The curve sample nearest the pointer on screen within GRAB_PX: { part, curve, t, xyz } or null. */
+  nearest(e) {
+    const [x, y, w, h] = this.pixel(e);
+    const v = new THREE.Vector3();
+    let best = null;
+    for (const d of this.parts.values()) {
+      if (!d.root.visible) continue;
+      d.curves.forEach((c, k) => {
+        const s = c.samples;
+        for (let i = 0; i < s.t.length; i++) {
+          v.set(s.xyz[3 * i], s.xyz[3 * i + 1], s.xyz[3 * i + 2]);
+          const world = v.clone();
+          this.view.model.localToWorld(world);
+          v.copy(world).project(this.view.camera);
+          const px = ((v.x + 1) / 2) * w;
+          const py = ((1 - v.y) / 2) * h;
+          const dist = Math.hypot(px - x, py - y);
+          if (dist <= GRAB_PX && (!best || dist < best.dist)) best = { part: d.id, curve: k, t: s.t[i], world, dist };
+        }
+      });
+    }
+    return best;
+  }
+
+  down(e) {
+    if (!this.canEdit() || e.button !== 0) return;
+    const hit = this.nearest(e);
+    if (!hit) return;
+    // Neither the orbit controls nor the icon picking see this press.
+    e.stopImmediatePropagation();
+    this.view.controls.enabled = false;
+    const normal = new THREE.Vector3();
+    this.view.camera.getWorldDirection(normal);
+    this.drag = { part: hit.part, curve: hit.curve, t: hit.t, plane: new THREE.Plane().setFromNormalAndCoplanarPoint(normal, hit.world), pending: null, inFlight: false };
+  }
+
+  move(e) {
+    if (!this.drag) return;
+    const [x, y, w, h] = this.pixel(e);
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(new THREE.Vector2((x / w) * 2 - 1, 1 - (y / h) * 2), this.view.camera);
+    const world = ray.ray.intersectPlane(this.drag.plane, new THREE.Vector3());
+    if (!world) return;
+    this.drag.pending = this.view.model.worldToLocal(world.clone()).toArray();
+    this.flush();
+  }
+
+  /** Sends the newest pointer position unless a drag message is still unanswered. */
+  flush() {
+    const d = this.drag;
+    if (!d || d.inFlight || !d.pending) return;
+    const xyz = d.pending;
+    d.pending = null;
+    const req = this.send({ type: 'network_edit', part: d.part, edit: { op: 'drag_point', curve: d.curve, t: d.t, xyz } });
+    if (req !== null && req !== undefined) {
+      d.inFlight = req;
+    }
+  }
+
+  /** The server answered request `req` (ack or error): the next drag position may go. */
+  answered(req) {
+    if (this.drag && this.drag.inFlight === req) {
+      this.drag.inFlight = false;
+      this.flush();
+    }
+  }
+
+  up() {
+    if (!this.drag) return;
+    this.drag = null;
+    this.view.controls.enabled = true;
+  }
+
+  /** Fairs every face of network part `id` toward its boundary's mean curvature. Returns the number of requests sent. */
+  fairAll(id, maxIterations = 100) {
+    const d = this.parts.get(id);
+    if (!d) return 0;
+    let sent = 0;
+    d.network.faces.forEach((_, face) => {
+      if (this.send({ type: 'network_edit', part: id, edit: { op: 'fair', face, measure: 'mean', goal: 'from_boundary', max_iterations: maxIterations } }) !== null) sent++;
+    });
+    return sent;
+  }
+}

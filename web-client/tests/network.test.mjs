@@ -1,0 +1,173 @@
+// A styling-curve network part end to end (issue 14), in real headless
+// Chromium against the real server: the bottle template's nine curves and
+// six patches are drawn in an editor and a viewer; a point of the bottom
+// ring is dragged with the mouse in the editor; the viewer then shows the
+// moved curve and patches whose boundary lies on the curves (every boundary
+// vertex of its mesh frame within the frame's quantisation of a curve,
+// measured by Newton's method on the curves the viewer was sent); the
+// fairing button fairs the faces and the boundary stays on the curves.
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { serverAndBrowser } from './harness.mjs';
+
+let server;
+let browser;
+const dataDir = serverAndBrowser('vsculpt-network-', (s, b) => {
+  server = s;
+  browser = b;
+});
+
+/** A new design holding the bottle network (REST, admin token). */
+async function bottleDesign(name) {
+  const admin = readFileSync(join(dataDir, 'admin-token'), 'utf8').trim();
+  const res = await fetch(`${server.base}/api/designs`, {
+    method: 'POST',
+    headers: { authorization: `Bearer ${admin}`, 'content-type': 'application/json' },
+    body: JSON.stringify({ name, template: 'bottle' }),
+  });
+  assert.equal(res.status, 201, await res.clone().text());
+  const d = await res.json();
+  return {
+    editor: `${server.base}/?design=${d.id}&token=${d.tokens.editor}`,
+    viewer: `${server.base}/?design=${d.id}&token=${d.tokens.viewer}`,
+  };
+}
+
+/** Opens `url` and waits until the network part's curves and patches are drawn and the shell is gone. */
+async function openNetwork(url) {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 700 } });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.errors = errors;
+  await page.goto(url);
+  await page.waitForFunction(
+    () => {
+      const v = window.vsculpt;
+      const d = v && v.networkView.parts.get(1);
+      return v.design.joined && v.state.access && d && d.frame && d.curves.length === 9 && !document.querySelector('#shell:not(.done)');
+    },
+    null,
+    { timeout: 30000 },
+  );
+  return page;
+}
+
+/**
+ * In the page: the largest distance from a boundary vertex of the network's
+ * mesh frame (edges of one triangle) to the nearest of its curves, the
+ * frame's quantisation bound, and curve 0 at t = 0.5.
+ */
+function measure(page) {
+  return page.evaluate(async () => {
+    const { curveDerivs } = await import('/src/bspline.js');
+    const d = window.vsculpt.networkView.parts.get(1);
+    const f = d.frame;
+    const count = new Map();
+    for (let i = 0; i < f.indices.length; i += 3) {
+      for (let k = 0; k < 3; k++) {
+        const a = f.indices[i + k];
+        const b = f.indices[i + ((k + 1) % 3)];
+        const key = Math.min(a, b) * 4294967296 + Math.max(a, b);
+        count.set(key, (count.get(key) || 0) + 1);
+      }
+    }
+    const boundary = new Set();
+    for (const [key, n] of count) {
+      if (n !== 1) continue;
+      boundary.add(Math.floor(key / 4294967296));
+      boundary.add(key % 4294967296);
+    }
+    const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const dist = (c, p) => {
+      const [a, b] = [c.knots[c.degree], c.knots[c.n]];
+      let t = a;
+      let best = Infinity;
+      for (let k = 0; k <= 400; k++) {
+        const s = a + ((b - a) * k) / 400;
+        const q = sub(curveDerivs(c, s).p, p);
+        if (dot(q, q) < best) [best, t] = [dot(q, q), s];
+      }
+      for (let it = 0; it < 20; it++) {
+        const g = curveDerivs(c, t);
+        const r = sub(g.p, p);
+        const df = dot(g.d1, g.d1) + dot(r, g.d2);
+        if (Math.abs(df) < 1e-300) break;
+        t = Math.min(b, Math.max(a, t - dot(r, g.d1) / df));
+      }
+      return Math.sqrt(dot(sub(curveDerivs(c, t).p, p), sub(curveDerivs(c, t).p, p)));
+    };
+    let gap = 0;
+    for (const i of boundary) {
+      const p = [f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]];
+      gap = Math.max(gap, Math.min(...d.curves.map((c) => dist(c.curve, p))));
+    }
+    return { gap, quantum: f.step * 0.5 * Math.sqrt(3) + 1e-5, boundary: boundary.size, mid: curveDerivs(d.curves[0].curve, 0.5).p, revision: f.revision };
+  });
+}
+
+/** Screen position of curve 0's point at t = 0.5 in `page`. */
+function screenOfMid(page) {
+  return page.evaluate(async () => {
+    const { curveDerivs } = await import('/src/bspline.js');
+    const v = window.vsculpt.view;
+    const c = window.vsculpt.networkView.parts.get(1).curves[0].curve;
+    const p = curveDerivs(c, 0.5).p;
+    const r = v.renderer.domElement.getBoundingClientRect();
+    const q = v.model.localToWorld(new v.camera.position.constructor(...p)).project(v.camera);
+    return { x: r.left + ((q.x + 1) / 2) * r.width, y: r.top + ((1 - q.y) / 2) * r.height };
+  });
+}
+
+test('a curve point dragged in one browser: the other browser\'s patches still meet the moved curve; fairing keeps the boundary', async () => {
+  const d = await bottleDesign('bottle');
+  const editor = await openNetwork(d.editor);
+  const viewer = await openNetwork(d.viewer);
+  const before = await measure(viewer);
+  assert.ok(before.boundary > 100, `boundary vertices: ${before.boundary}`);
+  assert.ok(before.gap <= before.quantum, `patches off the curves before the drag by ${before.gap}`);
+
+  const at = await screenOfMid(editor);
+  await editor.mouse.move(at.x, at.y);
+  await editor.mouse.down();
+  for (let k = 1; k <= 10; k++) await editor.mouse.move(at.x + 4 * k, at.y - 3 * k);
+  await editor.mouse.up();
+
+  // The viewer shows the moved curve and patches on it (waits for a
+  // consistent pair: network_changed comes before its frame).
+  await viewer.waitForFunction(
+    async (mid0) => {
+      const { curveDerivs } = await import('/src/bspline.js');
+      const d = window.vsculpt.networkView.parts.get(1);
+      const p = curveDerivs(d.curves[0].curve, 0.5).p;
+      return Math.hypot(p[0] - mid0[0], p[1] - mid0[1], p[2] - mid0[2]) > 0.02;
+    },
+    before.mid,
+    { timeout: 15000 },
+  );
+  let after = await measure(viewer);
+  for (let k = 0; k < 50 && after.gap > after.quantum; k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    after = await measure(viewer);
+  }
+  assert.ok(after.gap <= after.quantum, `the viewer's patches miss the moved curve by ${after.gap} (quantum ${after.quantum})`);
+  const moved = Math.hypot(after.mid[0] - before.mid[0], after.mid[1] - before.mid[1], after.mid[2] - before.mid[2]);
+  assert.ok(moved > 0.02, `curve moved by ${moved}`);
+
+  // The fairing button: every face faired, the boundary still on the curves.
+  await editor.click('#fair-network');
+  await viewer.waitForFunction(() => window.vsculpt.networkView.parts.get(1).network.faired.length === 6, null, { timeout: 30000 });
+  let faired = await measure(viewer);
+  for (let k = 0; k < 50 && (faired.revision <= after.revision || faired.gap > faired.quantum); k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    faired = await measure(viewer);
+  }
+  assert.ok(faired.gap <= faired.quantum, `faired patches miss the curves by ${faired.gap}`);
+  assert.deepEqual(editor.errors, []);
+  assert.deepEqual(viewer.errors, []);
+  await editor.close();
+  await viewer.close();
+});
