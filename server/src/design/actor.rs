@@ -142,6 +142,8 @@ pub enum DesignEvent {
     PartDeleted(u64),
     /// A part was renamed, shown or hidden, locked or unlocked, recoloured.
     PartChanged(PartDoc),
+    /// A DSM part's shape data changed (its mesh follows as a frame).
+    DsmChanged(PartDoc),
     /// A relation was created.
     RelationCreated(RelationDoc),
     /// A relation was removed.
@@ -796,6 +798,12 @@ impl Actor {
                 != (&part.name, part.visible, part.locked, &part.colour)
             {
                 send(DesignEvent::PartChanged(part.clone()));
+            }
+            if let (super::part::PartBody::Dsm(a), super::part::PartBody::Dsm(b)) =
+                (&old.body, &part.body)
+                && a != b
+            {
+                send(DesignEvent::DsmChanged(part.clone()));
             }
             let old_icons = old.body.icons();
             for icon in part.body.icons() {

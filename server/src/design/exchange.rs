@@ -18,18 +18,33 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             })?],
             None => doc.parts.iter().collect(),
         };
+    if let (Some(id), [p]) = (only, parts.as_slice())
+        && let PartBody::Dsm(_) = p.body
+    {
+        return Err(CommandError::new(
+            ErrorKind::Unsupported,
+            format!(
+                "part {id} is a dsm part: it has no exact IGES form; export it as STL, OBJ or glTF"
+            ),
+        ));
+    }
+    // A whole-product exchange file leaves the dsm parts out (mesh formats carry them).
     Ok(parts
         .into_iter()
-        .map(|p| IgesPart {
-            name: Some(p.name.clone()),
-            entity: match &p.body {
+        .filter_map(|p| {
+            let entity = match &p.body {
                 PartBody::Surface(s) => IgesEntity::Surface(s.surface.to_iges()),
                 PartBody::Curve(c) => IgesEntity::Curve(IgesCurve {
                     degree: c.curve.degree,
                     knots: c.curve.knots.clone(),
                     points: c.curve.points.clone(),
                 }),
-            },
+                PartBody::Dsm(_) => return None,
+            };
+            Some(IgesPart {
+                name: Some(p.name.clone()),
+                entity,
+            })
         })
         .collect())
 }

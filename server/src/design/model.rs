@@ -101,6 +101,7 @@ impl DesignModel {
                     c.curve.points = points;
                     c.kappa = kappa;
                 }
+                PartBody::Dsm(_) => {}
             }
             let part = p.id;
             for icon in p.body.icons_mut() {
@@ -144,7 +145,7 @@ impl DesignModel {
         let next = &mut self.engine;
         let outcome = (|| -> Result<Vec<u64>, CommandError> {
             Ok(match &edit {
-                Edit::Part { part, .. } => {
+                Edit::Part { part, .. } | Edit::Dsm { part, .. } => {
                     let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
                     next.rebuild_part(*part, &p.body)?
                 }
@@ -272,6 +273,9 @@ impl DesignModel {
 
     /// The encoded geometry frame of `part` at revision `rev`.
     pub fn geometry(&self, design: u64, part: u64, rev: u64, drag: bool) -> Option<Geometry> {
+        if let Some(frame) = self.engine.dsm().frame(design, part, rev, drag) {
+            return Some(Geometry { rev, frame });
+        }
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;
         let icons: Vec<(u64, DVec3)> = p

@@ -136,6 +136,8 @@ pub enum PartBody {
     Surface(SurfacePart),
     /// A deformable curve (paper 003, eq. 1).
     Curve(CurvePart),
+    /// A Density Spatial Model shape (paper 001; `dsm_engine`).
+    Dsm(super::dsm_engine::DsmPart),
 }
 
 impl PartBody {
@@ -144,6 +146,7 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &s.icons,
             PartBody::Curve(c) => &c.icons,
+            PartBody::Dsm(d) => &d.icons,
         }
     }
 
@@ -152,22 +155,25 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &mut s.icons,
             PartBody::Curve(c) => &mut c.icons,
+            PartBody::Dsm(d) => &mut d.icons,
         }
     }
 
-    /// The kind's name (`"surface"`, `"curve"`).
+    /// The kind's name (`"surface"`, `"curve"`, `"dsm"`).
     pub fn kind(&self) -> &'static str {
         match self {
             PartBody::Surface(_) => "surface",
             PartBody::Curve(_) => "curve",
+            PartBody::Dsm(_) => "dsm",
         }
     }
 
-    /// Every control point.
+    /// Every control point (none for a DSM part).
     pub fn points(&self) -> &[[f64; 3]] {
         match self {
             PartBody::Surface(s) => &s.surface.points,
             PartBody::Curve(c) => &c.curve.points,
+            PartBody::Dsm(_) => &[],
         }
     }
 
@@ -189,6 +195,7 @@ impl PartBody {
                     i.anchor.validate_on_curve(&c.curve)?;
                 }
             }
+            PartBody::Dsm(d) => d.validate()?,
         }
         if self
             .icons()
