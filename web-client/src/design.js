@@ -43,6 +43,8 @@ export function geometryFromShape(shape) {
       points: flat(c.points),
     };
   }
+  // A DSM part: no control points; the server sends its mesh (dsm-view.js).
+  if (shape.kind === 'dsm') return { kind: 'dsm' };
   throw new Error(`unknown part kind ${shape.kind}`);
 }
 
@@ -125,6 +127,7 @@ export class Design {
       locked: p.locked,
       colour: p.colour,
       material: p.material,
+      dsm: p.shape.kind === 'dsm' ? p.shape.dsm : undefined,
       icons: new Set(),
       geometry: geometry.points ? geometry : null,
       revision: rev,
@@ -174,6 +177,12 @@ export class Design {
         const part = this.parts.get(msg.part);
         if (!part) return [];
         for (const k of ['name', 'visible', 'locked', 'colour']) if (msg[k] !== undefined) part[k] = msg[k];
+        return [part.id];
+      }
+      case 'dsm_changed': {
+        const part = this.parts.get(msg.part);
+        if (!part || part.kind !== 'dsm') return [];
+        part.dsm = msg.dsm;
         return [part.id];
       }
       case 'relation_created':
