@@ -260,9 +260,8 @@ pub enum ClientMessage {
     },
     /// Reshape a DSM part: add, move, resize or remove a primitive, set its
     /// density and reducing factor, move it to another group, or drag a net
-    /// node. Meant to be answered `ack` and a mesh frame (kind 3) of the part;
-    /// today's server refuses it with `unsupported`. A refused edit changes
-    /// nothing.
+    /// node. Answered `ack`, then `dsm_changed` to every client and a mesh
+    /// frame (kind 3) of the part. A refused edit changes nothing.
     DsmEdit {
         /// The DSM part.
         part: u64,

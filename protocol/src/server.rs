@@ -216,6 +216,14 @@ pub enum ServerMessage {
         /// The network as it is now.
         network: crate::network::NetworkData,
     },
+    /// A DSM part's shape data changed (`dsm_edit`); its new mesh follows
+    /// as a mesh frame (kind 3).
+    DsmChanged {
+        /// The part.
+        part: u64,
+        /// Its groups and primitives now.
+        dsm: crate::dsm::DsmData,
+    },
     /// Parts were tied together.
     RelationCreated {
         /// The new relation.

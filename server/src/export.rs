@@ -222,6 +222,23 @@ pub async fn mesh(
         Some(p) => format!("{} - {}", doc.name, p.name),
         None => doc.name.clone(),
     };
+    if let Some(p) = part.and_then(|id| doc.part(id))
+        && let crate::design::part::PartBody::Dsm(d) = &p.body
+    {
+        // A DSM part: its implicit surface meshed within the vertex budget.
+        let data = d.dsm.clone();
+        drop(doc);
+        return stream(
+            move || {
+                let t = crate::design::dsm_engine::export_mesh(&data, max_vertices)
+                    .map_err(|e| ExportError::Part(e.message))?;
+                Mesh::new(&t.positions, &t.normals, &t.indices)?;
+                Ok(t)
+            },
+            move |t, out| write_mesh(&t.positions, &t.normals, &t.indices, format, &name, out),
+        )
+        .await;
+    }
     let networks = export_networks(&doc, part);
     let surfaces = if networks.is_empty() || part.is_none() {
         export_surfaces(&doc, part)?
@@ -266,19 +283,27 @@ pub async fn mesh(
             Mesh::new(&t.positions, &t.normals, &t.indices)?;
             Ok(t)
         },
-        move |t, out| {
-            // Validated in `prepare`; cannot fail again.
-            let mesh = Mesh::new(&t.positions, &t.normals, &t.indices)
-                .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e))?;
-            let mut out = out;
-            match format {
-                MeshFormat::Obj => cad::write_obj_to(&mesh, &name, &mut out),
-                MeshFormat::Stl => cad::write_stl_to(&mesh, &name, &mut out),
-                MeshFormat::Gltf => cad::write_gltf_to(&mesh, &name, &mut out),
-            }
-        },
+        move |t, out| write_mesh(&t.positions, &t.normals, &t.indices, format, &name, out),
     )
     .await
+}
+
+/// Writes a mesh validated in `prepare` (so it cannot fail validation again).
+fn write_mesh(
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    indices: &[u32],
+    format: MeshFormat,
+    name: &str,
+    mut out: &mut dyn Write,
+) -> io::Result<()> {
+    let mesh = Mesh::new(positions, normals, indices)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e))?;
+    match format {
+        MeshFormat::Obj => cad::write_obj_to(&mesh, name, &mut out),
+        MeshFormat::Stl => cad::write_stl_to(&mesh, name, &mut out),
+        MeshFormat::Gltf => cad::write_gltf_to(&mesh, name, &mut out),
+    }
 }
 
 /// The IGES export of `doc` — one part, or every part (surfaces as entity

@@ -20,6 +20,8 @@ import { PartsView } from './parts-view.js';
 import { NetworkView } from './network-view.js';
 import { PartsPanel } from './parts-panel.js';
 import { deviation, sameDomain, versionSurface } from './compare.js';
+import { DsmView } from './dsm-view.js';
+import { DsmPanel } from './dsm-panel.js';
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -71,6 +73,16 @@ const view = new View($('viewport'));
 const partsView = new PartsView(view);
 const icons = new IconLayer(view.model);
 const networkView = new NetworkView(view, { send: (m) => send(m), canEdit: () => state.access === 'editor' && state.online });
+const dsmView = new DsmView(view.model);
+{
+  // The view's bounds: the surface and curve drawings' and the DSM meshes'.
+  const partsBounds = view.bounds;
+  view.bounds = () => {
+    const a = partsBounds();
+    const b = dsmView.bounds();
+    return a && b ? a.clone().union(b) : a || b;
+  };
+}
 
 function status(kind, text) {
   const el = $('status');
@@ -169,6 +181,7 @@ function redraw() {
   perf.redraws++;
   partsView.sync(design, { hidden: state.hidden, selected: state.selectedPart });
   networkView.sync(design, state.hidden);
+  dsmView.sync(design, partShownHere);
   for (const id of design.parts.keys()) partShownSeq.set(id, partSeq.get(id) || 0);
   dirtyParts.clear();
   if (partsView.drawings.size || networkView.parts.size) pictured = true;
@@ -193,6 +206,7 @@ function keepSelection() {
   }
 }
 
+const dsmPanel = new DsmPanel({ section: $('dsm-section'), onEdit: (part, edit) => dsmEdit(part, edit) });
 const partsPanel = new PartsPanel({
   list: $('parts'),
   relations: $('relations'),
@@ -238,6 +252,7 @@ function renderPanels() {
       ${editor ? `<button data-restore="${v.version}"${state.online ? '' : ' disabled'}>restore</button>` : ''}</li>`)
     .join('');
   partsPanel.render({ design, selected: state.selectedPart, hidden: state.hidden, editor, online: !!state.online });
+  dsmPanel.render(selectedPart(), editor && !!state.online);
   const part = selectedPart();
   $('target-part').textContent = part ? `on ${part.name} (${part.kind})${part.locked ? ' · locked' : ''}` : 'no part selected';
   const curve = part && part.kind === 'curve';
@@ -306,11 +321,13 @@ function onMessage(msg) {
     case 'icon_created':
     case 'icon_updated':
     case 'icon_deleted':
-    case 'material_changed': {
+    case 'material_changed':
+    case 'dsm_changed': {
       if (msg.type === 'part_created' && partHasPoints(msg.part)) partSeq.set(msg.part.id, (partSeq.get(msg.part.id) || 0) + 1);
       design.applyEvent(msg);
       if (msg.type === 'part_deleted') {
         state.hidden.delete(msg.part);
+        dsmView.drop(msg.part);
         if (tessWorker) tessWorker.forget(msg.part);
         if (state.compare && state.compare.part === msg.part) stopCompare();
       }
@@ -358,7 +375,7 @@ function onMessage(msg) {
 /** Whether a part's JSON carries its control points (a full snapshot or part_created). */
 function partHasPoints(p) {
   const s = p.shape;
-  if (s.kind === 'network') return false;
+  if (s.kind === 'network' || s.kind === 'dsm') return false;
   return (s.kind === 'surface' ? s.surface.points : s.curve.points).length > 0;
 }
 
@@ -371,9 +388,16 @@ function setHistory(canUndo, canRedo) {
 
 function onFrame(f) {
   state.frames++;
-  // Mesh frames (kind 3): a network part's patches are drawn; dsm parts' not yet.
+  // Mesh frames (kind 3): a network part's patches, a DSM part's surface.
+  // Before the snapshot (compact join) the part is unknown: both views take
+  // the frame and each keeps only its own kind once the parts are known.
   if (f.kind === 'mesh') {
-    if (networkView.mesh(f)) pictured = true;
+    const part = design.parts.get(f.part);
+    if ((!part || part.kind === 'network') && networkView.mesh(f)) pictured = true;
+    if ((!part || part.kind === 'dsm') && dsmView.show(f, part)) {
+      dsmView.style(part || { id: f.part }, partShownHere(f.part));
+      pictured = true;
+    }
     return;
   }
   const known = design.parts.has(f.part);
@@ -737,6 +761,25 @@ function addPlane() {
   return send({ type: 'create_part', spec: { name: freshName('plane'), shape: { kind: 'surface', surface: { u: { degree: 3, knots }, v: { degree: 3, knots }, nu: n, nv: n, points } } } });
 }
 
+/** Adds a DSM part beside the design (paper 001): a flat box whose ends two sphere-based density primitives round off, and a bump on top. */
+function addDsm() {
+  const { x, y, z, size } = placeNew();
+  const c = [x + size / 2, y + size / 2, z];
+  const a = Math.log(3) / (0.2 * size);
+  const prims = [
+    { id: 1, at: c, shape: { type: 'box', half: [0.4 * size, 0.2 * size, 0.08 * size] } },
+    { id: 2, at: [c[0] + 0.4 * size, c[1], c[2]], shape: { type: 'density_sphere', density: 3, reducing: a } },
+    { id: 3, at: [c[0] - 0.4 * size, c[1], c[2]], shape: { type: 'density_sphere', density: 3, reducing: a } },
+    { id: 4, at: [c[0], c[1], c[2] + 0.08 * size], shape: { type: 'density_sphere', density: 2, reducing: a } },
+  ];
+  return send({ type: 'create_part', spec: { name: freshName('concept'), shape: { kind: 'dsm', dsm: { de: 1, cells: 32, groups: [{ op: 'add', primitives: prims }] } } } });
+}
+
+/** Sends one `dsm_edit` of DSM part `part`. */
+function dsmEdit(part, edit) {
+  return send({ type: 'dsm_edit', part, edit });
+}
+
 /** Adds a cubic curve (6 control points, a gentle arch) beside the design. */
 function addCurve() {
   const { x, y, z, size } = placeNew();
@@ -784,6 +827,7 @@ $('fair-network').addEventListener('click', () => {
   const ids = [...design.parts.values()].filter((p) => p.kind === 'network' && (state.selectedPart === null || state.selectedPart === undefined || state.selectedPart === p.id)).map((p) => p.id);
   for (const id of ids) networkView.fairAll(id);
 });
+$('add-dsm').addEventListener('click', addDsm);
 $('finish-curve').addEventListener('click', finishCurve);
 $('sel-role').addEventListener('change', (e) => send({ type: 'set_role', icon: state.selected, role: ROLES[e.target.value] }));
 $('sel-state').addEventListener('change', (e) => send({ type: 'set_state', icon: state.selected, state: e.target.value }));
@@ -1038,4 +1082,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, send, view, partsView, networkView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

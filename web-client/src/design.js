@@ -45,6 +45,8 @@ export function geometryFromShape(shape) {
   }
   // A network's curves and patches are drawn by network-view.js (part.network).
   if (shape.kind === 'network') return { kind: 'network', points: null };
+  // A DSM part: no control points; the server sends its mesh (dsm-view.js).
+  if (shape.kind === 'dsm') return { kind: 'dsm' };
   throw new Error(`unknown part kind ${shape.kind}`);
 }
 
@@ -127,6 +129,7 @@ export class Design {
       locked: p.locked,
       colour: p.colour,
       material: p.material,
+      dsm: p.shape.kind === 'dsm' ? p.shape.dsm : undefined,
       icons: new Set(),
       geometry: geometry.points ? geometry : null,
       revision: rev,
@@ -177,6 +180,12 @@ export class Design {
         const part = this.parts.get(msg.part);
         if (!part) return [];
         for (const k of ['name', 'visible', 'locked', 'colour']) if (msg[k] !== undefined) part[k] = msg[k];
+        return [part.id];
+      }
+      case 'dsm_changed': {
+        const part = this.parts.get(msg.part);
+        if (!part || part.kind !== 'dsm') return [];
+        part.dsm = msg.dsm;
         return [part.id];
       }
       case 'relation_created':

@@ -69,6 +69,12 @@ export class NetworkView {
       const part = design.parts.get(id);
       if (!part || part.kind !== 'network') this.remove(id);
     }
+    // Frames kept from before the snapshot for parts that turned out not to
+    // be networks (a DSM part's mesh) are not ours.
+    for (const id of [...this.pending.keys()]) {
+      const part = design.parts.get(id);
+      if (part && part.kind !== 'network') this.pending.delete(id);
+    }
     for (const part of design.parts.values()) {
       if (part.kind !== 'network' || !part.network) continue;
       const d = this.parts.get(part.id);

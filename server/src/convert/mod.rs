@@ -477,14 +477,12 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
             part,
             edit: PartEdit::SetMaterial(parts::part_material_from_wire(&material)),
         }),
-        M::DsmEdit { .. } => return Err((req, dsm_not_served())),
+        M::DsmEdit { part, edit: e } => edit(Edit::Dsm { part, edit: e }),
         M::NetworkEdit { part, edit: e } => edit(Edit::Network {
             part,
             edit: network::edit_from_wire(&e),
         }),
-        M::CreatePart { spec } => {
-            edit(parts::create_part(&spec).ok_or_else(|| (req, dsm_not_served()))?)
-        }
+        M::CreatePart { spec } => edit(parts::create_part(&spec)),
         M::DeletePart { part } => edit(Edit::DeletePart { part }),
         M::SetPart {
             part,
@@ -531,15 +529,6 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
         },
     };
     Ok((req, inbound))
-}
-
-/// DSM parts (paper 001) are in the protocol but this server does not build
-/// them yet (issue 12): refused with a clear error, nothing changes.
-fn dsm_not_served() -> WireError {
-    WireError::new(
-        ErrorCode::Unsupported,
-        "dsm parts are not served by this server yet (issue 12): the part was not created",
-    )
 }
 
 fn text(m: &ServerMessage) -> Utf8Bytes {
@@ -702,6 +691,13 @@ pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
             part: *part,
             network: network::network_to_wire(v),
         }),
+        DesignEvent::DsmChanged(p) => match &p.body {
+            PartBody::Dsm(d) => text(&ServerMessage::DsmChanged {
+                part: p.id,
+                dsm: d.dsm.clone(),
+            }),
+            _ => Utf8Bytes::default(),
+        },
         DesignEvent::RelationCreated(r) => text(&ServerMessage::RelationCreated {
             relation: parts::relation_to_wire(r),
         }),
@@ -760,10 +756,9 @@ pub fn geometry_frame(
                 s.v_knots.clone(),
             )
         }
-        PartBody::Network(_) => {
-            // Network parts are sent as mesh frames (`NetworkEngine::frame`).
-            return Bytes::new();
-        }
+        // Network and DSM parts travel as mesh frames
+        // (`NetworkEngine::frame`, `DesignModel::geometry`).
+        PartBody::Network(_) | PartBody::Dsm(_) => return Bytes::new(),
         PartBody::Curve(c) => {
             let c = &c.curve;
             (

@@ -5,6 +5,7 @@
 
 use super::{icon_to_wire, material_from_wire, material_to_wire};
 use crate::design::doc::{IconDoc, SurfaceDoc};
+use crate::design::dsm_engine::DsmPart;
 use crate::design::part::{
     ContinuityDoc, CurveDoc, CurveMaterialDoc, CurvePart, EdgeDoc, IsoLineDoc, PartBody, PartDoc,
     RelationDoc, RelationKind, SurfacePart,
@@ -81,16 +82,19 @@ pub fn body_material(b: &PartBody) -> MaterialEdit {
     match b {
         PartBody::Surface(s) => MaterialEdit::Surface(s.material),
         PartBody::Curve(c) => MaterialEdit::Curve(c.material),
-        // A network has no material; the wire's field shows the curve default.
-        PartBody::Network(_) => MaterialEdit::Curve(CurveMaterialDoc::default()),
+        // Network and DSM parts have no material; the wire's `material`
+        // field gets the curve default as a placeholder (set_material on
+        // them is refused).
+        PartBody::Network(_) | PartBody::Dsm(_) => {
+            MaterialEdit::Curve(CurveMaterialDoc::default())
+        }
     }
 }
 
 /// `create_part` as an edit: the shape with the given material (or the
 /// kind's default; a material of the other kind is refused by validation
-/// in the protocol crate). `None` for a kind this server does not build
-/// (`dsm`).
-pub fn create_part(spec: &wire::PartSpec) -> Option<Edit> {
+/// in the protocol crate).
+pub fn create_part(spec: &wire::PartSpec) -> Edit {
     let body = match &spec.shape {
         wire::PartShape::Surface { surface } => PartBody::Surface(SurfacePart {
             surface: surface_from_wire(surface),
@@ -117,16 +121,16 @@ pub fn create_part(spec: &wire::PartSpec) -> Option<Edit> {
             icons: Vec::new(),
             kappa: None,
         }),
-        wire::PartShape::Dsm { .. } => return None,
+        wire::PartShape::Dsm { dsm } => PartBody::Dsm(DsmPart::new(dsm.clone())),
         wire::PartShape::Network { network } => {
             PartBody::Network(super::network::network_from_wire(network))
         }
     };
-    Some(Edit::CreatePart {
+    Edit::CreatePart {
         name: spec.name.clone(),
         body: Box::new(body),
         colour: spec.colour.clone(),
-    })
+    }
 }
 
 /// A part as clients see it; icons carry their holders; control points
@@ -158,6 +162,7 @@ pub fn part_to_wire(p: &PartDoc, holders: &BTreeMap<u64, u64>, points: bool) -> 
                     &crate::design::network_engine::NetworkView::of(n),
                 ),
             },
+            PartBody::Dsm(d) => wire::PartShape::Dsm { dsm: d.dsm.clone() },
         },
     }
 }

@@ -147,6 +147,8 @@ pub enum DesignEvent {
     /// A network part's curves or faired faces changed (with its meetings
     /// and faces).
     NetworkChanged(u64, Arc<super::network_engine::NetworkView>),
+    /// A DSM part's shape data changed (its mesh follows as a frame).
+    DsmChanged(PartDoc),
     /// A relation was created.
     RelationCreated(RelationDoc),
     /// A relation was removed.
@@ -837,6 +839,12 @@ impl Actor {
                 && let Some(n) = self.model.network(part.id)
             {
                 send(DesignEvent::NetworkChanged(part.id, Arc::new(n.view())));
+            }
+            if let (super::part::PartBody::Dsm(a), super::part::PartBody::Dsm(b)) =
+                (&old.body, &part.body)
+                && a != b
+            {
+                send(DesignEvent::DsmChanged(part.clone()));
             }
             let old_icons = old.body.icons();
             for icon in part.body.icons() {

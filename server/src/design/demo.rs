@@ -286,3 +286,96 @@ pub fn demo() -> Result<DesignDoc, CommandError> {
     doc.validate()?;
     Ok(doc)
 }
+
+/// The DSM demo shape (paper 001, a handset-like product concept): a flat
+/// box body whose ends are rounded by two fused sphere-based density
+/// primitives, a free-form top shaped by a 5 × 4 passing-points net on the
+/// body's top face (the inverse transformation puts the surface through the
+/// interior nodes), and a lanyard hole through it subtracted by a second
+/// group.
+pub fn handset_dsm() -> vsculpt_protocol::DsmData {
+    use vsculpt_protocol::dsm::{DsmData, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
+    let prim = |id: u64, at: [f64; 3], shape: DsmPrimitiveShape| DsmPrimitive {
+        id,
+        at,
+        axis: None,
+        shape,
+    };
+    let heights = vec![
+        0.08, 0.10, 0.10, 0.10, 0.08, //
+        0.10, 0.22, 0.26, 0.22, 0.10, //
+        0.10, 0.22, 0.26, 0.22, 0.10, //
+        0.08, 0.10, 0.10, 0.10, 0.08,
+    ];
+    DsmData {
+        de: 1.0,
+        cells: 40,
+        groups: vec![
+            DsmGroup {
+                op: DsmOp::Add,
+                incorporated: Vec::new(),
+                primitives: vec![
+                    prim(
+                        1,
+                        [0.0, 0.0, 0.0],
+                        DsmPrimitiveShape::Box {
+                            half: [1.6, 0.8, 0.3],
+                            negative: false,
+                        },
+                    ),
+                    prim(
+                        2,
+                        [1.5, 0.0, 0.0],
+                        DsmPrimitiveShape::DensitySphere {
+                            density: 3.0,
+                            reducing: 3.0,
+                        },
+                    ),
+                    prim(
+                        3,
+                        [-1.5, 0.0, 0.0],
+                        DsmPrimitiveShape::DensitySphere {
+                            density: 3.0,
+                            reducing: 3.0,
+                        },
+                    ),
+                    prim(
+                        4,
+                        [0.0, 0.0, 0.3],
+                        DsmPrimitiveShape::Net {
+                            nu: 5,
+                            nv: 4,
+                            spacing: [0.7, 0.45],
+                            heights,
+                            reducing: 3.0,
+                        },
+                    ),
+                ],
+            },
+            DsmGroup {
+                op: DsmOp::Subtract,
+                incorporated: Vec::new(),
+                primitives: vec![prim(
+                    5,
+                    [1.15, 0.0, 0.0],
+                    DsmPrimitiveShape::Cylinder {
+                        radius: 0.15,
+                        half_height: 1.5,
+                        negative: false,
+                    },
+                )],
+            },
+        ],
+    }
+}
+
+/// The DSM demo design: one part, the handset concept of [`handset_dsm`].
+pub fn handset() -> Result<DesignDoc, CommandError> {
+    let doc = DesignDoc::single(
+        "handset concept",
+        "handset",
+        PartBody::Dsm(super::dsm_engine::DsmPart::new(handset_dsm())),
+    );
+    doc.validate()?;
+    Ok(doc)
+}

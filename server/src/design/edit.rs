@@ -81,6 +81,13 @@ pub enum Edit {
         /// The change.
         edit: super::network_engine::NetworkEditDoc,
     },
+    /// Reshapes a DSM part (`dsm_edit`; see `dsm_engine::apply_edit`).
+    Dsm {
+        /// The part.
+        part: u64,
+        /// The change.
+        edit: vsculpt_protocol::DsmEdit,
+    },
 }
 
 /// A part's material, by kind.
@@ -282,6 +289,16 @@ pub fn apply<'q>(
                     format!("icon {icon} is on part {}, not part {part}", other.id),
                 ));
             }
+            if let Some(p) = doc.part(*part)
+                && let PartBody::Dsm(_) = p.body
+            {
+                return Err(CommandError::new(
+                    ErrorKind::Unsupported,
+                    format!(
+                        "part {part} is a dsm part: it has no icons or material; reshape it with dsm_edit"
+                    ),
+                ));
+            }
             let q = query(*part).ok_or_else(|| unknown_part(*part))?;
             let total_icons = doc.icons().count();
             let mut next_icon = doc.next_icon;
@@ -413,6 +430,20 @@ pub fn apply<'q>(
             });
             created.relation = Some(id);
         }
+        Edit::Dsm { part, edit } => {
+            let p = doc.part_mut(*part).ok_or_else(|| unknown_part(*part))?;
+            if p.locked {
+                return Err(locked(p));
+            }
+            let kind = p.body.kind();
+            let PartBody::Dsm(d) = &mut p.body else {
+                return Err(CommandError::new(
+                    ErrorKind::Incompatible,
+                    format!("part {part} is a {kind} part: dsm_edit needs a dsm part"),
+                ));
+            };
+            d.dsm = super::dsm_engine::apply_edit(&d.dsm, edit)?;
+        }
         Edit::Unrelate { relation } => {
             let before = doc.relations.len();
             doc.relations.retain(|r| r.id != *relation);
@@ -443,10 +474,14 @@ fn apply_part(
             ErrorKind::Incompatible,
             "a network part has no icons",
         )),
+        PartBody::Dsm(_) => Err(CommandError::new(
+            ErrorKind::Unsupported,
+            "a dsm part has no icons",
+        )),
     };
     let check_kind_role = |body: &PartBody, role: IconRoleDoc| match body {
         PartBody::Curve(_) => super::curve_engine::curve_role(role).map(|_| ()),
-        PartBody::Surface(_) | PartBody::Network(_) => Ok(()),
+        PartBody::Surface(_) | PartBody::Network(_) | PartBody::Dsm(_) => Ok(()),
     };
     match edit {
         PartEdit::AddIcon {

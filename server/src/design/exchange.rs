@@ -19,6 +19,16 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             })?],
             None => doc.parts.iter().collect(),
         };
+    if let (Some(id), [p]) = (only, parts.as_slice())
+        && let PartBody::Dsm(_) = p.body
+    {
+        return Err(CommandError::new(
+            ErrorKind::Unsupported,
+            format!(
+                "part {id} is a dsm part: it has no exact IGES form; export it as STL, OBJ or glTF"
+            ),
+        ));
+    }
     let curve = |c: &CurveDoc| {
         IgesEntity::Curve(IgesCurve {
             degree: c.degree,
@@ -26,6 +36,8 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             points: c.points.clone(),
         })
     };
+    // A whole-product exchange file leaves the dsm parts out (mesh formats
+    // carry them).
     Ok(parts
         .into_iter()
         .flat_map(|p| match &p.body {
@@ -48,6 +60,7 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
                     entity: curve(c),
                 })
                 .collect(),
+            PartBody::Dsm(_) => Vec::new(),
         })
         .collect())
 }

@@ -106,7 +106,7 @@ impl DesignModel {
                     c.curve.points = points;
                     c.kappa = kappa;
                 }
-                PartBody::Network(_) => {}
+                PartBody::Network(_) | PartBody::Dsm(_) => {}
             }
             let part = p.id;
             for icon in p.body.icons_mut() {
@@ -179,7 +179,7 @@ impl DesignModel {
                     networks.remove(part);
                     Vec::new()
                 }
-                Edit::Part { part, .. } => {
+                Edit::Part { part, .. } | Edit::Dsm { part, .. } => {
                     let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
                     next.rebuild_part(*part, &p.body)?
                 }
@@ -318,6 +318,9 @@ impl DesignModel {
                 rev,
                 frame: n.frame(design, part, rev, drag),
             });
+        }
+        if let Some(frame) = self.engine.dsm().frame(design, part, rev, drag) {
+            return Some(Geometry { rev, frame });
         }
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;

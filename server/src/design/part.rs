@@ -208,6 +208,8 @@ pub enum PartBody {
     Curve(CurvePart),
     /// A styling-curve network filled with n-sided patches (paper 004).
     Network(NetworkPart),
+    /// A Density Spatial Model shape (paper 001; `dsm_engine`).
+    Dsm(super::dsm_engine::DsmPart),
 }
 
 impl PartBody {
@@ -217,6 +219,7 @@ impl PartBody {
             PartBody::Surface(s) => &s.icons,
             PartBody::Curve(c) => &c.icons,
             PartBody::Network(n) => &n.icons,
+            PartBody::Dsm(d) => &d.icons,
         }
     }
 
@@ -226,24 +229,27 @@ impl PartBody {
             PartBody::Surface(s) => &mut s.icons,
             PartBody::Curve(c) => &mut c.icons,
             PartBody::Network(n) => &mut n.icons,
+            PartBody::Dsm(d) => &mut d.icons,
         }
     }
 
-    /// The kind's name (`"surface"`, `"curve"`).
+    /// The kind's name (`"surface"`, `"curve"`, `"network"`, `"dsm"`).
     pub fn kind(&self) -> &'static str {
         match self {
             PartBody::Surface(_) => "surface",
             PartBody::Curve(_) => "curve",
             PartBody::Network(_) => "network",
+            PartBody::Dsm(_) => "dsm",
         }
     }
 
-    /// Every control point (none for a network part: its curves hold them).
+    /// Every control point (none for a network part — its curves hold
+    /// them — nor for a DSM part).
     pub fn points(&self) -> &[[f64; 3]] {
         match self {
             PartBody::Surface(s) => &s.surface.points,
             PartBody::Curve(c) => &c.curve.points,
-            PartBody::Network(_) => &[],
+            PartBody::Network(_) | PartBody::Dsm(_) => &[],
         }
     }
 
@@ -266,6 +272,7 @@ impl PartBody {
                 }
             }
             PartBody::Network(n) => n.validate()?,
+            PartBody::Dsm(d) => d.validate()?,
         }
         if self
             .icons()

@@ -11,6 +11,7 @@
 
 use super::curve_engine::{CurveEngine, CurveQuery, curve_mesh, curve_readback};
 use super::doc::DesignDoc;
+use super::dsm_engine::DsmEngine;
 use super::edit::SurfaceQuery;
 use super::engine::{DesignQuery, Engine, IconReadback, kernel_error, readback, surface_mesh};
 use super::error::{CommandError, ErrorKind};
@@ -45,6 +46,8 @@ pub struct ProductEngine {
     relations: BTreeMap<u64, KernelRelation>,
     /// Per part: the icon grabbed and where it was at the grab.
     grabbed: BTreeMap<u64, (u64, DVec3)>,
+    /// The DSM parts (paper 001), meshed outside the kernel product.
+    dsm: DsmEngine,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -142,6 +145,12 @@ fn kernel_part(body: &PartBody) -> Result<(Part, BTreeMap<u64, IconId>), Command
                 "a network part is not a product part (see network_engine)",
             ));
         }
+        PartBody::Dsm(_) => {
+            return Err(CommandError::new(
+                ErrorKind::Incompatible,
+                "a dsm part is not a kernel product part",
+            ));
+        }
     })
 }
 
@@ -151,9 +160,14 @@ impl ProductEngine {
     pub fn build_unsolved(doc: &DesignDoc) -> Result<Self, CommandError> {
         let mut product = Product::new();
         let mut ids = BTreeMap::new();
+        let mut dsm = DsmEngine::default();
         for p in &doc.parts {
             if let PartBody::Network(_) = p.body {
                 continue; // the model's network engines hold networks
+            }
+            if let PartBody::Dsm(d) = &p.body {
+                dsm.insert(p.id, d)?;
+                continue;
             }
             let (part, map) = kernel_part(&p.body)?;
             product
@@ -166,6 +180,7 @@ impl ProductEngine {
             ids,
             relations: BTreeMap::new(),
             grabbed: BTreeMap::new(),
+            dsm,
         };
         for r in &doc.relations {
             e.insert_relation(r)?;
@@ -243,6 +258,9 @@ impl ProductEngine {
 
     /// Adds a new part (bare: a part starts without icons; nothing moves).
     pub fn add_part(&mut self, id: u64, body: &PartBody) -> Result<(), CommandError> {
+        if let PartBody::Dsm(d) = body {
+            return self.dsm.insert(id, d);
+        }
         let (part, map) = kernel_part(body)?;
         self.product
             .insert_part(PartId(id), part)
@@ -253,6 +271,9 @@ impl ProductEngine {
 
     /// Removes a part with its relations; returns the parts that changed.
     pub fn remove_part(&mut self, id: u64) -> Result<Vec<u64>, CommandError> {
+        if self.dsm.remove(id) {
+            return Ok(Vec::new());
+        }
         let removed = self
             .product
             .remove_part(PartId(id))
@@ -272,6 +293,10 @@ impl ProductEngine {
     /// material) inside its relations, and solves it with everything solved
     /// with it. Returns the parts that moved.
     pub fn rebuild_part(&mut self, id: u64, body: &PartBody) -> Result<Vec<u64>, CommandError> {
+        if let PartBody::Dsm(d) = body {
+            self.dsm.insert(id, d)?;
+            return Ok(vec![id]);
+        }
         let (part, map) = kernel_part(body)?;
         let removed = self
             .product
@@ -406,6 +431,9 @@ impl ProductEngine {
 
     /// A tessellation (surface) or polyline (curve) of `part`.
     pub fn mesh(&self, part: u64, density: usize) -> Result<MeshData, CommandError> {
+        if let Some(m) = self.dsm.mesh_data(part) {
+            return Ok(m);
+        }
         match self.product.part(PartId(part)) {
             Some(Part::Surface(d)) => Ok(surface_mesh(d.surface(), density)),
             Some(Part::Curve(c)) => Ok(curve_mesh(c.curve(), density)),
@@ -414,6 +442,11 @@ impl ProductEngine {
                 format!("no part {part}"),
             )),
         }
+    }
+
+    /// The DSM parts and their meshes.
+    pub fn dsm(&self) -> &DsmEngine {
+        &self.dsm
     }
 
     /// Part `part`'s geometry as a query for icon placement.

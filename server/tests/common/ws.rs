@@ -17,6 +17,8 @@ pub type Stream =
 pub enum Got {
     Text(Value),
     Frame(GeometryFrame),
+    /// A mesh frame (kind 3: a dsm part).
+    Mesh(vsculpt_protocol::MeshFrame),
     Closed,
 }
 
@@ -68,12 +70,10 @@ pub async fn next(ws: &mut Stream) -> Got {
             Some(Ok(Message::Text(t))) => {
                 return Got::Text(serde_json::from_str(t.as_str()).unwrap());
             }
-            // Mesh frames (kind 3: a network part's patches) are checked
-            // by the tests of those parts; this client skips them.
             Some(Ok(Message::Binary(b)))
                 if b.get(4) == Some(&vsculpt_protocol::mesh_frame::KIND_MESH) =>
             {
-                continue;
+                return Got::Mesh(vsculpt_protocol::MeshFrame::decode(&b).expect("bad mesh frame"));
             }
             Some(Ok(Message::Binary(b))) => {
                 return Got::Frame(GeometryFrame::decode(&b).expect("bad geometry frame"));
@@ -154,6 +154,18 @@ impl Client {
             match self.next().await {
                 Got::Frame(f) => return f,
                 Got::Closed => panic!("closed while waiting for a frame"),
+                _ => {}
+            }
+        }
+    }
+
+    /// The next mesh frame of part `part` with revision > `after`, skipping
+    /// text and other frames.
+    pub async fn mesh_of_after(&mut self, part: u64, after: u64) -> vsculpt_protocol::MeshFrame {
+        loop {
+            match self.next().await {
+                Got::Mesh(m) if m.part == part && m.revision > after => return m,
+                Got::Closed => panic!("closed while waiting for a mesh frame"),
                 _ => {}
             }
         }

@@ -240,7 +240,8 @@ pub async fn snapshot_points(addr: SocketAddr, token: &str) -> Vec<[f64; 3]> {
                 .flat_map(|p| match p.shape {
                     vsculpt_protocol::PartShape::Surface { surface } => surface.points,
                     vsculpt_protocol::PartShape::Curve { curve } => curve.points,
-                    vsculpt_protocol::PartShape::Dsm { .. } => Vec::new(),
+                    vsculpt_protocol::PartShape::Dsm { .. }
+                    | vsculpt_protocol::PartShape::Network { .. } => Vec::new(),
                 })
                 .collect();
         }
