@@ -45,6 +45,12 @@ pub enum PartShape {
         /// The shape.
         dsm: crate::dsm::DsmData,
     },
+    /// A Coons body (paper 002): a B-spline volume shaped by its control
+    /// lattice, drawn from body frames (kind 4). It has no material or icons.
+    Body {
+        /// The body.
+        body: crate::body::BodyData,
+    },
 }
 
 impl PartShape {
@@ -54,6 +60,7 @@ impl PartShape {
             PartShape::Surface { .. } => PartKind::Surface,
             PartShape::Curve { .. } => PartKind::Curve,
             PartShape::Dsm { .. } => PartKind::Dsm,
+            PartShape::Body { .. } => PartKind::Body,
         }
     }
 }
@@ -68,6 +75,8 @@ pub enum PartKind {
     Curve,
     /// A Density Spatial Model shape.
     Dsm,
+    /// A Coons body.
+    Body,
 }
 
 /// The material of a curve part (paper 003, eq. 1): stretch α and bend β.

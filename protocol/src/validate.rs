@@ -204,9 +204,16 @@ fn part_spec(p: &PartSpec) -> Result<(), ProtocolError> {
         PartShape::Surface { surface: s } => surface(s)?,
         PartShape::Curve { curve: c } => curve(c)?,
         PartShape::Dsm { dsm } => dsm.validate()?,
+        PartShape::Body { body } => body.validate()?,
     }
     if let Some(m) = &p.material {
         part_material(m)?;
+        if let PartShape::Body { .. } = &p.shape {
+            return Err(ProtocolError::new(
+                ErrorCode::OutOfRange,
+                "a body part has no material",
+            ));
+        }
         let fits = matches!(
             (&p.shape, m),
             (PartShape::Surface { .. }, PartMaterial::Surface(_))
@@ -275,6 +282,8 @@ impl ClientMessage {
             SetMaterial { material: m, .. } => part_material(m),
             CreatePart { spec } => part_spec(spec),
             DsmEdit { edit, .. } => edit.validate(),
+            BodyEdit { edit, .. } => edit.validate(),
+            BodyMorph { t, .. } => crate::body::validate_morph_time(*t),
             Relate {
                 relation: crate::parts::RelationSpec::Binding { line, .. },
             } => match line {

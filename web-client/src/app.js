@@ -18,6 +18,7 @@ import { XRSculpt } from './xr.js';
 import { Design, domainOf, relationParts } from './design.js';
 import { PartsView } from './parts-view.js';
 import { PartsPanel } from './parts-panel.js';
+import { BodyView } from './body-view.js';
 import { deviation, sameDomain, versionSurface } from './compare.js';
 
 const params = new URLSearchParams(location.search);
@@ -68,6 +69,13 @@ const design = state.design;
 
 const view = new View($('viewport'));
 const partsView = new PartsView(view);
+// Body parts (paper 002): drawn from body frames, lattice handles, morph slider.
+const bodyView = new BodyView(view, {
+  send: (msg) => send(msg),
+  canEdit: () => state.access === 'editor',
+  panel: $('viewport').parentElement,
+  partNames: () => new Set([...design.parts.values()].map((p) => p.name)),
+});
 const icons = new IconLayer(view.model);
 
 function status(kind, text) {
@@ -166,6 +174,7 @@ let pictured = false;
 function redraw() {
   perf.redraws++;
   partsView.sync(design, { hidden: state.hidden, selected: state.selectedPart });
+  bodyView.sync(design, state.hidden);
   for (const id of design.parts.keys()) partShownSeq.set(id, partSeq.get(id) || 0);
   dirtyParts.clear();
   if (partsView.drawings.size) pictured = true;
@@ -346,6 +355,7 @@ function onMessage(msg) {
 /** Whether a part's JSON carries its control points (a full snapshot or part_created). */
 function partHasPoints(p) {
   const s = p.shape;
+  if (s.kind !== 'surface' && s.kind !== 'curve') return false;
   return (s.kind === 'surface' ? s.surface.points : s.curve.points).length > 0;
 }
 
@@ -360,6 +370,10 @@ function onFrame(f) {
   state.frames++;
   // Mesh frames (kind 3, dsm parts) decode but are not drawn by this page yet.
   if (f.kind === 'mesh') return;
+  if (f.kind === 'body') {
+    bodyView.apply(f, design.parts.get(f.part));
+    return;
+  }
   const known = design.parts.has(f.part);
   if (!design.applyFrame(f)) return;
   state.revision = design.revision;
@@ -1018,4 +1032,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, send, view, partsView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, send, view, partsView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

@@ -43,6 +43,8 @@ export function geometryFromShape(shape) {
       points: flat(c.points),
     };
   }
+  // A body part (paper 002) is drawn from its body frames by body-view.js.
+  if (shape.kind === 'body') return { kind: 'body', points: null };
   throw new Error(`unknown part kind ${shape.kind}`);
 }
 

@@ -477,6 +477,14 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
             edit: PartEdit::SetMaterial(parts::part_material_from_wire(&material)),
         }),
         M::DsmEdit { .. } => return Err((req, dsm_not_served())),
+        M::BodyEdit { part, edit: e } => edit(Edit::Part {
+            part,
+            edit: PartEdit::MoveLattice {
+                select: parts::lattice_select(&e.select),
+                delta: e.delta,
+            },
+        }),
+        M::BodyMorph { part, t } => Inbound::Command(Command::BodyMorph { part, t }),
         M::CreatePart { spec } => {
             edit(parts::create_part(&spec).ok_or_else(|| (req, dsm_not_served()))?)
         }
@@ -763,6 +771,8 @@ pub fn geometry_frame(
                 Vec::new(),
             )
         }
+        // A body part's frame is a body frame (kind 4) from its engine.
+        PartBody::Body(_) => return Bytes::new(),
     };
     let frame = wire::GeometryFrame {
         kind,

@@ -18,20 +18,36 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             })?],
             None => doc.parts.iter().collect(),
         };
-    Ok(parts
-        .into_iter()
-        .map(|p| IgesPart {
+    let mut out = Vec::new();
+    for p in parts {
+        let entity = match &p.body {
+            PartBody::Surface(s) => IgesEntity::Surface(s.surface.to_iges()),
+            PartBody::Curve(c) => IgesEntity::Curve(IgesCurve {
+                degree: c.curve.degree,
+                knots: c.curve.knots.clone(),
+                points: c.curve.points.clone(),
+            }),
+            // A body's boundary: its six faces, outward, named by face.
+            PartBody::Body(b) => {
+                for (face, s) in b.lattice.faces()? {
+                    out.push(IgesPart {
+                        name: Some(format!(
+                            "{} {}",
+                            p.name,
+                            super::body_engine::face_name(face)
+                        )),
+                        entity: IgesEntity::Surface(s.to_iges()),
+                    });
+                }
+                continue;
+            }
+        };
+        out.push(IgesPart {
             name: Some(p.name.clone()),
-            entity: match &p.body {
-                PartBody::Surface(s) => IgesEntity::Surface(s.surface.to_iges()),
-                PartBody::Curve(c) => IgesEntity::Curve(IgesCurve {
-                    degree: c.curve.degree,
-                    knots: c.curve.knots.clone(),
-                    points: c.curve.points.clone(),
-                }),
-            },
-        })
-        .collect())
+            entity,
+        });
+    }
+    Ok(out)
 }
 
 /// A name not used in `doc` (nor in `taken`): `name`, else `name (2)`, …

@@ -5,6 +5,7 @@
 //! nothing. Drags go straight to the part's engine (no rebuild, no refactor,
 //! no other part touched).
 
+use super::body_engine::BodyEngines;
 pub use super::doc::DesignDoc;
 pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc};
 pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
@@ -49,6 +50,8 @@ pub struct GeometrySet {
 pub struct DesignModel {
     doc: DesignDoc,
     engine: ProductEngine,
+    /// The body parts' volumes and displayed shapes (paper 002).
+    bodies: BodyEngines,
     /// The solve warning of the last edit (see [`Self::edit_warning`]).
     warning: Option<String>,
 }
@@ -64,9 +67,12 @@ impl DesignModel {
     pub fn load(doc: &DesignDoc) -> Result<Self, CommandError> {
         doc.validate()?;
         let engine = ProductEngine::build_unsolved(doc)?;
+        let mut bodies = BodyEngines::default();
+        bodies.sync(doc)?;
         let mut m = Self {
             doc: doc.clone(),
             engine,
+            bodies,
             warning: None,
         };
         m.sync();
@@ -101,6 +107,8 @@ impl DesignModel {
                     c.curve.points = points;
                     c.kappa = kappa;
                 }
+                // Not in the product (no points there): the document is its truth.
+                PartBody::Body(_) => {}
             }
             let part = p.id;
             for icon in p.body.icons_mut() {
@@ -173,6 +181,7 @@ impl DesignModel {
             })
         })();
         self.warning = None;
+        let outcome = outcome.and_then(|m| self.bodies.sync(&doc).map(|()| m));
         let moved = match outcome {
             Ok(m) => m,
             Err(e) => {
@@ -270,8 +279,37 @@ impl DesignModel {
         Ok(moved)
     }
 
+    /// Shows body part `part` at morph time `t` (evaluated here: run it
+    /// where heavy work may run).
+    pub fn set_morph_time(&mut self, part: u64, t: f64) -> Result<(), CommandError> {
+        match self.doc.part(part).map(|p| &p.body) {
+            None => Err(unknown_part(part)),
+            Some(PartBody::Body(_)) => self.bodies.set_time(part, t),
+            Some(_) => Err(CommandError::new(
+                ErrorKind::Unsupported,
+                format!("part {part} is not a body: it has no morph"),
+            )),
+        }
+    }
+
+    /// The volume body part `part` shows (its morph at the current time).
+    pub fn body_volume(&self, part: u64) -> Option<&vsculpt_kernel::body::BSplineVolume> {
+        self.bodies.get(part).map(|e| e.shown())
+    }
+
     /// The encoded geometry frame of `part` at revision `rev`.
     pub fn geometry(&self, design: u64, part: u64, rev: u64, drag: bool) -> Option<Geometry> {
+        if let Some(body) = self.bodies.get(part) {
+            let flags = if drag {
+                vsculpt_protocol::frame::FLAG_DRAG
+            } else {
+                0
+            };
+            return Some(Geometry {
+                rev,
+                frame: body.frame(design, part, rev, flags)?.into(),
+            });
+        }
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;
         let icons: Vec<(u64, DVec3)> = p
@@ -309,13 +347,30 @@ impl DesignModel {
     /// of every surface part (the whole product) when `None`.
     pub fn mesh(&self, part: Option<u64>, density: usize) -> Result<MeshData, CommandError> {
         let density = density.clamp(1, 32);
+        let body_mesh = |id: u64| {
+            self.bodies.get(id).map(|b| {
+                let s = b.shape();
+                MeshData {
+                    positions: s.positions.clone(),
+                    normals: s.normals.clone(),
+                    indices: s.triangles.iter().flatten().copied().collect(),
+                }
+            })
+        };
         match part {
-            Some(id) => self.engine.mesh(id, density),
+            Some(id) => match body_mesh(id) {
+                Some(m) => Ok(m),
+                None => self.engine.mesh(id, density),
+            },
             None => {
                 let mut out = MeshData::default();
                 for p in &self.doc.parts {
-                    if let PartBody::Surface(_) = &p.body {
-                        let m = self.engine.mesh(p.id, density)?;
+                    let m = match &p.body {
+                        PartBody::Surface(_) => Some(self.engine.mesh(p.id, density)?),
+                        PartBody::Body(_) => body_mesh(p.id),
+                        PartBody::Curve(_) => None,
+                    };
+                    if let Some(m) = m {
                         let base = out.positions.len() as u32;
                         out.positions.extend(m.positions);
                         out.normals.extend(m.normals);

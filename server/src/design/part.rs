@@ -136,6 +136,8 @@ pub enum PartBody {
     Surface(SurfacePart),
     /// A deformable curve (paper 003, eq. 1).
     Curve(CurvePart),
+    /// A Coons body (paper 002): a B-spline volume shaped by its lattice.
+    Body(super::body_part::BodyPart),
 }
 
 impl PartBody {
@@ -144,6 +146,7 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &s.icons,
             PartBody::Curve(c) => &c.icons,
+            PartBody::Body(b) => &b.icons,
         }
     }
 
@@ -152,6 +155,7 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &mut s.icons,
             PartBody::Curve(c) => &mut c.icons,
+            PartBody::Body(b) => &mut b.icons,
         }
     }
 
@@ -160,6 +164,7 @@ impl PartBody {
         match self {
             PartBody::Surface(_) => "surface",
             PartBody::Curve(_) => "curve",
+            PartBody::Body(_) => "body",
         }
     }
 
@@ -168,6 +173,7 @@ impl PartBody {
         match self {
             PartBody::Surface(s) => &s.surface.points,
             PartBody::Curve(c) => &c.curve.points,
+            PartBody::Body(b) => &b.lattice.points,
         }
     }
 
@@ -189,6 +195,7 @@ impl PartBody {
                     i.anchor.validate_on_curve(&c.curve)?;
                 }
             }
+            PartBody::Body(b) => b.validate()?,
         }
         if self
             .icons()

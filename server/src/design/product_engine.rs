@@ -125,9 +125,10 @@ fn ids_of(c: &ChangedParts) -> Vec<u64> {
 }
 
 /// The kernel part of `body` (its control points as stored) and its icon
-/// id map.
-fn kernel_part(body: &PartBody) -> Result<(Part, BTreeMap<u64, IconId>), CommandError> {
-    Ok(match body {
+/// id map; `None` for a body part (paper 002), which lives in the model's
+/// body engines, outside the product.
+fn kernel_part(body: &PartBody) -> Result<Option<(Part, BTreeMap<u64, IconId>)>, CommandError> {
+    Ok(Some(match body {
         PartBody::Surface(s) => {
             let (d, ids) = Engine::build_unsolved(s)?.into_parts();
             (Part::Surface(d), ids)
@@ -136,7 +137,8 @@ fn kernel_part(body: &PartBody) -> Result<(Part, BTreeMap<u64, IconId>), Command
             let (d, ids) = CurveEngine::build_unsolved(c)?.into_parts();
             (Part::Curve(d), ids)
         }
-    })
+        PartBody::Body(_) => return Ok(None),
+    }))
 }
 
 impl ProductEngine {
@@ -146,7 +148,9 @@ impl ProductEngine {
         let mut product = Product::new();
         let mut ids = BTreeMap::new();
         for p in &doc.parts {
-            let (part, map) = kernel_part(&p.body)?;
+            let Some((part, map)) = kernel_part(&p.body)? else {
+                continue;
+            };
             product
                 .insert_part(PartId(p.id), part)
                 .map_err(product_error)?;
@@ -234,7 +238,9 @@ impl ProductEngine {
 
     /// Adds a new part (bare: a part starts without icons; nothing moves).
     pub fn add_part(&mut self, id: u64, body: &PartBody) -> Result<(), CommandError> {
-        let (part, map) = kernel_part(body)?;
+        let Some((part, map)) = kernel_part(body)? else {
+            return Ok(());
+        };
         self.product
             .insert_part(PartId(id), part)
             .map_err(product_error)?;
@@ -244,6 +250,10 @@ impl ProductEngine {
 
     /// Removes a part with its relations; returns the parts that changed.
     pub fn remove_part(&mut self, id: u64) -> Result<Vec<u64>, CommandError> {
+        if !self.ids.contains_key(&id) {
+            // A body part: not in the product.
+            return Ok(Vec::new());
+        }
         let removed = self
             .product
             .remove_part(PartId(id))
@@ -263,7 +273,10 @@ impl ProductEngine {
     /// material) inside its relations, and solves it with everything solved
     /// with it. Returns the parts that moved.
     pub fn rebuild_part(&mut self, id: u64, body: &PartBody) -> Result<Vec<u64>, CommandError> {
-        let (part, map) = kernel_part(body)?;
+        let Some((part, map)) = kernel_part(body)? else {
+            // A body part: its engine rebuilds in the model.
+            return Ok(vec![id]);
+        };
         let removed = self
             .product
             .remove_part(PartId(id))
