@@ -105,3 +105,46 @@ test('a lattice point dragged in one page moves for a viewer; the morph slider r
   await editor.close();
   await viewer.close();
 });
+
+test('a body frame built byte by byte from the README table decodes; a wrong length, index or direction is refused', async () => {
+  const { decodeFrame } = await import('../src/frame.js');
+  // N = 2·1·1 lattice points, V = 3 vertices, T = 1 triangle, L = 1 line of S = 2 samples.
+  const [N, V, T, L, S] = [2, 3, 1, 1, 2];
+  const len = 64 + 12 * N + 24 * V + 12 * T + 4 * L + 12 * L * S;
+  const buf = new ArrayBuffer(len);
+  const dv = new DataView(buf);
+  [0x56, 0x53, 0x47, 0x46].forEach((b, i) => dv.setUint8(i, b));
+  dv.setUint8(4, 4);
+  dv.setUint8(5, 2);
+  dv.setUint16(6, 1, true);
+  dv.setBigUint64(8, 7n, true);
+  dv.setBigUint64(16, 9n, true);
+  dv.setBigUint64(24, 42n, true);
+  dv.setFloat32(32, 0.25, true);
+  [2, 1, 1, V, T, L, S].forEach((x, i) => dv.setUint32(36 + 4 * i, x, true));
+  let o = 64;
+  const f32 = (...xs) => xs.forEach((x) => { dv.setFloat32(o, x, true); o += 4; });
+  const u32 = (...xs) => xs.forEach((x) => { dv.setUint32(o, x, true); o += 4; });
+  f32(0, 0, 0, 1, 2, 3); // lattice
+  f32(0, 0, 0, 1, 0, 0, 0, 1, 0); // positions
+  f32(0, 0, 1, 0, 0, 1, 0, 0, 1); // normals
+  u32(0, 1, 2); // triangle
+  u32(2); // line held at constant w
+  f32(0, 0, 0, 1, 1, 1); // its samples
+  assert.equal(o, len);
+  const f = decodeFrame(buf);
+  assert.equal(f.kind, 'body');
+  assert.deepEqual([f.design, f.part, f.revision, f.flags, f.t], [7, 9, 42, 1, 0.25]);
+  assert.deepEqual(f.counts, [2, 1, 1]);
+  assert.deepEqual(Array.from(f.lattice), [0, 0, 0, 1, 2, 3]);
+  assert.deepEqual(Array.from(f.triangles), [0, 1, 2]);
+  assert.deepEqual(Array.from(f.lineDirs), [2]);
+  assert.deepEqual(Array.from(f.linePoints), [0, 0, 0, 1, 1, 1]);
+  assert.throws(() => decodeFrame(buf.slice(0, len - 4)), /bytes/);
+  const badIndex = buf.slice(0);
+  new DataView(badIndex).setUint32(64 + 12 * N + 24 * V + 8, 3, true);
+  assert.throws(() => decodeFrame(badIndex), /missing vertex/);
+  const badDir = buf.slice(0);
+  new DataView(badDir).setUint32(64 + 12 * N + 24 * V + 12 * T, 3, true);
+  assert.throws(() => decodeFrame(badDir), /direction/);
+});
