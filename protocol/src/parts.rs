@@ -48,8 +48,8 @@ pub enum PartShape {
     /// A Coons body (paper 002): a B-spline volume shaped by its control
     /// lattice, drawn from body frames (kind 4). It has no material or icons.
     Body {
-        /// The body.
-        body: crate::body::BodyData,
+        /// The body (boxed: two lattices are large, most shapes small).
+        body: Box<crate::body::BodyData>,
     },
 }
 

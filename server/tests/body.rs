@@ -171,7 +171,7 @@ async fn stored(addr: std::net::SocketAddr, design: u64, token: &str) -> Value {
         .clone()
 }
 
-fn stored_body<'a>(doc: &'a Value, part: u64) -> &'a Value {
+fn stored_body(doc: &Value, part: u64) -> &Value {
     doc["parts"]
         .as_array()
         .unwrap()

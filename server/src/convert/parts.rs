@@ -84,10 +84,10 @@ pub fn body_spec(name: &str, b: &BodyPart) -> wire::PartSpec {
     wire::PartSpec {
         name: name.to_string(),
         shape: wire::PartShape::Body {
-            body: wire::BodyData {
+            body: Box::new(wire::BodyData {
                 lattice: lattice_to_wire(&b.lattice),
                 morph_target: b.morph_target.as_ref().map(lattice_to_wire),
-            },
+            }),
         },
         material: None,
         colour: None,
@@ -209,10 +209,10 @@ pub fn part_to_wire(p: &PartDoc, holders: &BTreeMap<u64, u64>, points: bool) -> 
                 curve: curve_to_wire(&c.curve, points),
             },
             PartBody::Body(b) => wire::PartShape::Body {
-                body: wire::BodyData {
+                body: Box::new(wire::BodyData {
                     lattice: lattice_to_wire(&b.lattice),
                     morph_target: b.morph_target.as_ref().map(lattice_to_wire),
-                },
+                }),
             },
         },
     }

@@ -124,10 +124,13 @@ fn ids_of(c: &ChangedParts) -> Vec<u64> {
     c.iter().map(|p| p.0).collect()
 }
 
+/// A kernel part and its map from document icon ids.
+type KernelPart = (Part, BTreeMap<u64, IconId>);
+
 /// The kernel part of `body` (its control points as stored) and its icon
 /// id map; `None` for a body part (paper 002), which lives in the model's
 /// body engines, outside the product.
-fn kernel_part(body: &PartBody) -> Result<Option<(Part, BTreeMap<u64, IconId>)>, CommandError> {
+fn kernel_part(body: &PartBody) -> Result<Option<KernelPart>, CommandError> {
     Ok(Some(match body {
         PartBody::Surface(s) => {
             let (d, ids) = Engine::build_unsolved(s)?.into_parts();
