@@ -219,34 +219,26 @@ impl BodyEngines {
     /// their morph time), drops those of parts gone. On an error nothing
     /// changes.
     pub fn sync(&mut self, doc: &DesignDoc) -> Result<(), CommandError> {
-        let mut next = BTreeMap::new();
-        let mut old = std::mem::take(&mut self.engines);
+        // First build what changed (self untouched on an error), then swap.
+        let mut built = BTreeMap::new();
         for p in &doc.parts {
             let PartBody::Body(b) = &p.body else { continue };
-            match old.remove(&p.id) {
-                Some(e) if e.part == *b => {
-                    next.insert(p.id, e);
-                }
+            match self.engines.get(&p.id) {
+                Some(e) if e.part == *b => {}
                 prior => {
-                    let t = prior.as_ref().map_or(0.0, |e| e.t);
-                    match BodyEngine::build(b, t) {
-                        Ok(e) => {
-                            next.insert(p.id, e);
-                        }
-                        Err(err) => {
-                            // Put back what was there.
-                            if let Some(e) = prior {
-                                old.insert(p.id, e);
-                            }
-                            old.extend(next);
-                            self.engines = old;
-                            return Err(err);
-                        }
-                    }
+                    let t = prior.map_or(0.0, |e| e.t);
+                    built.insert(p.id, BodyEngine::build(b, t)?);
                 }
             }
         }
-        self.engines = next;
+        let mut old = std::mem::take(&mut self.engines);
+        for p in &doc.parts {
+            if let PartBody::Body(_) = &p.body
+                && let Some(e) = built.remove(&p.id).or_else(|| old.remove(&p.id))
+            {
+                self.engines.insert(p.id, e);
+            }
+        }
         Ok(())
     }
 
