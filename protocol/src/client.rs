@@ -278,6 +278,25 @@ pub enum ClientMessage {
         /// What to change.
         edit: crate::network::NetworkEdit,
     },
+    /// Move lattice points of a body part (one point, a face's or an
+    /// edge's) by a delta; answered `ack` and a body frame (kind 4) to
+    /// everyone. An edit that folds the body (det J ≤ 0) is refused with
+    /// where it folds, and changes nothing. Undoable.
+    BodyEdit {
+        /// The body part.
+        part: u64,
+        /// What to move.
+        edit: crate::body::BodyEdit,
+    },
+    /// Show a body part with a morph target at time `t` ∈ [0, 1] (0 the
+    /// body, 1 its target): every client gets the body frame at `t`. Not
+    /// an edit: nothing is stored or undone.
+    BodyMorph {
+        /// The body part.
+        part: u64,
+        /// The time.
+        t: f64,
+    },
 }
 
 /// The `type` tags of every client message, for telling an unknown type
@@ -316,6 +335,8 @@ pub const CLIENT_TYPES: &[&str] = &[
     "unrelate",
     "dsm_edit",
     "network_edit",
+    "body_edit",
+    "body_morph",
 ];
 
 /// Parses and validates one text message from a client: `too_large`,

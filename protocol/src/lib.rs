@@ -21,10 +21,14 @@
 //! * [`dsm`] — a Density Spatial Model part's shape and its edits.
 //! * [`network`] — a styling-curve network part's shape and its edits.
 //! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
+//! * [`body`] — a Coons body part's lattice, its edits and morph time.
+//! * [`body_frame`] — the binary body frame (kind 4, [`BodyFrame`]).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
 
+pub mod body;
+pub mod body_frame;
 pub mod client;
 pub mod dsm;
 pub mod error;
@@ -39,6 +43,8 @@ pub mod types;
 pub mod validate;
 pub mod version;
 
+pub use body::{BodyData, BodyEdit, BodyFace, LatticeData, LatticeSelection};
+pub use body_frame::BodyFrame;
 pub use client::{ClientEnvelope, ClientMessage, parse_client};
 pub use dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
 pub use error::{ErrorCode, ProtocolError};

@@ -51,6 +51,12 @@ pub enum PartShape {
         /// The network.
         network: crate::network::NetworkData,
     },
+    /// A Coons body (paper 002): a B-spline volume shaped by its control
+    /// lattice, drawn from body frames (kind 4). It has no material or icons.
+    Body {
+        /// The body (boxed: two lattices are large, most shapes small).
+        body: Box<crate::body::BodyData>,
+    },
 }
 
 impl PartShape {
@@ -61,6 +67,7 @@ impl PartShape {
             PartShape::Curve { .. } => PartKind::Curve,
             PartShape::Dsm { .. } => PartKind::Dsm,
             PartShape::Network { .. } => PartKind::Network,
+            PartShape::Body { .. } => PartKind::Body,
         }
     }
 }
@@ -77,6 +84,8 @@ pub enum PartKind {
     Dsm,
     /// A styling-curve network.
     Network,
+    /// A Coons body.
+    Body,
 }
 
 /// The material of a curve part (paper 003, eq. 1): stretch α and bend β.

@@ -205,9 +205,16 @@ fn part_spec(p: &PartSpec) -> Result<(), ProtocolError> {
         PartShape::Curve { curve: c } => curve(c)?,
         PartShape::Dsm { dsm } => dsm.validate()?,
         PartShape::Network { network } => network.validate()?,
+        PartShape::Body { body } => body.validate()?,
     }
     if let Some(m) = &p.material {
         part_material(m)?;
+        if let PartShape::Body { .. } = &p.shape {
+            return Err(ProtocolError::new(
+                ErrorCode::OutOfRange,
+                "a body part has no material",
+            ));
+        }
         let fits = matches!(
             (&p.shape, m),
             (PartShape::Surface { .. }, PartMaterial::Surface(_))
@@ -277,6 +284,8 @@ impl ClientMessage {
             CreatePart { spec } => part_spec(spec),
             DsmEdit { edit, .. } => edit.validate(),
             NetworkEdit { edit, .. } => edit.validate(),
+            BodyEdit { edit, .. } => edit.validate(),
+            BodyMorph { t, .. } => crate::body::validate_morph_time(*t),
             Relate {
                 relation: crate::parts::RelationSpec::Binding { line, .. },
             } => match line {

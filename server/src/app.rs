@@ -503,11 +503,12 @@ async fn export(
         "obj" => ("model/obj", Some(MeshFormat::Obj)),
         "stl" => ("model/stl", Some(MeshFormat::Stl)),
         "gltf" => ("model/gltf+json", Some(MeshFormat::Gltf)),
+        "vtu" => ("model/vnd.vtu+xml", None),
         _ => {
             return Err(ApiError(
                 StatusCode::NOT_FOUND,
                 "unknown_message",
-                format!("unknown export format {ext} (igs, obj, stl, gltf)"),
+                format!("unknown export format {ext} (igs, obj, stl, gltf, vtu)"),
             ));
         }
     };
@@ -515,6 +516,7 @@ async fn export(
     let handle = s.hub.open(id).await?;
     let doc = handle.state().await?.doc.clone();
     let body = match format {
+        None if ext == "vtu" => crate::export::vtu(doc, part).await,
         None => crate::export::iges(doc, part).await,
         Some(f) => crate::export::mesh(doc, part, f, s.config.export_max_vertices).await,
     }
@@ -533,6 +535,14 @@ async fn export(
         .into_response())
 }
 
+/// The paper 002 demo body (cube → spool) as a `create_part` spec, for a
+/// page's "add spool" button: public data, no token needed.
+async fn spool_spec() -> Result<Response, ApiError> {
+    let part = crate::design::body_demo::spool_part()
+        .map_err(|e| ApiError(StatusCode::INTERNAL_SERVER_ERROR, "internal", e.message))?;
+    Ok(axum::Json(crate::convert::parts::body_spec("spool", &part)).into_response())
+}
+
 /// The whole router.
 pub fn router(state: AppState) -> Router {
     let web = crate::web::router(&state.config.web_dir);
@@ -547,6 +557,7 @@ pub fn router(state: AppState) -> Router {
         .route("/api/designs/{id}/versions/{v}", get(get_version))
         .route("/api/designs/{id}/import", post(import))
         .route("/api/designs/{id}/{file}", get(export))
+        .route("/api/demo-parts/spool", get(spool_spec))
         .layer(DefaultBodyLimit::max(limit))
         .layer(axum::middleware::map_response(
             crate::rejection::json_errors,

@@ -87,32 +87,42 @@ fn kernel_surface(s: &crate::design::doc::SurfaceDoc) -> Result<BSplineSurface, 
     BSplineSurface::new(u, v, s.dpoints()).map_err(|e| bad(&e))
 }
 
-/// The surface parts an export covers: `part` alone (an error if it is not
-/// a surface part of `doc`), or every visible surface part.
+/// The surfaces an export covers: of `part` alone (an error if it is not
+/// a surface or body part of `doc`), or of every visible surface and body
+/// part — a body gives its six boundary faces, oriented outward.
 pub fn export_surfaces(
     doc: &DesignDoc,
     part: Option<u64>,
 ) -> Result<Vec<(String, crate::design::doc::SurfaceDoc)>, ExportError> {
     use crate::design::part::PartBody;
+    // A body part's mesh is its boundary: six faces, oriented outward.
     let pick = |p: &crate::design::part::PartDoc| match &p.body {
-        PartBody::Surface(s) => Some((p.name.clone(), s.surface.clone())),
-        _ => None,
+        PartBody::Surface(s) => Ok(Some(vec![(p.name.clone(), s.surface.clone())])),
+        PartBody::Body(b) => b
+            .lattice
+            .faces()
+            .map(|f| Some(f.into_iter().map(|(_, s)| (p.name.clone(), s)).collect()))
+            .map_err(|e| ExportError::Surface(e.message)),
+        _ => Ok(None),
     };
     match part {
         Some(id) => {
             let p = doc
                 .part(id)
                 .ok_or_else(|| ExportError::Part(format!("no part {id}")))?;
-            Ok(vec![pick(p).ok_or_else(|| {
-                ExportError::Part(format!("part {id} is not a surface: it has no mesh"))
-            })?])
+            pick(p)?.ok_or_else(|| {
+                ExportError::Part(format!(
+                    "part {id} is not a surface or a body: it has no mesh"
+                ))
+            })
         }
-        None => Ok(doc
-            .parts
-            .iter()
-            .filter(|p| p.visible)
-            .filter_map(pick)
-            .collect()),
+        None => {
+            let mut out = Vec::new();
+            for p in doc.parts.iter().filter(|p| p.visible) {
+                out.extend(pick(p)?.unwrap_or_default());
+            }
+            Ok(out)
+        }
     }
 }
 
@@ -304,6 +314,55 @@ fn write_mesh(
         MeshFormat::Stl => cad::write_stl_to(&mesh, name, &mut out),
         MeshFormat::Gltf => cad::write_gltf_to(&mesh, name, &mut out),
     }
+}
+
+/// The interior of `doc`'s body parts — `part` alone (an error if it is
+/// not a body part), or every visible body part — as one hexahedral VTK
+/// grid (`.vtu`) with det J per point, written on a blocking thread and
+/// streamed.
+pub async fn vtu(doc: Arc<DesignDoc>, part: Option<u64>) -> Result<Body, ExportError> {
+    use crate::design::part::PartBody;
+    let lattices: Vec<_> = match part {
+        Some(id) => match doc.part(id).map(|p| &p.body) {
+            None => return Err(ExportError::Part(format!("no part {id}"))),
+            Some(PartBody::Body(b)) => vec![b.lattice.clone()],
+            Some(_) => {
+                return Err(ExportError::Part(format!(
+                    "part {id} is not a body: it has no interior"
+                )));
+            }
+        },
+        None => doc
+            .parts
+            .iter()
+            .filter(|p| p.visible)
+            .filter_map(|p| match &p.body {
+                PartBody::Body(b) => Some(b.lattice.clone()),
+                _ => None,
+            })
+            .collect(),
+    };
+    drop(doc);
+    stream(
+        move || {
+            let mut grid = cad::HexGrid {
+                scalar_name: "det_J".into(),
+                ..Default::default()
+            };
+            for l in &lattices {
+                let vol = l.volume().map_err(|e| ExportError::Surface(e.message))?;
+                grid.append(&crate::design::body_engine::hex_grid(&vol));
+            }
+            grid.check()
+                .map_err(|e| ExportError::Surface(e.to_string()))?;
+            Ok(grid)
+        },
+        |grid, out| {
+            let mut out = out;
+            cad::write_vtu_to(grid, &mut out)
+        },
+    )
+    .await
 }
 
 /// The IGES export of `doc` — one part, or every part (surfaces as entity

@@ -19,6 +19,7 @@ import { Design, domainOf, relationParts } from './design.js';
 import { PartsView } from './parts-view.js';
 import { NetworkView } from './network-view.js';
 import { PartsPanel } from './parts-panel.js';
+import { BodyView } from './body-view.js';
 import { deviation, sameDomain, versionSurface } from './compare.js';
 import { DsmView } from './dsm-view.js';
 import { DsmPanel } from './dsm-panel.js';
@@ -71,6 +72,13 @@ const design = state.design;
 
 const view = new View($('viewport'));
 const partsView = new PartsView(view);
+// Body parts (paper 002): drawn from body frames, lattice handles, morph slider.
+const bodyView = new BodyView(view, {
+  send: (msg) => send(msg),
+  canEdit: () => state.access === 'editor',
+  panel: $('viewport').parentElement,
+  partNames: () => new Set([...design.parts.values()].map((p) => p.name)),
+});
 const icons = new IconLayer(view.model);
 const networkView = new NetworkView(view, { send: (m) => send(m), canEdit: () => state.access === 'editor' && state.online });
 const dsmView = new DsmView(view.model);
@@ -182,6 +190,7 @@ function redraw() {
   partsView.sync(design, { hidden: state.hidden, selected: state.selectedPart });
   networkView.sync(design, state.hidden);
   dsmView.sync(design, partShownHere);
+  bodyView.sync(design, state.hidden);
   for (const id of design.parts.keys()) partShownSeq.set(id, partSeq.get(id) || 0);
   dirtyParts.clear();
   if (partsView.drawings.size || networkView.parts.size) pictured = true;
@@ -375,7 +384,7 @@ function onMessage(msg) {
 /** Whether a part's JSON carries its control points (a full snapshot or part_created). */
 function partHasPoints(p) {
   const s = p.shape;
-  if (s.kind === 'network' || s.kind === 'dsm') return false;
+  if (s.kind !== 'surface' && s.kind !== 'curve') return false;
   return (s.kind === 'surface' ? s.surface.points : s.curve.points).length > 0;
 }
 
@@ -388,6 +397,10 @@ function setHistory(canUndo, canRedo) {
 
 function onFrame(f) {
   state.frames++;
+  if (f.kind === 'body') {
+    bodyView.apply(f, design.parts.get(f.part));
+    return;
+  }
   // Mesh frames (kind 3): a network part's patches, a DSM part's surface.
   // Before the snapshot (compact join) the part is unknown: both views take
   // the frame and each keeps only its own kind once the parts are known.
@@ -1082,4 +1095,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

@@ -47,6 +47,8 @@ export function geometryFromShape(shape) {
   if (shape.kind === 'network') return { kind: 'network', points: null };
   // A DSM part: no control points; the server sends its mesh (dsm-view.js).
   if (shape.kind === 'dsm') return { kind: 'dsm' };
+  // A body part (paper 002) is drawn from its body frames by body-view.js.
+  if (shape.kind === 'body') return { kind: 'body', points: null };
   throw new Error(`unknown part kind ${shape.kind}`);
 }
 

@@ -6,6 +6,8 @@
 // part meshed by the server: "Binary mesh frame (kind 3)") has its own
 // 64-byte header and quantised positions, i16 normals and u16/u32 indices.
 
+import { KIND_BODY, decodeBodyFrame } from './body-frame.js';
+
 const MAGIC = [0x56, 0x53, 0x47, 0x46]; // "VSGF"
 export const PROTOCOL_VERSION = 2;
 /** Frame kinds (byte 4). */
@@ -35,6 +37,10 @@ export function decodeFrame(buf) {
   for (let i = 0; i < 4; i++) if (dv.getUint8(i) !== MAGIC[i]) throw new Error('bad magic');
   const kind = dv.getUint8(4);
   if (kind === KIND_MESH) return decodeMeshFrame(buf);
+  if (kind === KIND_BODY) {
+    if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
+    return decodeBodyFrame(buf);
+  }
   if (kind !== KIND_SURFACE && kind !== KIND_CURVE) throw new Error(`unknown frame kind ${kind}`);
   if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
   const flags = dv.getUint16(6, true);

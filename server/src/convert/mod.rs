@@ -482,6 +482,14 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
             part,
             edit: network::edit_from_wire(&e),
         }),
+        M::BodyEdit { part, edit: e } => edit(Edit::Part {
+            part,
+            edit: PartEdit::MoveLattice {
+                select: parts::lattice_select(&e.select),
+                delta: e.delta,
+            },
+        }),
+        M::BodyMorph { part, t } => Inbound::Command(Command::BodyMorph { part, t }),
         M::CreatePart { spec } => edit(parts::create_part(&spec)),
         M::DeletePart { part } => edit(Edit::DeletePart { part }),
         M::SetPart {
@@ -771,6 +779,8 @@ pub fn geometry_frame(
                 Vec::new(),
             )
         }
+        // A body part's frame is a body frame (kind 4) from its engine.
+        PartBody::Body(_) => return Bytes::new(),
     };
     let frame = wire::GeometryFrame {
         kind,

@@ -4,6 +4,7 @@
 //! `relation_created`.
 
 use super::{icon_to_wire, material_from_wire, material_to_wire};
+use crate::design::body_part::{BodyPart, LatticeDoc, LatticeSelect};
 use crate::design::doc::{IconDoc, SurfaceDoc};
 use crate::design::dsm_engine::DsmPart;
 use crate::design::part::{
@@ -55,6 +56,57 @@ fn curve_to_wire(c: &CurveDoc, points: bool) -> wire::CurveData {
     }
 }
 
+/// A wire lattice as a document lattice.
+fn lattice_from_wire(l: &wire::LatticeData) -> LatticeDoc {
+    LatticeDoc {
+        degrees: [&l.u, &l.v, &l.w].map(|k| k.degree as usize),
+        knots: [&l.u, &l.v, &l.w].map(|k| k.knots.clone()),
+        points: l.points.clone(),
+    }
+}
+
+/// A document lattice on the wire (always with its points: the client
+/// needs the knots and sizes, and a body is at most 4096 points).
+fn lattice_to_wire(l: &LatticeDoc) -> wire::LatticeData {
+    let k = |d: usize| wire::Knots {
+        degree: l.degrees[d] as u32,
+        knots: l.knots[d].clone(),
+    };
+    wire::LatticeData {
+        u: k(0),
+        v: k(1),
+        w: k(2),
+        points: l.points.clone(),
+    }
+}
+
+/// A `create_part` spec of body part `b` named `name` (the demo presets).
+pub fn body_spec(name: &str, b: &BodyPart) -> wire::PartSpec {
+    wire::PartSpec {
+        name: name.to_string(),
+        shape: wire::PartShape::Body {
+            body: Box::new(wire::BodyData {
+                lattice: lattice_to_wire(&b.lattice),
+                morph_target: b.morph_target.as_ref().map(lattice_to_wire),
+            }),
+        },
+        material: None,
+        colour: None,
+    }
+}
+
+/// A wire lattice selection as the document's.
+pub fn lattice_select(s: &wire::LatticeSelection) -> LatticeSelect {
+    match s {
+        wire::LatticeSelection::Point(ijk) => LatticeSelect::Point(ijk.map(|x| x as usize)),
+        wire::LatticeSelection::Face(f) => {
+            let (d, e) = f.dir_end();
+            LatticeSelect::Face(d, e)
+        }
+        wire::LatticeSelection::Edge([a, b]) => LatticeSelect::Edge([a.dir_end(), b.dir_end()]),
+    }
+}
+
 /// A part's material on the wire.
 pub fn part_material_to_wire(m: &MaterialEdit) -> wire::PartMaterial {
     match m {
@@ -88,6 +140,9 @@ pub fn body_material(b: &PartBody) -> MaterialEdit {
         PartBody::Network(_) | PartBody::Dsm(_) => {
             MaterialEdit::Curve(CurveMaterialDoc::default())
         }
+        // A body has no material: the wire's `material` field carries the
+        // surface default, and `set_material` on a body is refused.
+        PartBody::Body(_) => MaterialEdit::Surface(Default::default()),
     }
 }
 
@@ -125,6 +180,11 @@ pub fn create_part(spec: &wire::PartSpec) -> Edit {
         wire::PartShape::Network { network } => {
             PartBody::Network(super::network::network_from_wire(network))
         }
+        wire::PartShape::Body { body } => PartBody::Body(BodyPart {
+            lattice: lattice_from_wire(&body.lattice),
+            morph_target: body.morph_target.as_ref().map(lattice_from_wire),
+            icons: Vec::new(),
+        }),
     };
     Edit::CreatePart {
         name: spec.name.clone(),
@@ -163,6 +223,12 @@ pub fn part_to_wire(p: &PartDoc, holders: &BTreeMap<u64, u64>, points: bool) -> 
                 ),
             },
             PartBody::Dsm(d) => wire::PartShape::Dsm { dsm: d.dsm.clone() },
+            PartBody::Body(b) => wire::PartShape::Body {
+                body: Box::new(wire::BodyData {
+                    lattice: lattice_to_wire(&b.lattice),
+                    morph_target: b.morph_target.as_ref().map(lattice_to_wire),
+                }),
+            },
         },
     }
 }

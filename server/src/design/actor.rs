@@ -1160,6 +1160,11 @@ impl Actor {
                 geometry_dirty.parts(moved);
                 Ok(Ack::default())
             }
+            Command::BodyMorph { part, t } => {
+                heavy(|| self.model.set_morph_time(part, t))?;
+                geometry_dirty.parts(vec![part]);
+                Ok(Ack::default())
+            }
             Command::Undo | Command::Redo => {
                 let current = self.model.to_doc();
                 let undo = matches!(command, Command::Undo);

@@ -49,6 +49,13 @@ pub enum Command {
         /// Version number.
         version: u64,
     },
+    /// Show a body part at morph time `t` (not stored, not undone).
+    BodyMorph {
+        /// The body part.
+        part: u64,
+        /// The time in [0, 1].
+        t: f64,
+    },
 }
 
 impl Command {
@@ -60,6 +67,7 @@ impl Command {
                 | Command::Grab { .. }
                 | Command::Drag { .. }
                 | Command::Release { .. }
+                | Command::BodyMorph { .. }
         )
     }
 }

@@ -173,6 +173,14 @@ pub enum PartEdit {
     },
     /// Change the material.
     SetMaterial(MaterialEdit),
+    /// Move lattice points of a body part by a delta (refused if the body
+    /// would fold).
+    MoveLattice {
+        /// Which points.
+        select: super::body_part::LatticeSelect,
+        /// By how much.
+        delta: [f64; 3],
+    },
 }
 
 impl PartEdit {
@@ -186,7 +194,9 @@ impl PartEdit {
             | PartEdit::SetState { id, .. }
             | PartEdit::BindSensor { id, .. }
             | PartEdit::UnbindSensor { id, .. } => Some(*id),
-            PartEdit::AddIcon { .. } | PartEdit::SetMaterial(_) => None,
+            PartEdit::AddIcon { .. } | PartEdit::SetMaterial(_) | PartEdit::MoveLattice { .. } => {
+                None
+            }
         }
     }
 }
@@ -298,6 +308,23 @@ pub fn apply<'q>(
                         "part {part} is a dsm part: it has no icons or material; reshape it with dsm_edit"
                     ),
                 ));
+            }
+            if let Some(p) = doc.part_mut(*part)
+                && let PartBody::Body(b) = &mut p.body
+            {
+                if p.locked {
+                    return Err(locked(p));
+                }
+                let PartEdit::MoveLattice { select, delta } = edit else {
+                    return Err(CommandError::new(
+                        ErrorKind::Unsupported,
+                        format!(
+                            "part {part} is a body: it is shaped by its lattice (body_edit), not by icons or a material"
+                        ),
+                    ));
+                };
+                b.move_points(*select, *delta)?;
+                return Ok((doc, created));
             }
             let q = query(*part).ok_or_else(|| unknown_part(*part))?;
             let total_icons = doc.icons().count();
@@ -478,12 +505,26 @@ fn apply_part(
             ErrorKind::Unsupported,
             "a dsm part has no icons",
         )),
+        PartBody::Body(_) => Err(CommandError::new(
+            ErrorKind::Unsupported,
+            "a body part has no icons",
+        )),
     };
     let check_kind_role = |body: &PartBody, role: IconRoleDoc| match body {
         PartBody::Curve(_) => super::curve_engine::curve_role(role).map(|_| ()),
         PartBody::Surface(_) | PartBody::Network(_) | PartBody::Dsm(_) => Ok(()),
+        PartBody::Body(_) => Err(CommandError::new(
+            ErrorKind::Unsupported,
+            "a body part has no icons",
+        )),
     };
     match edit {
+        PartEdit::MoveLattice { .. } => {
+            return Err(CommandError::new(
+                ErrorKind::Unsupported,
+                "only a body part has a lattice to move",
+            ));
+        }
         PartEdit::AddIcon {
             anchor,
             role,

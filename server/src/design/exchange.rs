@@ -38,31 +38,35 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
     };
     // A whole-product exchange file leaves the dsm parts out (mesh formats
     // carry them).
-    Ok(parts
-        .into_iter()
-        .flat_map(|p| match &p.body {
-            PartBody::Surface(s) => vec![IgesPart {
-                name: Some(p.name.clone()),
-                entity: IgesEntity::Surface(s.surface.to_iges()),
-            }],
-            PartBody::Curve(c) => vec![IgesPart {
-                name: Some(p.name.clone()),
-                entity: curve(&c.curve),
-            }],
+    let mut out = Vec::new();
+    for p in parts {
+        let named = |name: String, entity| IgesPart {
+            name: Some(name),
+            entity,
+        };
+        match &p.body {
+            PartBody::Surface(s) => {
+                out.push(named(p.name.clone(), IgesEntity::Surface(s.surface.to_iges())))
+            }
+            PartBody::Curve(c) => out.push(named(p.name.clone(), curve(&c.curve))),
             // A network's styling curves, one entity 126 each, named
             // "<part> curve <k>".
-            PartBody::Network(n) => n
-                .curves
-                .iter()
-                .enumerate()
-                .map(|(k, c)| IgesPart {
-                    name: Some(format!("{} curve {k}", p.name)),
-                    entity: curve(c),
-                })
-                .collect(),
-            PartBody::Dsm(_) => Vec::new(),
-        })
-        .collect())
+            PartBody::Network(n) => {
+                for (k, c) in n.curves.iter().enumerate() {
+                    out.push(named(format!("{} curve {k}", p.name), curve(c)));
+                }
+            }
+            // A body's boundary: its six faces, outward, named by face.
+            PartBody::Body(b) => {
+                for (face, s) in b.lattice.faces()? {
+                    let name = format!("{} {}", p.name, super::body_engine::face_name(face));
+                    out.push(named(name, IgesEntity::Surface(s.to_iges())));
+                }
+            }
+            PartBody::Dsm(_) => {}
+        }
+    }
+    Ok(out)
 }
 
 /// A name not used in `doc` (nor in `taken`): `name`, else `name (2)`, …

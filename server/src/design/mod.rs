@@ -4,6 +4,9 @@
 //! the registry of running actors ([`hub`]).
 
 pub mod actor;
+pub mod body_demo;
+pub mod body_engine;
+pub mod body_part;
 pub mod command;
 pub mod curve_engine;
 pub mod demo;

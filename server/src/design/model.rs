@@ -5,6 +5,7 @@
 //! nothing. Drags go straight to the part's engine (no rebuild, no refactor,
 //! no other part touched).
 
+use super::body_engine::BodyEngines;
 pub use super::doc::DesignDoc;
 pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc};
 pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
@@ -52,6 +53,8 @@ pub struct DesignModel {
     engine: ProductEngine,
     /// The network parts' engines (outside the kernel product).
     networks: NetworkEngines,
+    /// The body parts' volumes and displayed shapes (paper 002).
+    bodies: BodyEngines,
     /// The solve warning of the last edit (see [`Self::edit_warning`]).
     warning: Option<String>,
 }
@@ -68,10 +71,13 @@ impl DesignModel {
         doc.validate()?;
         let engine = ProductEngine::build_unsolved(doc)?;
         let networks = network_engines(doc)?;
+        let mut bodies = BodyEngines::default();
+        bodies.sync(doc)?;
         let mut m = Self {
             doc: doc.clone(),
             engine,
             networks,
+            bodies,
             warning: None,
         };
         m.sync();
@@ -106,7 +112,9 @@ impl DesignModel {
                     c.curve.points = points;
                     c.kappa = kappa;
                 }
-                PartBody::Network(_) | PartBody::Dsm(_) => {}
+                // Not in the product (no points there): the document (or
+                // the part's own engine) is its truth.
+                PartBody::Network(_) | PartBody::Dsm(_) | PartBody::Body(_) => {}
             }
             let part = p.id;
             for icon in p.body.icons_mut() {
@@ -208,10 +216,14 @@ impl DesignModel {
             })
         })();
         self.warning = None;
+        let outcome = outcome.and_then(|m| self.bodies.sync(&doc).map(|()| m));
         let moved = match outcome {
             Ok(m) => m,
             Err(e) => {
+                // Every engine back to the unchanged document.
                 self.engine = ProductEngine::build_unsolved(&current)?;
+                self.networks = network_engines(&current)?;
+                self.bodies.sync(&current)?;
                 return Err(e);
             }
         };
@@ -310,8 +322,27 @@ impl DesignModel {
         self.networks.get(&part)
     }
 
+    /// Shows body part `part` at morph time `t` (evaluated here: run it
+    /// where heavy work may run).
+    pub fn set_morph_time(&mut self, part: u64, t: f64) -> Result<(), CommandError> {
+        match self.doc.part(part).map(|p| &p.body) {
+            None => Err(unknown_part(part)),
+            Some(PartBody::Body(_)) => self.bodies.set_time(part, t),
+            Some(_) => Err(CommandError::new(
+                ErrorKind::Unsupported,
+                format!("part {part} is not a body: it has no morph"),
+            )),
+        }
+    }
+
+    /// The volume body part `part` shows (its morph at the current time).
+    pub fn body_volume(&self, part: u64) -> Option<&vsculpt_kernel::body::BSplineVolume> {
+        self.bodies.get(part).map(|e| e.shown())
+    }
+
     /// The encoded geometry frame of `part` at revision `rev` (a network
-    /// part's: a mesh frame of its patches).
+    /// part's: a mesh frame of its patches; a DSM part's: a mesh frame of
+    /// its surface; a body's: a body frame).
     pub fn geometry(&self, design: u64, part: u64, rev: u64, drag: bool) -> Option<Geometry> {
         if let Some(n) = self.networks.get(&part) {
             return Some(Geometry {
@@ -321,6 +352,17 @@ impl DesignModel {
         }
         if let Some(frame) = self.engine.dsm().frame(design, part, rev, drag) {
             return Some(Geometry { rev, frame });
+        }
+        if let Some(body) = self.bodies.get(part) {
+            let flags = if drag {
+                vsculpt_protocol::frame::FLAG_DRAG
+            } else {
+                0
+            };
+            return Some(Geometry {
+                rev,
+                frame: body.frame(design, part, rev, flags)?.into(),
+            });
         }
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;
@@ -360,16 +402,28 @@ impl DesignModel {
     /// (a network's patches at the engine's resolution).
     pub fn mesh(&self, part: Option<u64>, density: usize) -> Result<MeshData, CommandError> {
         let density = density.clamp(1, 32);
+        let body_mesh = |id: u64| {
+            self.bodies.get(id).map(|b| {
+                let s = b.shape();
+                MeshData {
+                    positions: s.positions.clone(),
+                    normals: s.normals.clone(),
+                    indices: s.triangles.iter().flatten().copied().collect(),
+                }
+            })
+        };
         match part {
-            Some(id) => match self.networks.get(&id) {
-                Some(n) => Ok(n.mesh()),
-                None => self.engine.mesh(id, density),
+            Some(id) => match (self.networks.get(&id), body_mesh(id)) {
+                (Some(n), _) => Ok(n.mesh()),
+                (None, Some(m)) => Ok(m),
+                (None, None) => self.engine.mesh(id, density),
             },
             None => {
                 let mut out = MeshData::default();
                 for p in &self.doc.parts {
                     let m = match (&p.body, self.networks.get(&p.id)) {
                         (PartBody::Surface(_), _) => Some(self.engine.mesh(p.id, density)?),
+                        (PartBody::Body(_), _) => body_mesh(p.id),
                         (_, Some(n)) => Some(n.mesh()),
                         _ => None,
                     };

@@ -210,6 +210,8 @@ pub enum PartBody {
     Network(NetworkPart),
     /// A Density Spatial Model shape (paper 001; `dsm_engine`).
     Dsm(super::dsm_engine::DsmPart),
+    /// A Coons body (paper 002): a B-spline volume shaped by its lattice.
+    Body(super::body_part::BodyPart),
 }
 
 impl PartBody {
@@ -220,6 +222,7 @@ impl PartBody {
             PartBody::Curve(c) => &c.icons,
             PartBody::Network(n) => &n.icons,
             PartBody::Dsm(d) => &d.icons,
+            PartBody::Body(b) => &b.icons,
         }
     }
 
@@ -230,16 +233,18 @@ impl PartBody {
             PartBody::Curve(c) => &mut c.icons,
             PartBody::Network(n) => &mut n.icons,
             PartBody::Dsm(d) => &mut d.icons,
+            PartBody::Body(b) => &mut b.icons,
         }
     }
 
-    /// The kind's name (`"surface"`, `"curve"`, `"network"`, `"dsm"`).
+    /// The kind's name (`"surface"`, `"curve"`, `"network"`, `"dsm"`, `"body"`).
     pub fn kind(&self) -> &'static str {
         match self {
             PartBody::Surface(_) => "surface",
             PartBody::Curve(_) => "curve",
             PartBody::Network(_) => "network",
             PartBody::Dsm(_) => "dsm",
+            PartBody::Body(_) => "body",
         }
     }
 
@@ -250,6 +255,7 @@ impl PartBody {
             PartBody::Surface(s) => &s.surface.points,
             PartBody::Curve(c) => &c.curve.points,
             PartBody::Network(_) | PartBody::Dsm(_) => &[],
+            PartBody::Body(b) => &b.lattice.points,
         }
     }
 
@@ -273,6 +279,7 @@ impl PartBody {
             }
             PartBody::Network(n) => n.validate()?,
             PartBody::Dsm(d) => d.validate()?,
+            PartBody::Body(b) => b.validate()?,
         }
         if self
             .icons()

@@ -127,10 +127,14 @@ fn ids_of(c: &ChangedParts) -> Vec<u64> {
     c.iter().map(|p| p.0).collect()
 }
 
+/// A kernel part and its map from document icon ids.
+type KernelPart = (Part, BTreeMap<u64, IconId>);
+
 /// The kernel part of `body` (its control points as stored) and its icon
-/// id map.
-fn kernel_part(body: &PartBody) -> Result<(Part, BTreeMap<u64, IconId>), CommandError> {
-    Ok(match body {
+/// id map; `None` for a body part (paper 002), which lives in the model's
+/// body engines, outside the product.
+fn kernel_part(body: &PartBody) -> Result<Option<KernelPart>, CommandError> {
+    Ok(Some(match body {
         PartBody::Surface(s) => {
             let (d, ids) = Engine::build_unsolved(s)?.into_parts();
             (Part::Surface(d), ids)
@@ -139,19 +143,10 @@ fn kernel_part(body: &PartBody) -> Result<(Part, BTreeMap<u64, IconId>), Command
             let (d, ids) = CurveEngine::build_unsolved(c)?.into_parts();
             (Part::Curve(d), ids)
         }
-        PartBody::Network(_) => {
-            return Err(CommandError::new(
-                ErrorKind::Incompatible,
-                "a network part is not a product part (see network_engine)",
-            ));
-        }
-        PartBody::Dsm(_) => {
-            return Err(CommandError::new(
-                ErrorKind::Incompatible,
-                "a dsm part is not a kernel product part",
-            ));
-        }
-    })
+        // Network, DSM and body parts live outside the kernel product
+        // (their own engines: network_engine, DsmEngine, body_engine).
+        PartBody::Network(_) | PartBody::Dsm(_) | PartBody::Body(_) => return Ok(None),
+    }))
 }
 
 impl ProductEngine {
@@ -162,14 +157,13 @@ impl ProductEngine {
         let mut ids = BTreeMap::new();
         let mut dsm = DsmEngine::default();
         for p in &doc.parts {
-            if let PartBody::Network(_) = p.body {
-                continue; // the model's network engines hold networks
-            }
             if let PartBody::Dsm(d) = &p.body {
                 dsm.insert(p.id, d)?;
                 continue;
             }
-            let (part, map) = kernel_part(&p.body)?;
+            let Some((part, map)) = kernel_part(&p.body)? else {
+                continue;
+            };
             product
                 .insert_part(PartId(p.id), part)
                 .map_err(product_error)?;
@@ -261,7 +255,9 @@ impl ProductEngine {
         if let PartBody::Dsm(d) = body {
             return self.dsm.insert(id, d);
         }
-        let (part, map) = kernel_part(body)?;
+        let Some((part, map)) = kernel_part(body)? else {
+            return Ok(());
+        };
         self.product
             .insert_part(PartId(id), part)
             .map_err(product_error)?;
@@ -271,7 +267,8 @@ impl ProductEngine {
 
     /// Removes a part with its relations; returns the parts that changed.
     pub fn remove_part(&mut self, id: u64) -> Result<Vec<u64>, CommandError> {
-        if self.dsm.remove(id) {
+        if self.dsm.remove(id) || !self.ids.contains_key(&id) {
+            // A DSM part, or a body part: not in the product.
             return Ok(Vec::new());
         }
         let removed = self
@@ -297,7 +294,10 @@ impl ProductEngine {
             self.dsm.insert(id, d)?;
             return Ok(vec![id]);
         }
-        let (part, map) = kernel_part(body)?;
+        let Some((part, map)) = kernel_part(body)? else {
+            // A body part: its engine rebuilds in the model.
+            return Ok(vec![id]);
+        };
         let removed = self
             .product
             .remove_part(PartId(id))

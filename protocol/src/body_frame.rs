@@ -1,0 +1,255 @@
+//! The binary body frame (kind 4): what a client draws of one Coons body
+//! part (paper 002 §2.1) — its control lattice (the handles), its boundary
+//! as a triangle mesh with normals, and isoparametric lines at constant
+//! u, v and w on the boundary — at one morph time. One binary WebSocket
+//! message per evaluated shape, latest-wins per part, like a geometry frame.
+//!
+//! All numbers little-endian; every section is a multiple of 4 bytes, so
+//! JavaScript views the arrays with `Float32Array` / `Uint32Array` without
+//! copying. protocol/README.md gives the layout byte by byte.
+
+use crate::error::{ErrorCode, ProtocolError};
+use crate::frame::MAGIC;
+use crate::version::PROTOCOL_VERSION;
+
+/// Frame kind: a Coons body.
+pub const KIND_BODY: u8 = 4;
+/// Size of the body frame's header in bytes.
+pub const BODY_HEADER_BYTES: usize = 64;
+/// Most lattice points a body frame may carry.
+pub const MAX_FRAME_LATTICE: usize = 1 << 16;
+/// Most boundary vertices a body frame may carry.
+pub const MAX_FRAME_VERTICES: usize = 1 << 20;
+/// Most boundary triangles a body frame may carry.
+pub const MAX_FRAME_TRIANGLES: usize = 1 << 21;
+/// Most isoparametric lines a body frame may carry.
+pub const MAX_FRAME_LINES: usize = 4096;
+/// Most samples along one isoparametric line.
+pub const MAX_LINE_SAMPLES: usize = 1024;
+
+/// One evaluated body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyFrame {
+    /// The design.
+    pub design: u64,
+    /// The part.
+    pub part: u64,
+    /// The shape revision.
+    pub revision: u64,
+    /// Bit flags (as a geometry frame's: bit 0 drag, bit 1 snapshot).
+    pub flags: u16,
+    /// The morph time this shape is at (0 without a morph target).
+    pub t: f32,
+    /// Lattice size `[nu, nv, nw]`.
+    pub counts: [u32; 3],
+    /// The lattice points at time `t`, k fastest (`(i * nv + j) * nw + k`).
+    pub lattice: Vec<[f32; 3]>,
+    /// Boundary vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Boundary vertex unit normals (outward).
+    pub normals: Vec<[f32; 3]>,
+    /// Boundary triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Samples per isoparametric line.
+    pub line_samples: u32,
+    /// Per line, the direction held constant: 0 u, 1 v, 2 w.
+    pub line_dirs: Vec<u32>,
+    /// The lines' points, `line_samples` per line, line after line.
+    pub line_points: Vec<[f32; 3]>,
+}
+
+fn bad(message: impl Into<String>) -> ProtocolError {
+    ProtocolError::new(ErrorCode::Malformed, message)
+}
+
+impl BodyFrame {
+    /// The encoded length in bytes.
+    pub fn byte_len(&self) -> usize {
+        BODY_HEADER_BYTES
+            + 12 * self.lattice.len()
+            + 24 * self.positions.len()
+            + 12 * self.triangles.len()
+            + 4 * self.line_dirs.len()
+            + 12 * self.line_points.len()
+    }
+
+    /// Checks sizes, numbers and indices (the checks `decode` makes).
+    pub fn check(&self) -> Result<(), ProtocolError> {
+        let n: usize = self.counts.iter().map(|&c| c as usize).product();
+        if n > MAX_FRAME_LATTICE
+            || self.positions.len() > MAX_FRAME_VERTICES
+            || self.triangles.len() > MAX_FRAME_TRIANGLES
+            || self.line_dirs.len() > MAX_FRAME_LINES
+            || self.line_samples as usize > MAX_LINE_SAMPLES
+        {
+            return Err(ProtocolError::new(
+                ErrorCode::TooLarge,
+                "body frame exceeds the size limits",
+            ));
+        }
+        if self.lattice.len() != n {
+            return Err(bad("lattice size does not match its counts"));
+        }
+        if self.normals.len() != self.positions.len() {
+            return Err(bad("positions and normals differ in number"));
+        }
+        if self.line_points.len() != self.line_dirs.len() * self.line_samples as usize {
+            return Err(bad("line points do not match lines × samples"));
+        }
+        if self.line_dirs.iter().any(|&d| d > 2) {
+            return Err(bad("a line direction is not 0, 1 or 2"));
+        }
+        let finite = |p: &[f32; 3]| p.iter().all(|x| x.is_finite());
+        if !self.t.is_finite()
+            || !self.lattice.iter().all(finite)
+            || !self.positions.iter().all(finite)
+            || !self.normals.iter().all(finite)
+            || !self.line_points.iter().all(finite)
+        {
+            return Err(ProtocolError::new(
+                ErrorCode::NotFinite,
+                "body frame has a non-finite number",
+            ));
+        }
+        let v = self.positions.len();
+        if let Some(t) = self
+            .triangles
+            .iter()
+            .find(|t| t.iter().any(|&i| i as usize >= v))
+        {
+            return Err(bad(format!(
+                "triangle {t:?} names a vertex beyond the {v} sent"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The frame as bytes (after [`check`](Self::check)).
+    pub fn encode(&self) -> Result<Vec<u8>, ProtocolError> {
+        self.check()?;
+        let mut out = Vec::with_capacity(self.byte_len());
+        out.extend_from_slice(&MAGIC);
+        out.push(KIND_BODY);
+        out.push(PROTOCOL_VERSION as u8);
+        out.extend_from_slice(&self.flags.to_le_bytes());
+        out.extend_from_slice(&self.design.to_le_bytes());
+        out.extend_from_slice(&self.part.to_le_bytes());
+        out.extend_from_slice(&self.revision.to_le_bytes());
+        out.extend_from_slice(&self.t.to_le_bytes());
+        for c in self.counts {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+        for n in [
+            self.positions.len(),
+            self.triangles.len(),
+            self.line_dirs.len(),
+        ] {
+            out.extend_from_slice(&(n as u32).to_le_bytes());
+        }
+        out.extend_from_slice(&self.line_samples.to_le_bytes());
+        debug_assert_eq!(out.len(), BODY_HEADER_BYTES);
+        let put3 = |out: &mut Vec<u8>, xs: &[[f32; 3]]| {
+            for p in xs {
+                p.iter()
+                    .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+            }
+        };
+        put3(&mut out, &self.lattice);
+        put3(&mut out, &self.positions);
+        put3(&mut out, &self.normals);
+        for t in &self.triangles {
+            t.iter()
+                .for_each(|i| out.extend_from_slice(&i.to_le_bytes()));
+        }
+        for d in &self.line_dirs {
+            out.extend_from_slice(&d.to_le_bytes());
+        }
+        put3(&mut out, &self.line_points);
+        debug_assert_eq!(out.len(), self.byte_len());
+        Ok(out)
+    }
+
+    /// Parses a body frame. Any byte string gives a frame or an error; never a panic.
+    pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
+        if bytes.len() < BODY_HEADER_BYTES {
+            return Err(bad(format!(
+                "body frame of {} bytes is shorter than its header",
+                bytes.len()
+            )));
+        }
+        if bytes[0..4] != MAGIC {
+            return Err(bad("not a geometry frame (bad magic)"));
+        }
+        if bytes[4] != KIND_BODY {
+            return Err(bad(format!("frame kind {} is not a body", bytes[4])));
+        }
+        if bytes[5] as u32 != PROTOCOL_VERSION {
+            return Err(ProtocolError::new(
+                ErrorCode::BadVersion,
+                format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
+            ));
+        }
+        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let counts = [u32_at(36), u32_at(40), u32_at(44)];
+        let (v, t, l, s) = (
+            u32_at(48) as usize,
+            u32_at(52) as usize,
+            u32_at(56) as usize,
+            u32_at(60) as usize,
+        );
+        let n = counts
+            .iter()
+            .try_fold(1usize, |a, &c| a.checked_mul(c as usize))
+            .unwrap_or(usize::MAX);
+        if n > MAX_FRAME_LATTICE
+            || v > MAX_FRAME_VERTICES
+            || t > MAX_FRAME_TRIANGLES
+            || l > MAX_FRAME_LINES
+            || s > MAX_LINE_SAMPLES
+        {
+            return Err(ProtocolError::new(
+                ErrorCode::TooLarge,
+                "body frame exceeds the size limits",
+            ));
+        }
+        let total = BODY_HEADER_BYTES + 12 * n + 24 * v + 12 * t + 4 * l + 12 * l * s;
+        if bytes.len() != total {
+            return Err(bad(format!(
+                "body frame has {} bytes, its header says {total}",
+                bytes.len()
+            )));
+        }
+        let vec3s = |at: usize, count: usize| -> Vec<[f32; 3]> {
+            (0..count)
+                .map(|k| [0, 1, 2].map(|a| f32_at(at + 12 * k + 4 * a)))
+                .collect()
+        };
+        let lat = BODY_HEADER_BYTES;
+        let pos = lat + 12 * n;
+        let nor = pos + 12 * v;
+        let tri = nor + 12 * v;
+        let dirs = tri + 12 * t;
+        let pts = dirs + 4 * l;
+        let frame = Self {
+            design: u64_at(8),
+            part: u64_at(16),
+            revision: u64_at(24),
+            flags: u16::from_le_bytes([bytes[6], bytes[7]]),
+            t: f32_at(32),
+            counts,
+            lattice: vec3s(lat, n),
+            positions: vec3s(pos, v),
+            normals: vec3s(nor, v),
+            triangles: (0..t)
+                .map(|k| [0, 1, 2].map(|a| u32_at(tri + 12 * k + 4 * a)))
+                .collect(),
+            line_samples: s as u32,
+            line_dirs: (0..l).map(|k| u32_at(dirs + 4 * k)).collect(),
+            line_points: vec3s(pts, l * s),
+        };
+        frame.check()?;
+        Ok(frame)
+    }
+}
