@@ -89,18 +89,16 @@ impl Banded {
         let (n, b) = (self.n, self.b);
         let mut y = r.to_vec();
         for i in 0..n {
-            let mut s = y[i];
-            for k in i.saturating_sub(b)..i {
-                s -= self.get(i, k) * y[k];
-            }
-            y[i] = s / self.get(i, i);
+            let dot: f64 = (i.saturating_sub(b)..i)
+                .map(|k| self.get(i, k) * y[k])
+                .sum();
+            y[i] = (y[i] - dot) / self.get(i, i);
         }
         for i in (0..n).rev() {
-            let mut s = y[i];
-            for k in i + 1..(i + b + 1).min(n) {
-                s -= self.get(k, i) * y[k];
-            }
-            y[i] = s / self.get(i, i);
+            let dot: f64 = (i + 1..(i + b + 1).min(n))
+                .map(|k| self.get(k, i) * y[k])
+                .sum();
+            y[i] = (y[i] - dot) / self.get(i, i);
         }
         y
     }

@@ -785,8 +785,14 @@ impl Solver {
             let rq = llt.solve(q.transpose());
             inv_k = &inv_k - &q * &rq;
         }
-        let mut out = Mat::<f64>::zeros(m, m);
-        if a > 0 {
+        // The new order: kept equations at their new places, then the
+        // added ones.
+        let place: Vec<usize> = kept
+            .iter()
+            .map(|&(e, _)| e)
+            .chain(added.iter().copied())
+            .collect();
+        let whole = if a > 0 {
             let b = Mat::<f64>::from_fn(k, a, |i, j| s[(kept[i].0, added[j])]);
             let d = Mat::<f64>::from_fn(a, a, |i, j| s[(added[i], added[j])]);
             let x = &inv_k * &b;
@@ -794,25 +800,19 @@ impl Solver {
             let t_inv = t.llt(faer::Side::Lower).ok()?.inverse();
             let xt = &x * &t_inv;
             let top = &inv_k + &xt * x.transpose();
-            for i in 0..k {
-                for j in 0..k {
-                    out[(kept[i].0, kept[j].0)] = top[(i, j)];
-                }
-                for j in 0..a {
-                    out[(kept[i].0, added[j])] = -xt[(i, j)];
-                    out[(added[j], kept[i].0)] = -xt[(i, j)];
-                }
-            }
-            for i in 0..a {
-                for j in 0..a {
-                    out[(added[i], added[j])] = t_inv[(i, j)];
-                }
-            }
+            Mat::<f64>::from_fn(k + a, k + a, |i, j| match (i < k, j < k) {
+                (true, true) => top[(i, j)],
+                (true, false) => -xt[(i, j - k)],
+                (false, true) => -xt[(j, i - k)],
+                (false, false) => t_inv[(i - k, j - k)],
+            })
         } else {
-            for i in 0..k {
-                for j in 0..k {
-                    out[(kept[i].0, kept[j].0)] = inv_k[(i, j)];
-                }
+            inv_k
+        };
+        let mut out = Mat::<f64>::zeros(m, m);
+        for (i, &pi) in place.iter().enumerate() {
+            for (j, &pj) in place.iter().enumerate() {
+                out[(pi, pj)] = whole[(i, j)];
             }
         }
         checked_inverse(s, &out)
@@ -2062,7 +2062,7 @@ fn checked_inverse(s: &Mat<f64>, inverse: &Mat<f64>) -> Option<Vec<f64>> {
             .map(|i| ((0..m).map(|j| scaled(i, j) * x[j]).sum::<f64>() - v[i]).abs())
             .fold(0.0f64, f64::max);
         let size = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        if !(worst <= 1e-6 * size) {
+        if worst.is_nan() || worst > 1e-6 * size {
             return None;
         }
     }
