@@ -270,6 +270,48 @@ impl Stiffness {
         }
     }
 
+    /// [`Self::mul_points`] and, in the same pass, `y_abs[i] = Σ_j |K[i][j]| · |x[j]|`
+    /// per coordinate: the size of the terms each product sums, which bounds
+    /// its rounding (a residual below a few units of round-off of it is
+    /// noise, see `Solver`'s refinement).
+    ///
+    /// # Panics
+    /// If `x`, `y` or `y_abs` is not [`Self::dim`] long.
+    pub fn mul_points_with_bound(
+        &self,
+        x: &[glam::DVec3],
+        y: &mut [glam::DVec3],
+        y_abs: &mut [glam::DVec3],
+    ) {
+        let n = self.dim();
+        assert!(
+            x.len() == n && y.len() == n && y_abs.len() == n,
+            "mul_points_with_bound: length"
+        );
+        y.fill(glam::DVec3::ZERO);
+        y_abs.fill(glam::DVec3::ZERO);
+        let s = self.lower.symbolic();
+        let (cp, ri, v) = (s.col_ptr(), s.row_idx(), self.lower.val());
+        for c in 0..n {
+            let xc = x[c];
+            let xc_abs = xc.abs();
+            let mut acc = glam::DVec3::ZERO;
+            let mut acc_abs = glam::DVec3::ZERO;
+            for e in cp[c]..cp[c + 1] {
+                let r = ri[e];
+                let a = v[e].abs();
+                y[r] += xc * v[e];
+                y_abs[r] += xc_abs * a;
+                if r != c {
+                    acc += x[r] * v[e];
+                    acc_abs += x[r].abs() * a;
+                }
+            }
+            y[c] += acc;
+            y_abs[c] += acc_abs;
+        }
+    }
+
     /// The quadratic form xᵀ K x (the energy of one coordinate field).
     pub fn energy(&self, x: &[f64]) -> f64 {
         self.mul(x).iter().zip(x).map(|(a, b)| a * b).sum()

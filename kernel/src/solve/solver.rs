@@ -296,6 +296,9 @@ pub struct Solver {
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
     s_pinv: Vec<f64>,
+    /// Whether `s_pinv` is S's exact inverse (the Cholesky path or a
+    /// checked block update of it), not a pseudo-inverse.
+    s_exact: bool,
     rank_deficiency: usize,
     base: Option<Base>,
     response: Option<Response>,
@@ -324,6 +327,7 @@ impl Solver {
             eqs: Vec::new(),
             loads: Vec::new(),
             s_pinv: Vec::new(),
+            s_exact: false,
             rank_deficiency: 0,
             base: None,
             response: None,
@@ -400,6 +404,11 @@ impl Solver {
     pub fn set_problem(&mut self, problem: Problem) -> Result<(), SolveError> {
         let n = self.dim();
         validate(&problem, n)?;
+        if self.same_structure(&problem) {
+            // Only targets and forces changed: keep everything else.
+            self.take_targets(problem);
+            return Ok(());
+        }
         // Pins: a vector equation on one control point fixes it. They are
         // eliminated from the unknowns (the factor is of K_ff), not
         // answered through S: any number of them, exactly.
@@ -435,10 +444,7 @@ impl Solver {
         for p in &pin_points {
             pinned[p.index] = true;
         }
-        let is_pin = |eq: &Equation| {
-            matches!(eq, Equation::Vector { row, .. }
-                if row.indices.len() == 1 && row.weights[0] != 0.0)
-        };
+        let is_pin = |eq: &Equation| matches!(eq, Equation::Vector { row, .. } if is_pin_row(row));
         // Columns: one per equation row and per load row, deduplicated.
         let mut rows: Vec<ScalarRow> = Vec::new();
         let mut index: HashMap<RowKey, usize> = HashMap::new();
@@ -540,7 +546,7 @@ impl Solver {
             foldable.clone()
         };
         let mut refactored = false;
-        let (z, g, s_pinv, rank_deficiency) = loop {
+        let (z, g, s_pinv, rank_deficiency, s_exact) = loop {
             if pinned != self.pinned || !same_folds(&fold, &self.folded) {
                 if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
                     if refactored {
@@ -551,13 +557,24 @@ impl Solver {
                 refactored = true;
             }
             let (z, g, s) = self.schur(&rows, &free_rows, &eqs);
-            match pseudo_inverse(&s) {
+            // Same factor: S⁻¹ by block updates of the current one when
+            // they are exact enough, else from scratch.
+            let updated = if refactored {
+                None
+            } else {
+                self.updated_inverse(&rows, &eqs, &s)
+            };
+            let inverse = match updated {
+                Some(p) => Ok((p, 0, true)),
+                None => pseudo_inverse(&s),
+            };
+            match inverse {
                 Ok((_, _, false)) if !same_folds(&fold, &foldable) => {
                     // S is ill-conditioned over K: fold the equations into
                     // the factor and try again.
                     fold = foldable.clone();
                 }
-                Ok((p, dropped, _)) => break (z, g, p, dropped),
+                Ok((p, dropped, exact)) => break (z, g, p, dropped, exact),
                 Err(e) => {
                     if refactored {
                         self.restore_factor(old);
@@ -604,6 +621,7 @@ impl Solver {
         self.eqs = eqs;
         self.loads = loads;
         self.s_pinv = s_pinv;
+        self.s_exact = s_exact;
         self.rank_deficiency = rank_deficiency + pin_redundant;
         self.pinned = pinned;
         self.pins = pins;
@@ -693,6 +711,113 @@ impl Solver {
         (z, g, s)
     }
 
+    /// S⁻¹ for the new equations `eqs` (over `rows`, S = `s`) from the
+    /// current one by block updates instead of a new factorisation: the
+    /// equations the change removed are eliminated from the old inverse
+    /// (a Schur downdate, (S_kk)⁻¹ = P − Q R⁻¹ Qᵀ), the added ones bordered
+    /// on (X = S_kk⁻¹B, T = D − BᵀX). O(m²·(added + removed)) instead of
+    /// O(m³). `None` (the caller inverts S from scratch) unless the current
+    /// inverse is exact (Cholesky path, same factor), the change is small,
+    /// and the result is provably well conditioned and checked: the same
+    /// condition bound as [`well_conditioned_inverse`], and S S⁻¹ v = v to
+    /// 1e-9 on two probe vectors.
+    fn updated_inverse(
+        &self,
+        rows: &[ScalarRow],
+        eqs: &[ScalarEq],
+        s: &Mat<f64>,
+    ) -> Option<Vec<f64>> {
+        use faer::linalg::solvers::{DenseSolveCore, Solve};
+        let (m_old, m) = (self.eqs.len(), eqs.len());
+        if !self.s_exact || m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
+            return None;
+        }
+        // New column → old column (the same row, the same cached Z column).
+        let old_col: HashMap<RowKey, usize> = self
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(c, r)| (row_key(r), c))
+            .collect();
+        let map: Vec<Option<usize>> = rows
+            .iter()
+            .map(|r| old_col.get(&row_key(r)).copied())
+            .collect();
+        type EqKey = Vec<(usize, u64, usize)>;
+        let mut old_eqs: HashMap<EqKey, Vec<usize>> = HashMap::new();
+        for (e, eq) in self.eqs.iter().enumerate().rev() {
+            let key = eq
+                .terms
+                .iter()
+                .map(|t| (t.k, t.coef.to_bits(), t.col))
+                .collect();
+            old_eqs.entry(key).or_default().push(e);
+        }
+        let mut kept: Vec<(usize, usize)> = Vec::new();
+        let mut added: Vec<usize> = Vec::new();
+        for (e, eq) in eqs.iter().enumerate() {
+            let key: Option<EqKey> = eq
+                .terms
+                .iter()
+                .map(|t| map[t.col].map(|c| (t.k, t.coef.to_bits(), c)))
+                .collect();
+            match key.and_then(|k| old_eqs.get_mut(&k)).and_then(Vec::pop) {
+                Some(old) => kept.push((e, old)),
+                None => added.push(e),
+            }
+        }
+        let mut is_kept = vec![false; m_old];
+        for &(_, o) in &kept {
+            is_kept[o] = true;
+        }
+        let removed: Vec<usize> = (0..m_old).filter(|&o| !is_kept[o]).collect();
+        let (k, a, r) = (kept.len(), added.len(), removed.len());
+        if k == 0 || 4 * (a + r) > m_old.max(m) {
+            return None;
+        }
+        let old = |i: usize, j: usize| self.s_pinv[i * m_old + j];
+        // (S_kk)⁻¹ over the kept equations, in the new order.
+        let mut inv_k = Mat::<f64>::from_fn(k, k, |i, j| old(kept[i].1, kept[j].1));
+        if r > 0 {
+            let q = Mat::<f64>::from_fn(k, r, |i, j| old(kept[i].1, removed[j]));
+            let rr = Mat::<f64>::from_fn(r, r, |i, j| old(removed[i], removed[j]));
+            let llt = rr.llt(faer::Side::Lower).ok()?;
+            let rq = llt.solve(q.transpose());
+            inv_k = &inv_k - &q * &rq;
+        }
+        // The new order: kept equations at their new places, then the
+        // added ones.
+        let place: Vec<usize> = kept
+            .iter()
+            .map(|&(e, _)| e)
+            .chain(added.iter().copied())
+            .collect();
+        let whole = if a > 0 {
+            let b = Mat::<f64>::from_fn(k, a, |i, j| s[(kept[i].0, added[j])]);
+            let d = Mat::<f64>::from_fn(a, a, |i, j| s[(added[i], added[j])]);
+            let x = &inv_k * &b;
+            let t = &d - b.transpose() * &x;
+            let t_inv = t.llt(faer::Side::Lower).ok()?.inverse();
+            let xt = &x * &t_inv;
+            let top = &inv_k + &xt * x.transpose();
+            Mat::<f64>::from_fn(k + a, k + a, |i, j| match (i < k, j < k) {
+                (true, true) => top[(i, j)],
+                (true, false) => -xt[(i, j - k)],
+                (false, true) => -xt[(j, i - k)],
+                (false, false) => t_inv[(i - k, j - k)],
+            })
+        } else {
+            inv_k
+        };
+        let mut out = Mat::<f64>::zeros(m, m);
+        for (i, &pi) in place.iter().enumerate() {
+            for (j, &pj) in place.iter().enumerate() {
+                out[(pi, pj)] = whole[(i, j)];
+            }
+        }
+        checked_inverse(s, &out)
+    }
+
     /// Refactors for `pinned` control points eliminated and `folded`
     /// equations folded in: K̃ = K + Σ ρ a aᵀ with the pinned rows and
     /// columns eliminated. Every cached column belongs to the old factor and
@@ -710,11 +835,23 @@ impl Solver {
 
     /// Takes a problem that differs from the current one only in its
     /// equations' targets and its loads' forces (the same groups, keys,
-    /// rows, directions and gains, in the same order): Z, S and its inverse
-    /// and the drag response are kept, only the targets and forces change
-    /// (a bound curve moved, [`crate::product`]). Any other problem goes to
+    /// rows, directions and gains, in the same order): the factor (its
+    /// pinned points and folded rows), Z, S⁻¹ and the drag response are
+    /// kept, only the targets and forces change (a bound curve moved,
+    /// [`crate::product`]; an icon's target set). Any other problem goes to
     /// [`Self::set_problem`]. On error nothing changes.
     pub fn retarget(&mut self, problem: Problem) -> Result<(), SolveError> {
+        if !self.same_structure(&problem) {
+            return self.set_problem(problem);
+        }
+        validate(&problem, self.dim())?;
+        self.take_targets(problem);
+        Ok(())
+    }
+
+    /// Whether `problem` has the current problem's structure (see
+    /// [`Self::retarget`]) and the caches built for it are whole.
+    fn same_structure(&self, problem: &Problem) -> bool {
         let same_eq = |a: &Equation, b: &Equation| match (a, b) {
             (Equation::Vector { row: r, .. }, Equation::Vector { row: q, .. }) => r == q,
             (
@@ -731,7 +868,17 @@ impl Solver {
             ) => r == q && d == e,
             _ => false,
         };
-        let same = problem.groups.len() == self.problem.groups.len()
+        // After a refactor the columns are forgotten until `set_problem`
+        // rebuilds them.
+        let whole = self.z.len() == self.rows.len()
+            && self
+                .eqs
+                .iter()
+                .flat_map(|e| &e.terms)
+                .all(|t| t.col < self.z.len())
+            && self.loads.iter().all(|l| l.col < self.z.len());
+        whole
+            && problem.groups.len() == self.problem.groups.len()
             && problem
                 .groups
                 .iter()
@@ -748,21 +895,23 @@ impl Solver {
                             .iter()
                             .zip(&b.loads)
                             .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
-                });
-        // Pinned points (eliminated from the unknowns) and folded
-        // equations carry their targets outside `eqs`: those problems take
-        // the full path.
-        if !same || !self.pin_points.is_empty() || !self.folded.is_empty() {
-            return self.set_problem(problem);
-        }
-        validate(&problem, self.dim())?;
-        // The scalar equations and load columns are in the order
-        // `set_problem` made them: group by group, a vector equation as its
-        // three coordinates.
+                })
+    }
+
+    /// The targets and forces of `problem` (of the current structure, valid)
+    /// copied into the scalar equations, the pins and the load columns.
+    fn take_targets(&mut self, problem: Problem) {
+        // The order `set_problem` made them in: group by group, a pin by
+        // its control point (stably), a vector equation as its three
+        // coordinates.
         let (mut e, mut l) = (0, 0);
+        let mut pins: Vec<(usize, DVec3)> = Vec::with_capacity(self.pins.len());
         for group in &problem.groups {
             for eq in &group.equations {
                 match eq {
+                    Equation::Vector { row, target } if is_pin_row(row) => {
+                        pins.push((row.indices[0], *target));
+                    }
                     Equation::Vector { target, .. } => {
                         for k in 0..3 {
                             self.eqs[e].target = target[k];
@@ -780,9 +929,13 @@ impl Solver {
                 l += 1;
             }
         }
+        pins.sort_by_key(|p| p.0);
+        for (pin, (index, target)) in self.pins.iter_mut().zip(pins) {
+            debug_assert_eq!(pin.index, index);
+            pin.target = target;
+        }
         self.problem = problem;
         self.base = None;
-        Ok(())
     }
 
     /// Back to an earlier factor after a failed problem change, and to the
@@ -1457,12 +1610,16 @@ impl Solver {
         extent: f64,
     ) -> (Vec<f64>, [Option<Vec<f64>>; 3], f64) {
         let n = self.dim();
-        // ρ = b − Cᵀλ − K δ.
+        // ρ = b − Cᵀλ − K δ, and the size of the terms it sums, per point
+        // and coordinate: |b| + |Cᵀ||λ| + |K||δ| (its rounding is a few
+        // units of round-off of that).
         let mut rho = vec![DVec3::ZERO; n];
+        let mut terms = vec![DVec3::ZERO; n];
         for (l, f) in self.loads.iter().zip(&inputs.forces) {
             let row = &self.rows[l.col];
             for (&i, &w) in row.indices.iter().zip(&row.weights) {
                 rho[i] += *f * w;
+                terms[i] += (*f * w).abs();
             }
         }
         for (eq, lam) in self.eqs.iter().zip(lambda) {
@@ -1470,6 +1627,7 @@ impl Solver {
                 let row = &self.rows[t.col];
                 for (&i, &w) in row.indices.iter().zip(&row.weights) {
                     rho[i][t.k] -= t.coef * lam * w;
+                    terms[i][t.k] += (t.coef * lam * w).abs();
                 }
             }
         }
@@ -1478,18 +1636,46 @@ impl Solver {
         // error: it is zeroed).
         let mut computed = DVec3::ZERO;
         let mut k_delta = vec![DVec3::ZERO; n];
-        self.augmented.mul_points(delta, &mut k_delta);
-        for ((r, kd), &pinned) in rho.iter_mut().zip(&k_delta).zip(&self.pinned) {
+        let mut k_abs = vec![DVec3::ZERO; n];
+        self.augmented
+            .mul_points_with_bound(delta, &mut k_delta, &mut k_abs);
+        // The componentwise backward error max_i |ρ_i| / (|b| + |Cᵀ||λ| +
+        // |K||δ|)_i (Oettli–Prager), per coordinate.
+        let mut backward = DVec3::ZERO;
+        for (((r, kd), (t, ka)), &pinned) in rho
+            .iter_mut()
+            .zip(&k_delta)
+            .zip(terms.iter().zip(&k_abs))
+            .zip(&self.pinned)
+        {
             if pinned {
                 *r = DVec3::ZERO;
                 continue;
             }
             computed = computed.max(r.abs()).max(kd.abs());
             *r -= *kd;
+            let size = *t + *ka;
+            for k in 0..3 {
+                if r[k] != 0.0 {
+                    let ratio = if size[k] > 0.0 {
+                        r[k].abs() / size[k]
+                    } else {
+                        f64::INFINITY
+                    };
+                    backward[k] = backward[k].max(ratio);
+                }
+            }
         }
         let worst = rho.iter().fold(DVec3::ZERO, |m, r| m.max(r.abs()));
+        // A coordinate is refined when its residual is large against the
+        // answer (1e-13 of the terms' largest), is more than the rounding
+        // of its own computation (componentwise backward error above
+        // [`NOISE_BACKWARD_ERROR`]: below it, y = K⁻¹ρ is noise and a step
+        // gains nothing), and can reach the shape at all.
         let refine: [Option<Vec<f64>>; 3] = std::array::from_fn(|k| {
-            (worst[k] > 1e-13 * computed[k].max(1e-300) && reach[k] > 1e-9 * extent)
+            (worst[k] > 1e-13 * computed[k].max(1e-300)
+                && backward[k] > NOISE_BACKWARD_ERROR
+                && reach[k] > 1e-9 * extent)
                 .then(|| rho.iter().map(|r| r[k]).collect())
         });
         // σ = d − C P_ref − C δ: what the constraints still ask.
@@ -1670,6 +1856,12 @@ struct Inputs {
     pins: Vec<DVec3>,
 }
 
+/// A row on one control point with a non-zero weight: as a vector
+/// equation it pins that point (eliminated from the unknowns).
+fn is_pin_row(row: &ScalarRow) -> bool {
+    row.indices.len() == 1 && row.weights[0] != 0.0
+}
+
 fn validate(problem: &Problem, n: usize) -> Result<(), SolveError> {
     let row_ok = |r: &ScalarRow| -> Result<(), SolveError> {
         if r.indices.len() != r.weights.len() {
@@ -1781,6 +1973,13 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
 /// half.
 const MAX_REFINEMENT_STEPS: usize = 12;
 
+/// Componentwise backward error (see `Solver::residuals`) below which a
+/// residual is the rounding of its own computation: a sum of ~50 stiffness
+/// terms and a few constraint and load terms is exact to ~60 units of
+/// round-off (6.7e-15) at worst, so iterative refinement stops there (the
+/// usual Oettli–Prager stopping rule): a step would add noise, not digits.
+const NOISE_BACKWARD_ERROR: f64 = 1e-14;
+
 /// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
 const RETIRED_BYTES: usize = 16 << 20;
 
@@ -1815,6 +2014,62 @@ fn well_conditioned_inverse(scaled: &Mat<f64>, scale: &[f64]) -> Option<Vec<f64>
         (0..m)
             .flat_map(|i| (0..m).map(move |j| (i, j)))
             .map(|(i, j)| 0.5 * (inverse[(i, j)] + inverse[(j, i)]) * scale[i] * scale[j])
+            .collect(),
+    )
+}
+
+/// `inverse` (an S⁻¹ from block updates) as the row-major S⁻¹ when it is
+/// provably well conditioned and accurate: the bound of
+/// [`well_conditioned_inverse`] on the equilibrated Ŝ, and
+/// ‖Ŝ Ŝ⁻¹ v − v‖∞ ≤ 1e-6 ‖v‖∞ for two probe vectors (an inverse that
+/// good makes each constraint-projection step of the refinement gain six
+/// digits; the refinement then meets the equations as with a fresh one).
+fn checked_inverse(s: &Mat<f64>, inverse: &Mat<f64>) -> Option<Vec<f64>> {
+    let m = s.nrows();
+    let mut scale = Vec::with_capacity(m);
+    for i in 0..m {
+        let d = s[(i, i)];
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        scale.push(1.0 / d.sqrt());
+    }
+    let scaled = |i: usize, j: usize| s[(i, j)] * scale[i] * scale[j];
+    let scaled_inv = |i: usize, j: usize| inverse[(i, j)] / (scale[i] * scale[j]);
+    let norm = |f: &dyn Fn(usize, usize) -> f64| {
+        (0..m)
+            .map(|i| (0..m).map(|j| f(i, j).abs()).sum::<f64>())
+            .fold(0.0f64, f64::max)
+    };
+    let bound = norm(&scaled) * norm(&scaled_inv);
+    if !(bound.is_finite() && bound < CHOLESKY_CONDITION_LIMIT) {
+        return None;
+    }
+    for probe in 0..2 {
+        let v: Vec<f64> = (0..m)
+            .map(|i| {
+                if probe == 0 {
+                    1.0
+                } else {
+                    ((i * 7 + 3) % 11) as f64 / 5.0 - 1.0
+                }
+            })
+            .collect();
+        let x: Vec<f64> = (0..m)
+            .map(|i| (0..m).map(|j| scaled_inv(i, j) * v[j]).sum())
+            .collect();
+        let worst = (0..m)
+            .map(|i| ((0..m).map(|j| scaled(i, j) * x[j]).sum::<f64>() - v[i]).abs())
+            .fold(0.0f64, f64::max);
+        let size = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        if worst.is_nan() || worst > 1e-6 * size {
+            return None;
+        }
+    }
+    Some(
+        (0..m)
+            .flat_map(|i| (0..m).map(move |j| (i, j)))
+            .map(|(i, j)| 0.5 * (inverse[(i, j)] + inverse[(j, i)]))
             .collect(),
     )
 }
