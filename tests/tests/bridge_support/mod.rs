@@ -241,7 +241,8 @@ pub async fn snapshot_points(addr: SocketAddr, token: &str) -> Vec<[f64; 3]> {
                     vsculpt_protocol::PartShape::Surface { surface } => surface.points,
                     vsculpt_protocol::PartShape::Curve { curve } => curve.points,
                     vsculpt_protocol::PartShape::Dsm { .. }
-                    | vsculpt_protocol::PartShape::Network { .. } => Vec::new(),
+                    | vsculpt_protocol::PartShape::Network { .. }
+                    | vsculpt_protocol::PartShape::Body { .. } => Vec::new(),
                 })
                 .collect();
         }
