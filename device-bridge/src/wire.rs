@@ -274,7 +274,25 @@ impl Wire for ProtocolWire {
                 message: message.chars().take(512).collect(),
             }],
         };
-        msgs.into_iter().map(text).collect()
+        // An ordered design command carries a number: its answer (ack or error)
+        // tells a replay that the server has done it.
+        let numbered = ordered && self.answers(cmd, ordered) > 0;
+        msgs.into_iter()
+            .map(|m| {
+                let req = numbered.then(|| NEXT_REQ.fetch_add(1, Ordering::Relaxed));
+                envelope(req, m)
+            })
+            .collect()
+    }
+
+    fn answers(&self, cmd: &Command, ordered: bool) -> u64 {
+        match cmd {
+            Command::Grab { .. } | Command::Release { .. } => 2,
+            Command::SetState { .. } | Command::SetRole { .. } | Command::SetKind { .. } => 1,
+            // A coalesced drag is fire-and-forget; an ordered one is numbered.
+            Command::Drag { .. } => u64::from(ordered),
+            Command::HandSample { .. } | Command::DeviceStatus { .. } => 0,
+        }
     }
 
     fn decode(&self, text: &str) -> Result<Vec<ServerEvent>, String> {
@@ -378,12 +396,16 @@ impl Wire for ProtocolWire {
                     Vec::new()
                 }
             }
-            ServerMessage::Error { code, message, .. } => match code {
+            ServerMessage::Error { code, message, req } => match code {
                 ErrorCode::BadToken => vec![ServerEvent::Rejected(Rejection::Token, message)],
                 ErrorCode::UnknownDesign => vec![ServerEvent::Rejected(Rejection::Design, message)],
                 ErrorCode::BadVersion => vec![ServerEvent::Rejected(Rejection::Version, message)],
-                _ => vec![ServerEvent::Error(format!("{code:?}: {message}"))],
+                _ => std::iter::once(ServerEvent::Error(format!("{code:?}: {message}")))
+                    .chain(req.map(ServerEvent::Reply))
+                    .collect(),
             },
+            ServerMessage::Ack { req, .. } => vec![ServerEvent::Reply(req)],
+            ServerMessage::Pong { req: Some(req) } => vec![ServerEvent::Reply(req)],
             _ => Vec::new(),
         })
     }
