@@ -671,6 +671,52 @@ mod tests {
     }
 
     #[test]
+    fn ordered_design_commands_are_numbered_and_their_answers_reported() {
+        let w = ProtocolWire::default();
+        let grab = Command::Grab {
+            icon: 1,
+            sensor: "right".into(),
+        };
+        let drag = Command::Drag {
+            icon: 1,
+            target: DVec3::X,
+        };
+        let numbered = |texts: Vec<String>| {
+            texts
+                .iter()
+                .map(|t| parse_client(t).unwrap().req)
+                .collect::<Vec<_>>()
+        };
+        // in order: both messages of a grab and the drag carry numbers, one
+        // answer each
+        let reqs = numbered(w.encode(&grab, true));
+        assert_eq!(reqs.len(), 2);
+        assert!(reqs.iter().all(Option::is_some));
+        assert_eq!(w.answers(&grab, true), 2);
+        assert!(numbered(w.encode(&drag, true))[0].is_some());
+        assert_eq!(w.answers(&drag, true), 1);
+        // a coalesced drag is fire-and-forget; a hand sample is never answered
+        assert_eq!(numbered(w.encode(&drag, false)), vec![None]);
+        assert_eq!(w.answers(&drag, false), 0);
+        // acks, numbered errors and pongs are answers
+        assert_eq!(
+            w.decode(r#"{"type": "ack", "req": 7}"#).unwrap(),
+            vec![ServerEvent::Reply(7)]
+        );
+        assert_eq!(
+            w.decode(r#"{"type": "pong", "req": 8}"#).unwrap(),
+            vec![ServerEvent::Reply(8)]
+        );
+        let refused = w
+            .decode(
+                r#"{"type": "error", "req": 9, "code": "unknown_icon", "message": "no icon 1"}"#,
+            )
+            .unwrap();
+        assert_eq!(refused.len(), 2);
+        assert_eq!(refused[1], ServerEvent::Reply(9));
+    }
+
+    #[test]
     fn control_net_area_of_a_plate() {
         let s = SurfaceData {
             u: vsculpt_protocol::Knots {
