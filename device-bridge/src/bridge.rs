@@ -65,7 +65,10 @@ pub fn apply_event(interaction: &mut Interaction, event: ServerEvent, link: Opti
                 l.clear();
             }
         }
-        ServerEvent::Disconnected | ServerEvent::Welcome => {}
+        ServerEvent::Disconnected
+        | ServerEvent::Welcome
+        | ServerEvent::Reply(_)
+        | ServerEvent::Answered(_) => {}
         ServerEvent::Icons { icons, area } => {
             if let Some(a) = area {
                 interaction.set_surface_area(a);
@@ -108,18 +111,30 @@ pub async fn drive(
     drive_inner(config, wire, inputs, shutdown, None).await
 }
 
-/// [`drive`] for a replay: tells `ready` once the server's icons are known (the
-/// first snapshot after connecting), so the replay can wait before it starts
-/// playing, and sends drags only as the recorded samples make them due (no wall
-/// clock), so every replay speed sends the same commands.
-pub async fn drive_until_ready(
+/// How a replay and its driver keep in step.
+pub struct Lockstep {
+    /// Told once the server's icons are known (the first snapshot after
+    /// connecting), so the replay can wait before it starts playing.
+    pub ready: std::sync::mpsc::Sender<()>,
+    /// Told once per input, when the server has answered every command the
+    /// input made and the interaction has taken in everything the server
+    /// said before those answers: only then may the next input come.
+    pub done: std::sync::mpsc::Sender<()>,
+}
+
+/// [`drive`] for a replay, in lockstep with it ([`Lockstep`]): the server sees
+/// every command in order, none coalesced, and the interaction sees the
+/// server's state at the same point of the recording whatever the pace; drags
+/// leave only as the recorded samples make them due (no wall clock). So every
+/// replay speed sends the same commands and gets the same answers.
+pub async fn drive_in_lockstep(
     config: &Config,
     wire: Arc<dyn Wire>,
     inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
-    ready: std::sync::mpsc::Sender<()>,
+    lockstep: Lockstep,
 ) -> Result<(), String> {
-    drive_inner(config, wire, inputs, shutdown, Some(ready)).await
+    drive_inner(config, wire, inputs, shutdown, Some(lockstep)).await
 }
 
 async fn drive_inner(
@@ -127,15 +142,24 @@ async fn drive_inner(
     wire: Arc<dyn Wire>,
     mut inputs: mpsc::UnboundedReceiver<Input>,
     shutdown: impl Future<Output = ()>,
-    mut ready: Option<std::sync::mpsc::Sender<()>>,
+    lockstep: Option<Lockstep>,
 ) -> Result<(), String> {
-    let live = ready.is_none();
+    let live = lockstep.is_none();
+    let (mut ready, done) = match lockstep {
+        Some(l) => (Some(l.ready), Some(l.done)),
+        None => (None, None),
+    };
+    // The answer count that completes the input being replayed.
+    let mut awaiting: Option<u64> = None;
+    // No answers come while the link is down: a replay then goes on unanswered.
+    let mut connected = false;
     let mut interaction = Interaction::new(config);
     let (ev_tx, mut events) = mpsc::unbounded_channel();
     let link = (!config.server.url.is_empty()).then(|| {
         let mut o = LinkOptions::new(config.server.url.clone());
         o.token = config.server.token.clone();
         o.design = config.server.design;
+        o.in_order = !live;
         Link::spawn(o, wire, ev_tx.clone())
     });
     tokio::pin!(shutdown);
@@ -183,10 +207,19 @@ async fn drive_inner(
                             cmds.push(Command::DeviceStatus { device, condition, message });
                         }
                     }
+                    let mut owed = None;
                     if !cmds.is_empty() {
                         match &link {
-                            Some(l) => l.send(cmds.drain(..)),
+                            Some(l) => owed = l.send(cmds.drain(..)),
                             None => tracing::debug!(?cmds, "no server configured"),
+                        }
+                    }
+                    if let Some(done) = &done {
+                        match owed {
+                            Some(total) if connected => awaiting = Some(total),
+                            _ => {
+                                let _ = done.send(());
+                            }
                         }
                     }
                 }
@@ -208,9 +241,25 @@ async fn drive_inner(
                     }
                 }
                 let snapshot = matches!(ev, ServerEvent::Icons { .. });
+                // The replayed input's commands are all answered, or the
+                // connection they went on is gone (the restore re-sends state).
+                let settled = match ev {
+                    ServerEvent::Answered(n) => awaiting.is_some_and(|a| n >= a),
+                    ServerEvent::Connected | ServerEvent::Disconnected => {
+                        connected = matches!(ev, ServerEvent::Connected);
+                        true
+                    }
+                    _ => false,
+                };
                 apply_event(&mut interaction, ev, link.as_ref());
                 if snapshot && let Some(r) = ready.take() {
                     let _ = r.send(());
+                }
+                if settled
+                    && awaiting.take().is_some()
+                    && let Some(done) = &done
+                {
+                    let _ = done.send(());
                 }
             },
             _ = &mut drain, if !samples_open => break,
@@ -301,16 +350,38 @@ pub async fn run_replay(
     };
     let (tx, rx) = mpsc::unbounded_channel::<Input>();
     // With a server, play only once its icons are known (or after a timeout), so
-    // the recorded grabs find what they grabbed live.
+    // the recorded grabs find what they grabbed live; then each input only once
+    // the server has answered the last one's commands (lockstep: the pace
+    // changes neither what the server gets nor what the interaction knows).
     let (ready_tx, ready_rx) = std::sync::mpsc::channel::<()>();
+    let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
     let wait = !config.server.url.is_empty();
     let player = tokio::task::spawn_blocking(move || {
         if wait {
             let _ = ready_rx.recv_timeout(REPLAY_WAIT);
         }
-        replayer.play(speed, |input| tx.send(input).is_ok())
+        let mut stalled = false;
+        replayer.play(speed, |input| {
+            if tx.send(input).is_err() {
+                return false;
+            }
+            // A server that stops answering must not hang the replay for good.
+            if stalled {
+                while done_rx.try_recv().is_ok() {}
+            } else if done_rx.recv_timeout(REPLAY_WAIT).is_err() {
+                stalled = true;
+                tracing::warn!(
+                    "the server did not answer within {REPLAY_WAIT:?}; replaying on without waiting"
+                );
+            }
+            true
+        })
     });
-    let driven = drive_until_ready(&config, wire, rx, shutdown, ready_tx).await;
+    let lockstep = Lockstep {
+        ready: ready_tx,
+        done: done_tx,
+    };
+    let driven = drive_in_lockstep(&config, wire, rx, shutdown, lockstep).await;
     if let Err(text) = driven {
         player.abort();
         return Err(BridgeError::Rejected(text));

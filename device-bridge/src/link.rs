@@ -48,6 +48,13 @@ pub enum ServerEvent {
     },
     /// The server refused something; the text says what.
     Error(String),
+    /// The server answered a numbered request (ack, error or pong); the wire
+    /// reports it, the link turns it into [`ServerEvent::Answered`].
+    Reply(u64),
+    /// Answers received so far on an [in-order](LinkOptions::in_order) link,
+    /// after every event that came before the last of them (compare with
+    /// the total [`Link::send`] returned).
+    Answered(u64),
     /// The server will never accept this hello (bad token, unknown design, other
     /// protocol version): retrying cannot help, the bridge stops.
     Rejected(Rejection, String),
@@ -94,6 +101,11 @@ pub trait Wire: Send + Sync + 'static {
     }
     /// True once `event` means the server accepted the hello.
     fn accepts(&self, event: &ServerEvent) -> bool;
+    /// How many answers ([`ServerEvent::Reply`]) the server owes for `cmd`'s
+    /// messages (the numbered ones); none by default.
+    fn answers(&self, _cmd: &Command, _ordered: bool) -> u64 {
+        0
+    }
 }
 
 /// Where and how to connect.
@@ -109,6 +121,9 @@ pub struct LinkOptions {
     pub backoff_min: Duration,
     /// Longest reconnect delay.
     pub backoff_max: Duration,
+    /// Keep every command in order, none coalesced, and count the server's
+    /// answers (a replay: the server must see the same commands at any pace).
+    pub in_order: bool,
 }
 
 impl LinkOptions {
@@ -120,6 +135,7 @@ impl LinkOptions {
             design: None,
             backoff_min: Duration::from_millis(100),
             backoff_max: Duration::from_secs(5),
+            in_order: false,
         }
     }
 
@@ -159,6 +175,7 @@ pub struct LinkStats {
 
 /// The running link; dropping it stops the connection task.
 pub struct Link {
+    wire: Arc<dyn Wire>,
     outbox: Arc<Mutex<Outbox>>,
     notify: Arc<Notify>,
     stats: watch::Receiver<LinkStats>,
@@ -172,18 +189,23 @@ impl Link {
         wire: Arc<dyn Wire>,
         events: mpsc::UnboundedSender<ServerEvent>,
     ) -> Self {
-        let outbox = Arc::new(Mutex::new(Outbox::new()));
+        let outbox = Arc::new(Mutex::new(if options.in_order {
+            Outbox::in_order()
+        } else {
+            Outbox::new()
+        }));
         let notify = Arc::new(Notify::new());
         let (stats_tx, stats) = watch::channel(LinkStats::default());
         let task = tokio::spawn(supervise(
             options,
-            wire,
+            wire.clone(),
             events,
             outbox.clone(),
             notify.clone(),
             Arc::new(stats_tx),
         ));
         Self {
+            wire,
             outbox,
             notify,
             stats,
@@ -191,19 +213,27 @@ impl Link {
         }
     }
 
-    /// Queues commands for the server.
-    pub fn send(&self, cmds: impl IntoIterator<Item = Command>) {
+    /// Queues commands for the server. On an [in-order](LinkOptions::in_order)
+    /// link, returns the answer count at which the server has answered them
+    /// all (see [`ServerEvent::Answered`]), when it owes any.
+    pub fn send(&self, cmds: impl IntoIterator<Item = Command>) -> Option<u64> {
         let mut any = false;
-        {
+        let mut owed = 0;
+        let total = {
             let mut o = self.outbox.lock().unwrap_or_else(|e| e.into_inner());
             for c in cmds {
+                if o.is_in_order() {
+                    owed += self.wire.answers(&c, true);
+                }
                 o.push(c);
                 any = true;
             }
-        }
+            o.owe(owed)
+        };
         if any {
             self.notify.notify_one();
         }
+        (owed > 0).then_some(total)
     }
 
     /// Drops every pending command (before restoring state on a new connection).
@@ -395,7 +425,14 @@ async fn session(
                     Some(Ok(Message::Close(_))) => return if accepted { Ok(true) } else { Err(End::Failed("closed by server".into())) },
                     Some(Ok(_)) => Vec::new(),
                 };
-                for ev in evs {
+                for mut ev in evs {
+                    if let ServerEvent::Reply(_) = ev {
+                        let mut o = outbox.lock().unwrap_or_else(|e| e.into_inner());
+                        if !o.is_in_order() {
+                            continue;
+                        }
+                        ev = ServerEvent::Answered(o.answer());
+                    }
                     if !accepted && wire.accepts(&ev) {
                         accepted = true;
                         stats.send_modify(|s| s.connections += 1);

@@ -5,6 +5,10 @@
 //! Continuous commands are coalesced per subject (an icon's drag, a hand's sample).
 //! Order is kept where it matters: a discrete command about an icon first flushes
 //! that icon's pending drag, so "drag then release" never arrives reversed.
+//!
+//! A replay's outbox is [in order](Outbox::in_order): nothing is coalesced, every
+//! command leaves in order, and it counts the answers the server owes, so the
+//! replay can wait for them (delivery pace must not change what the server does).
 
 use crate::interaction::{Command, Subject};
 use std::collections::{BTreeMap, VecDeque};
@@ -15,6 +19,11 @@ pub struct Outbox {
     ordered: VecDeque<Command>,
     latest: BTreeMap<Subject, Command>,
     coalesced: u64,
+    in_order: bool,
+    /// Answers owed for commands queued so far (cumulative).
+    owed: u64,
+    /// Answers received so far (cumulative).
+    answered: u64,
 }
 
 impl Outbox {
@@ -23,10 +32,25 @@ impl Outbox {
         Self::default()
     }
 
+    /// An outbox that keeps every command, in order (a replay).
+    pub fn in_order() -> Self {
+        Self {
+            in_order: true,
+            ..Self::default()
+        }
+    }
+
+    /// True for an [in-order](Outbox::in_order) outbox.
+    pub fn is_in_order(&self) -> bool {
+        self.in_order
+    }
+
     /// Queues `cmd`.
     pub fn push(&mut self, cmd: Command) {
         let subject = cmd.subject();
-        if cmd.is_continuous() {
+        if self.in_order {
+            self.ordered.push_back(cmd);
+        } else if cmd.is_continuous() {
             if self.latest.insert(subject, cmd).is_some() {
                 self.coalesced += 1;
             }
@@ -51,10 +75,25 @@ impl Outbox {
         v
     }
 
-    /// Drops everything (a new connection restores state from scratch).
+    /// Drops everything (a new connection restores state from scratch); the
+    /// answers the old connection owed are written off.
     pub fn clear(&mut self) {
         self.ordered.clear();
         self.latest.clear();
+        self.answered = self.owed;
+    }
+
+    /// Counts `n` more answers owed (for commands just queued); returns the
+    /// total owed, the answer count at which they are all in.
+    pub fn owe(&mut self, n: u64) -> u64 {
+        self.owed += n;
+        self.owed
+    }
+
+    /// One answer came; returns the total received.
+    pub fn answer(&mut self) -> u64 {
+        self.answered = (self.answered + 1).min(self.owed);
+        self.answered
     }
 
     /// True when nothing is pending.
@@ -107,5 +146,29 @@ mod tests {
         });
         o.clear();
         assert!(o.drain().is_empty());
+    }
+
+    #[test]
+    fn in_order_keeps_every_drag_in_sending_order_and_counts_answers() {
+        let mut o = Outbox::in_order();
+        o.push(drag(1, 1.0));
+        o.push(drag(2, 1.0));
+        o.push(drag(1, 2.0));
+        assert_eq!(o.coalesced(), 0);
+        assert_eq!(
+            o.drain(),
+            vec![
+                (drag(1, 1.0), true),
+                (drag(2, 1.0), true),
+                (drag(1, 2.0), true)
+            ]
+        );
+        assert_eq!(o.owe(3), 3);
+        assert_eq!(o.answer(), 1);
+        assert_eq!(o.owe(1), 4);
+        o.clear();
+        // a lost connection's answers never come: written off
+        assert_eq!(o.owe(1), 5);
+        assert_eq!(o.answer(), 5);
     }
 }

@@ -274,7 +274,25 @@ impl Wire for ProtocolWire {
                 message: message.chars().take(512).collect(),
             }],
         };
-        msgs.into_iter().map(text).collect()
+        // An ordered design command carries a number: its answer (ack or error)
+        // tells a replay that the server has done it.
+        let numbered = ordered && self.answers(cmd, ordered) > 0;
+        msgs.into_iter()
+            .map(|m| {
+                let req = numbered.then(|| NEXT_REQ.fetch_add(1, Ordering::Relaxed));
+                envelope(req, m)
+            })
+            .collect()
+    }
+
+    fn answers(&self, cmd: &Command, ordered: bool) -> u64 {
+        match cmd {
+            Command::Grab { .. } | Command::Release { .. } => 2,
+            Command::SetState { .. } | Command::SetRole { .. } | Command::SetKind { .. } => 1,
+            // A coalesced drag is fire-and-forget; an ordered one is numbered.
+            Command::Drag { .. } => u64::from(ordered),
+            Command::HandSample { .. } | Command::DeviceStatus { .. } => 0,
+        }
     }
 
     fn decode(&self, text: &str) -> Result<Vec<ServerEvent>, String> {
@@ -378,12 +396,16 @@ impl Wire for ProtocolWire {
                     Vec::new()
                 }
             }
-            ServerMessage::Error { code, message, .. } => match code {
+            ServerMessage::Error { code, message, req } => match code {
                 ErrorCode::BadToken => vec![ServerEvent::Rejected(Rejection::Token, message)],
                 ErrorCode::UnknownDesign => vec![ServerEvent::Rejected(Rejection::Design, message)],
                 ErrorCode::BadVersion => vec![ServerEvent::Rejected(Rejection::Version, message)],
-                _ => vec![ServerEvent::Error(format!("{code:?}: {message}"))],
+                _ => std::iter::once(ServerEvent::Error(format!("{code:?}: {message}")))
+                    .chain(req.map(ServerEvent::Reply))
+                    .collect(),
             },
+            ServerMessage::Ack { req, .. } => vec![ServerEvent::Reply(req)],
+            ServerMessage::Pong { req: Some(req) } => vec![ServerEvent::Reply(req)],
             _ => Vec::new(),
         })
     }
@@ -646,6 +668,52 @@ mod tests {
         assert!(w.decode("{\"type\": \"nonsense\"}").is_err());
         assert!(w.decode("not json").is_err());
         assert_eq!(w.decode(r#"{"type": "pong"}"#).unwrap(), vec![]);
+    }
+
+    #[test]
+    fn ordered_design_commands_are_numbered_and_their_answers_reported() {
+        let w = ProtocolWire::default();
+        let grab = Command::Grab {
+            icon: 1,
+            sensor: "right".into(),
+        };
+        let drag = Command::Drag {
+            icon: 1,
+            target: DVec3::X,
+        };
+        let numbered = |texts: Vec<String>| {
+            texts
+                .iter()
+                .map(|t| parse_client(t).unwrap().req)
+                .collect::<Vec<_>>()
+        };
+        // in order: both messages of a grab and the drag carry numbers, one
+        // answer each
+        let reqs = numbered(w.encode(&grab, true));
+        assert_eq!(reqs.len(), 2);
+        assert!(reqs.iter().all(Option::is_some));
+        assert_eq!(w.answers(&grab, true), 2);
+        assert!(numbered(w.encode(&drag, true))[0].is_some());
+        assert_eq!(w.answers(&drag, true), 1);
+        // a coalesced drag is fire-and-forget; a hand sample is never answered
+        assert_eq!(numbered(w.encode(&drag, false)), vec![None]);
+        assert_eq!(w.answers(&drag, false), 0);
+        // acks, numbered errors and pongs are answers
+        assert_eq!(
+            w.decode(r#"{"type": "ack", "req": 7}"#).unwrap(),
+            vec![ServerEvent::Reply(7)]
+        );
+        assert_eq!(
+            w.decode(r#"{"type": "pong", "req": 8}"#).unwrap(),
+            vec![ServerEvent::Reply(8)]
+        );
+        let refused = w
+            .decode(
+                r#"{"type": "error", "req": 9, "code": "unknown_icon", "message": "no icon 1"}"#,
+            )
+            .unwrap();
+        assert_eq!(refused.len(), 2);
+        assert_eq!(refused[1], ServerEvent::Reply(9));
     }
 
     #[test]

@@ -3,7 +3,9 @@
 //!
 //! 1. replies to this client (acks, errors, design lists) from a bounded
 //!    queue its reader fills — a client that never reads stalls only its
-//!    own reader;
+//!    own reader. Before each reply go the events and the drag feedback the
+//!    actor published before it answered: a client that has its answer has
+//!    seen what its command did (a replaying bridge relies on it);
 //! 2. the design's ordered events (broadcast): never skipped silently — if
 //!    this client falls more than the channel's capacity behind, it gets a
 //!    fresh full snapshot from the actor and continues from there;
@@ -21,7 +23,7 @@ use futures_util::SinkExt;
 use futures_util::stream::SplitSink;
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use tokio::sync::broadcast::error::RecvError;
+use tokio::sync::broadcast::error::{RecvError, TryRecvError};
 use tokio::sync::mpsc;
 
 /// What the reader hands the writer.
@@ -54,6 +56,14 @@ async fn send_geometry(
         sent.insert(*part, g.rev);
     }
     Ok(())
+}
+
+/// Sends one ordered event, if it has a wire form.
+async fn ev_send(sink: &mut Sink, ev: &DesignEvent, compact: bool) -> Result<(), axum::Error> {
+    match convert::event(ev, !compact) {
+        Some(text) => sink.send(Message::Text(text)).await,
+        None => Ok(()),
+    }
 }
 
 /// Every part's current frame flagged as the snapshot's shape (the compact
@@ -121,7 +131,54 @@ pub async fn run(
             o = out.recv() => {
                 let ok = match o {
                     None => break,
-                    Some(Out::Msg(m)) => sink.send(m).await.is_ok(),
+                    Some(Out::Msg(m)) => {
+                        // Read your own writes: what the actor published before
+                        // it answered (a command's events, its drag feedback)
+                        // goes out before the answer, so a client that waits
+                        // for the answer has seen the state it left.
+                        loop {
+                            match joined.events.try_recv() {
+                                Ok(ev) => {
+                                    if ev_send(&mut sink, &ev, compact).await.is_err() {
+                                        return;
+                                    }
+                                    if matches!(ev, DesignEvent::Deleted(_)) {
+                                        deleted = true;
+                                        geometry_live = false;
+                                    }
+                                }
+                                Err(TryRecvError::Lagged(n)) => {
+                                    // As below: too far behind, a fresh snapshot.
+                                    tracing::info!(design = handle.id, skipped = n, "client lagged; resyncing with a full snapshot");
+                                    match handle.resync(client).await {
+                                        Ok(j) => {
+                                            let snap = convert::snapshot(&j.view, !compact);
+                                            joined = j;
+                                            if sink.send(Message::Text(snap)).await.is_err()
+                                                || (frames && send_geometry(&mut sink, &mut joined, &mut sent, &metrics).await.is_err())
+                                            {
+                                                return;
+                                            }
+                                        }
+                                        Err(_) => geometry_live = false,
+                                    }
+                                    break;
+                                }
+                                // Closed is handled by the main loop's receive.
+                                Err(_) => break,
+                            }
+                        }
+                        let feedback = (geometry_live
+                            && joined.feedback.has_changed().unwrap_or(false))
+                        .then(|| joined.feedback.borrow_and_update().clone())
+                        .flatten();
+                        if let Some(f) = feedback
+                            && sink.send(Message::Text(convert::feedback(&f))).await.is_err()
+                        {
+                            return;
+                        }
+                        sink.send(m).await.is_ok()
+                    }
                     Some(Out::Close(code, reason)) => {
                         let _ = sink
                             .send(Message::Close(Some(CloseFrame { code, reason: reason.into() })))
