@@ -20,11 +20,14 @@
 //!   types (checked in as `protocol/schema/protocol.schema.json`).
 //! * [`dsm`] — a Density Spatial Model part's shape and its edits.
 //! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
+//! * [`drag_frame`] — the drag stream: a part's drag basis (kind 4) and
+//!   its drag frames (kind 5), for clients that ask for it in `hello`.
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
 
 pub mod client;
+pub mod drag_frame;
 pub mod dsm;
 pub mod error;
 pub mod frame;

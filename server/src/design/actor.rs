@@ -443,6 +443,8 @@ struct Actor {
     dragging: BTreeMap<u64, (u64, u64)>,
     /// Whether the geometry published last came from a drag.
     drag_frame: bool,
+    /// The parts' drag streams (see [`super::drag_stream`]).
+    streams: super::drag_stream::DragStreams,
 }
 
 /// Starts the actor of design `id` from `doc`, with its committed versions;
@@ -482,6 +484,7 @@ pub fn spawn(
         persist_retry: None,
         dragging: BTreeMap::new(),
         drag_frame: false,
+        streams: Default::default(),
     };
     let task = tokio::spawn(actor.run(rx));
     Ok((DesignHandle { id, tx, retired }, task))
@@ -595,6 +598,7 @@ impl Actor {
                         self.changed();
                         self.announce_icon(icon);
                         geometry_dirty.parts(moved);
+                        geometry_dirty.parts(self.streams.at_rest(part));
                     }
                     if self.clients.remove(&client).is_some() {
                         self.broadcast_presence(client);
@@ -849,16 +853,27 @@ impl Actor {
     fn publish_geometry(&mut self, dirty: &Dirty) {
         self.rev += 1;
         let set = if dirty.all {
+            self.streams.clear();
             self.model.geometry_set(self.id, self.rev)
         } else {
             let mut set = (**self.geometry.borrow()).clone();
             set.parts
                 .retain(|id, _| self.model.doc().part(*id).is_some());
             for &part in &dirty.parts {
-                if let Some(g) = self
-                    .model
-                    .geometry(self.id, part, self.rev, self.drag_frame)
-                {
+                let g = if self.drag_frame {
+                    let previous = set.parts.get(&part).cloned();
+                    self.model.drag_geometry(
+                        self.id,
+                        part,
+                        self.rev,
+                        previous.as_deref(),
+                        &mut self.streams,
+                    )
+                } else {
+                    self.streams.forget(part);
+                    self.model.geometry(self.id, part, self.rev, false)
+                };
+                if let Some(g) = g {
                     set.parts.insert(part, Arc::new(g));
                 }
             }
@@ -1033,6 +1048,7 @@ impl Actor {
                 }
                 if let Some((pp, prev)) = self.dragging.remove(&client) {
                     let _ = self.model.release(pp, prev);
+                    geometry_dirty.parts(self.streams.at_rest(pp));
                 }
                 self.undo.push(self.model.to_doc());
                 self.model.grab(part, icon)?;
@@ -1077,6 +1093,7 @@ impl Actor {
                     return Ok(Ack::default());
                 }
                 let moved = self.model.release(part, icon)?;
+                geometry_dirty.parts(self.streams.at_rest(part));
                 self.dragging.remove(&client);
                 self.set_holding(client, None);
                 self.changed();

@@ -8,6 +8,7 @@ pub mod command;
 pub mod curve_engine;
 pub mod demo;
 pub mod doc;
+pub mod drag_stream;
 pub mod edit;
 pub mod engine;
 pub mod error;
