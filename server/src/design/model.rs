@@ -48,6 +48,9 @@ pub struct GeometrySet {
     pub parts: BTreeMap<u64, Arc<Geometry>>,
 }
 
+/// Icon ids and where they are on the solved shape.
+type IconPositions = Vec<(u64, DVec3)>;
+
 /// Document + the kernel product of its parts.
 pub struct DesignModel {
     doc: DesignDoc,
@@ -311,7 +314,7 @@ impl DesignModel {
     }
 
     /// A part's control points and icon positions.
-    fn frame_data(&self, part: u64) -> Option<(&[DVec3], Vec<(u64, DVec3)>)> {
+    fn frame_data(&self, part: u64) -> Option<(&[DVec3], IconPositions)> {
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;
         let icons: Vec<(u64, DVec3)> = p
