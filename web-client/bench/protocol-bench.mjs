@@ -375,7 +375,9 @@ try {
   const own = await benchOwnFrame(srv, big);
   console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
   for (const stream of [false, true]) {
-    const f = await benchFanout(srv, big, stream);
+    // Each fanout on a fresh 81 × 159 design: the same starting point.
+    const fresh = await createDesign(srv, `bench 81x159 ${stream ? 'stream' : 'full'}`, 81, 159);
+    const f = await benchFanout(srv, fresh, stream);
     console.log(
       `${VIEWERS} viewers at 60 Hz on 81x159 (${f.drags} drags), ${stream ? 'drag stream' : 'full frames'}: drag → viewer frame p50 ${fmt(pct(f.lat, 50))} ms, ` +
         `p99 ${fmt(pct(f.lat, 99))} ms over ${f.lat.length} frames; frames/s per viewer min ${fmt(Math.min(...f.fps))}, median ${fmt(pct(f.fps, 50))}; ` +
