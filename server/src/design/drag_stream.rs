@@ -259,3 +259,125 @@ fn encode(input: &DragInput<'_>, basis: Arc<StreamBasis>, d: [f64; 3]) -> Option
         frame: Bytes::from(frame),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 × 4 cubic surface frame of `points` at `revision`.
+    fn full(revision: u64, points: &[DVec3]) -> Bytes {
+        let knots = vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+        Bytes::from(
+            GeometryFrame {
+                kind: wire::frame::KIND_SURFACE,
+                design: 1,
+                part: 2,
+                revision,
+                flags: 0,
+                degree_u: 3,
+                degree_v: 3,
+                nu: 4,
+                nv: 4,
+                knots_u: knots.clone(),
+                knots_v: knots,
+                points: points.iter().map(|p| p.as_vec3().to_array()).collect(),
+                icons: Vec::new(),
+            }
+            .encode()
+            .unwrap(),
+        )
+    }
+
+    fn grid() -> (Vec<DVec3>, Vec<f64>) {
+        let start: Vec<DVec3> = (0..16)
+            .map(|k| DVec3::new((k / 4) as f64 * 10.0, (k % 4) as f64 * 10.0, 0.0))
+            .collect();
+        let rho: Vec<f64> = (0..16).map(|k| 1.0 / (1.0 + k as f64)).collect();
+        (start, rho)
+    }
+
+    fn input<'a>(
+        revision: u64,
+        basis: (&'a [DVec3], &'a [f64]),
+        points: &'a [DVec3],
+        previous: Option<(u64, &'a Bytes)>,
+        full: &'a Bytes,
+    ) -> DragInput<'a> {
+        DragInput {
+            design: 1,
+            part: 2,
+            revision,
+            basis: Some(basis),
+            points,
+            icons: &[],
+            previous,
+            full,
+        }
+    }
+
+    #[test]
+    fn a_drag_on_the_basis_streams_and_one_off_it_goes_full() {
+        let (start, rho) = grid();
+        let rest = full(1, &start);
+        let mut streams = DragStreams::default();
+        let t = DVec3::new(0.5, -2.0, 3.0);
+        let moved: Vec<DVec3> = start.iter().zip(&rho).map(|(s, r)| *s + t * *r).collect();
+        let f = full(2, &moved);
+        let s = streams
+            .frame(input(2, (&start, &rho), &moved, Some((1, &rest)), &f))
+            .expect("on the basis: a stream frame");
+        assert_eq!(s.basis.reference, 1);
+        let d = DragFrame::decode(&s.frame).unwrap();
+        let b = DragBasis::decode(&s.basis.frame).unwrap();
+        let reference = GeometryFrame::decode(&rest).unwrap().points;
+        let net = d.apply(&reference, &b.rho).unwrap();
+        let tol = 1e-6 * model_size(&moved);
+        for (a, p) in net.iter().zip(&moved) {
+            for c in 0..3 {
+                assert!((a[c] - p[c]).abs() <= tol, "{a:?} vs {p:?}");
+            }
+        }
+        // One control point 1e-5 of the size off the basis: a full frame.
+        let mut off = moved.clone();
+        off[7].z += 1e-5 * model_size(&moved);
+        let f3 = full(3, &off);
+        assert!(
+            streams
+                .frame(input(3, (&start, &rho), &off, Some((2, &f)), &f3))
+                .is_none()
+        );
+        // No kernel basis: a full frame, and the stream is gone.
+        let f4 = full(4, &moved);
+        let mut none = input(4, (&start, &rho), &moved, Some((3, &f3)), &f4);
+        none.basis = None;
+        assert!(streams.frame(none).is_none());
+        assert!(streams.at_rest(2).is_empty());
+    }
+
+    #[test]
+    fn a_shape_not_at_rest_on_the_basis_starts_the_stream_at_this_frame() {
+        // The reference clients hold is not start + ρ·t for any t: the first
+        // frame goes full and becomes the reference of the next.
+        let (start, rho) = grid();
+        let mut bent = start.clone();
+        bent[5].z += 4.0;
+        let rest = full(1, &bent);
+        let mut streams = DragStreams::default();
+        let at =
+            |t: DVec3| -> Vec<DVec3> { start.iter().zip(&rho).map(|(s, r)| *s + t * *r).collect() };
+        let p2 = at(DVec3::new(0.0, 0.0, 1.0));
+        let f2 = full(2, &p2);
+        assert!(
+            streams
+                .frame(input(2, (&start, &rho), &p2, Some((1, &rest)), &f2))
+                .is_none()
+        );
+        let p3 = at(DVec3::new(0.0, 0.0, 2.0));
+        let f3 = full(3, &p3);
+        let s = streams
+            .frame(input(3, (&start, &rho), &p3, Some((2, &f2)), &f3))
+            .expect("the second frame streams");
+        assert_eq!(s.basis.reference, 2);
+        assert_eq!(streams.at_rest(2), vec![2]);
+    }
+}
