@@ -84,6 +84,9 @@ struct Dirty {
     removed: bool,
     /// These parts moved.
     parts: std::collections::BTreeSet<u64>,
+    /// These parts' drags ended: their frames go out full, not as drag
+    /// frames, even when a drag of another part ran in the same batch.
+    rest: std::collections::BTreeSet<u64>,
 }
 
 impl Dirty {
@@ -599,6 +602,7 @@ impl Actor {
                         self.announce_icon(icon);
                         geometry_dirty.parts(moved);
                         geometry_dirty.parts(self.streams.at_rest(part));
+                        geometry_dirty.rest.insert(part);
                     }
                     if self.clients.remove(&client).is_some() {
                         self.broadcast_presence(client);
@@ -860,7 +864,7 @@ impl Actor {
             set.parts
                 .retain(|id, _| self.model.doc().part(*id).is_some());
             for &part in &dirty.parts {
-                let g = if self.drag_frame {
+                let g = if self.drag_frame && !dirty.rest.contains(&part) {
                     let previous = set.parts.get(&part).cloned();
                     self.model.drag_geometry(
                         self.id,
@@ -1049,6 +1053,7 @@ impl Actor {
                 if let Some((pp, prev)) = self.dragging.remove(&client) {
                     let _ = self.model.release(pp, prev);
                     geometry_dirty.parts(self.streams.at_rest(pp));
+                    geometry_dirty.rest.insert(pp);
                 }
                 self.undo.push(self.model.to_doc());
                 self.model.grab(part, icon)?;
@@ -1094,6 +1099,7 @@ impl Actor {
                 }
                 let moved = self.model.release(part, icon)?;
                 geometry_dirty.parts(self.streams.at_rest(part));
+                geometry_dirty.rest.insert(part);
                 self.dragging.remove(&client);
                 self.set_holding(client, None);
                 self.changed();
