@@ -848,6 +848,14 @@ impl Design {
         }
     }
 
+    /// The drag fast path's cached basis `(start, ρ)` of this design's own
+    /// solver (see [`Solver::drag_basis`]); `None` when there is none or the
+    /// response is coupled. Read-only: the caller checks that the current
+    /// shape is `start + ρ·t` for some `t` before relying on it.
+    pub fn drag_basis(&self) -> Option<(&[DVec3], &[f64])> {
+        self.solver.as_ref()?.drag_basis()
+    }
+
     /// Grabs an icon: it becomes driving; its drag starts from its current
     /// target (for a load: from where its spring is attached).
     pub fn drag_start(&mut self, id: IconId) -> Result<(), DesignError> {

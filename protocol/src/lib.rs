@@ -23,6 +23,8 @@
 //! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
 //! * [`body`] — a Coons body part's lattice, its edits and morph time.
 //! * [`body_frame`] — the binary body frame (kind 4, [`BodyFrame`]).
+//! * [`drag_frame`] — the drag stream: a part's drag basis (kind 5) and
+//!   its drag frames (kind 6), for clients that ask for it (`/ws?drag_stream=1`).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
@@ -30,6 +32,7 @@
 pub mod body;
 pub mod body_frame;
 pub mod client;
+pub mod drag_frame;
 pub mod dsm;
 pub mod error;
 pub mod frame;

@@ -10,6 +10,10 @@
 //   fanout 50 viewers while the editor drags at 60 Hz on 81 × 159: drag sent
 //          → each viewer's frame of that drag (matched by the revision in
 //          the editor's icon_feedback), p50/p99, and frames/s per viewer
+//   stream the same fanout with every viewer opening /ws?drag_stream=1 (README,
+//          "Drag stream (kinds 5 and 6)"): a drag basis once, then per frame
+//          d only; each viewer rebuilds the net R + ρ·d itself (time per
+//          frame reported) and bytes per viewer are counted
 //   soak   300 designs; rounds of 500 clients joining (10 at a time) a random
 //          design and leaving; per round the server's RSS and join p50/p99
 //
@@ -100,17 +104,81 @@ function frameHeader(buf) {
   };
 }
 
+/**
+ * The drag stream as README "Drag stream (kinds 5 and 6)" describes it: per
+ * part the net of the last full frame (kind 1) and the last basis (kind 5);
+ * a drag frame (kind 5) gives R[k] + ρ[k]·d. Returns the header to report,
+ * or null for a basis.
+ */
+class StreamState {
+  constructor() {
+    this.full = new Map(); // part → { revision, points: Float32Array }
+    this.basis = new Map(); // part → { basis, reference, rho: Float32Array }
+    this.applyMs = [];
+    this.net = new Map(); // part → the net shown (Float32Array)
+  }
+  take(buf) {
+    const dv = new DataView(buf);
+    const kind = dv.getUint8(4);
+    const part = Number(dv.getBigUint64(16, true));
+    if (kind === 5) {
+      const n = dv.getUint32(40, true);
+      this.basis.set(part, { basis: Number(dv.getBigUint64(24, true)), reference: Number(dv.getBigUint64(32, true)), rho: new Float32Array(buf, 48, n) });
+      return null;
+    }
+    if (kind === 6) {
+      const t0 = performance.now();
+      const revision = Number(dv.getBigUint64(24, true));
+      const b = this.basis.get(part);
+      const ref = this.full.get(part);
+      if (!b || !ref || b.basis !== Number(dv.getBigUint64(32, true)) || b.reference !== ref.revision) throw new Error('a drag frame that cannot be applied');
+      const dx = dv.getFloat64(40, true);
+      const dy = dv.getFloat64(48, true);
+      const dz = dv.getFloat64(56, true);
+      const r = ref.points;
+      const rho = b.rho;
+      const out = new Float32Array(r.length);
+      for (let k = 0, i = 0; k < rho.length; k++, i += 3) {
+        out[i] = r[i] + rho[k] * dx;
+        out[i + 1] = r[i + 1] + rho[k] * dy;
+        out[i + 2] = r[i + 2] + rho[k] * dz;
+      }
+      this.net.set(part, out);
+      this.applyMs.push(performance.now() - t0);
+      return { kind, part, revision, flags: dv.getUint16(6, true) };
+    }
+    const h = frameHeader(buf);
+    if (h.kind === 1) {
+      // Points at P = 48 + 8·(nu+pu+1) + 8·(nv+pv+1).
+      const pu = dv.getUint8(40);
+      const pv = dv.getUint8(41);
+      const at = 48 + 8 * (h.nu + pu + 1) + 8 * (h.nv + pv + 1);
+      const points = new Float32Array(buf, at, 3 * h.nu * h.nv);
+      this.full.set(part, { revision: h.revision, points });
+      this.basis.delete(part);
+      this.net.set(part, points);
+    }
+    return h;
+  }
+}
+
 class Client {
-  constructor(addr) {
-    this.ws = new WebSocket(`ws://${addr}/ws`);
+  constructor(addr, stream = false) {
+    this.ws = new WebSocket(`ws://${addr}/ws${stream ? '?drag_stream=1' : ''}`);
     this.ws.binaryType = 'arraybuffer';
     this.onText = () => {};
     this.onFrame = () => {};
     this.closed = false;
+    this.bytes = 0;
+    this.stream = stream ? new StreamState() : null;
     this.ws.onmessage = (ev) => {
       const now = performance.now();
       if (typeof ev.data === 'string') this.onText(JSON.parse(ev.data), now);
-      else this.onFrame(frameHeader(ev.data), now);
+      else {
+        this.bytes += ev.data.byteLength;
+        const h = this.stream ? this.stream.take(ev.data) : frameHeader(ev.data);
+        if (h) this.onFrame(h, now);
+      }
     };
     this.ws.onclose = () => {
       this.closed = true;
@@ -204,11 +272,11 @@ async function benchOwnFrame(srv, design) {
   return times;
 }
 
-async function benchFanout(srv, design) {
+async function benchFanout(srv, design, stream = false) {
   const { ed, part, icon } = await editorWithIcon(srv, design);
   const viewers = [];
   for (let k = 0; k < VIEWERS; k++) {
-    const c = new Client(srv.addr);
+    const c = new Client(srv.addr, stream);
     await c.join(design.id, design.tokens.viewer, `viewer-${k}`);
     viewers.push(c);
   }
@@ -229,6 +297,7 @@ async function benchFanout(srv, design) {
     };
   });
   measuring = true;
+  const bytes0 = viewers.map((c) => c.bytes);
   const start = performance.now();
   const n = Math.round(FANOUT_SECONDS * 60);
   for (let k = 0; k < n; k++) {
@@ -250,9 +319,12 @@ async function benchFanout(srv, design) {
       if (t0 !== undefined) lat.push(t - t0);
     }
   }
+  const bytes = viewers.map((c, i) => (c.bytes - bytes0[i]) / seconds);
+  const frames = arrivals.reduce((m, a) => m + a.length, 0);
+  const applyMs = stream ? viewers.flatMap((c) => c.stream.applyMs) : [];
   viewers.forEach((c) => c.close());
   ed.close();
-  return { lat, fps, drags: n };
+  return { lat, fps, drags: n, bytesPerFrame: bytes.reduce((a, b) => a + b, 0) * seconds / Math.max(1, frames), bytesPerSecond: pct(bytes, 50), applyMs };
 }
 
 async function benchSoak(srv) {
@@ -302,11 +374,17 @@ try {
   console.log(`join 81x159 (hello → snapshot), ${join.length} joins: p50 ${fmt(pct(join, 50))} ms, p99 ${fmt(pct(join, 99))} ms`);
   const own = await benchOwnFrame(srv, big);
   console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
-  const f = await benchFanout(srv, big);
-  console.log(
-    `${VIEWERS} viewers at 60 Hz on 81x159 (${f.drags} drags): drag → viewer frame p50 ${fmt(pct(f.lat, 50))} ms, ` +
-      `p99 ${fmt(pct(f.lat, 99))} ms over ${f.lat.length} frames; frames/s per viewer min ${fmt(Math.min(...f.fps))}, median ${fmt(pct(f.fps, 50))}`,
-  );
+  for (const stream of [false, true]) {
+    // Each fanout on a fresh 81 × 159 design: the same starting point.
+    const fresh = await createDesign(srv, `bench 81x159 ${stream ? 'stream' : 'full'}`, 81, 159);
+    const f = await benchFanout(srv, fresh, stream);
+    console.log(
+      `${VIEWERS} viewers at 60 Hz on 81x159 (${f.drags} drags), ${stream ? 'drag stream' : 'full frames'}: drag → viewer frame p50 ${fmt(pct(f.lat, 50))} ms, ` +
+        `p99 ${fmt(pct(f.lat, 99))} ms over ${f.lat.length} frames; frames/s per viewer min ${fmt(Math.min(...f.fps))}, median ${fmt(pct(f.fps, 50))}; ` +
+        `bytes per frame ${Math.round(f.bytesPerFrame)}, per viewer ${fmt(f.bytesPerSecond / 1e6)} MB/s` +
+        (stream ? `; client R + ρ·d per frame p50 ${fmt(pct(f.applyMs, 50))} ms, p99 ${fmt(pct(f.applyMs, 99))} ms` : ''),
+    );
+  }
   if (SOAK_ROUNDS > 0) {
     const rss0 = rssMiB(srv.child.pid);
     const rounds = await benchSoak(srv);

@@ -5,6 +5,8 @@
 // zero-copy typed-array views, every size checked. A mesh part (kind 3, a DSM
 // part meshed by the server: "Binary mesh frame (kind 3)") has its own
 // 64-byte header and quantised positions, i16 normals and u16/u32 indices.
+// The drag stream ("Drag stream (kinds 5 and 6)"): a drag basis (ρ of one
+// part, kind 5) and drag frames (d and icon positions, kind 6).
 
 import { KIND_BODY, decodeBodyFrame } from './body-frame.js';
 
@@ -14,6 +16,8 @@ export const PROTOCOL_VERSION = 2;
 export const KIND_SURFACE = 1;
 export const KIND_CURVE = 2;
 export const KIND_MESH = 3;
+export const KIND_DRAG_BASIS = 5;
+export const KIND_DRAG_FRAME = 6;
 /** Flags (bytes 6..8): bit 0 from a drag, bit 1 the shape of the snapshot that follows (compact join). */
 export const FLAG_DRAG = 1;
 export const FLAG_SNAPSHOT = 2;
@@ -41,6 +45,8 @@ export function decodeFrame(buf) {
     if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
     return decodeBodyFrame(buf);
   }
+  if (kind === KIND_DRAG_BASIS) return decodeDragBasis(buf);
+  if (kind === KIND_DRAG_FRAME) return decodeDragFrame(buf);
   if (kind !== KIND_SURFACE && kind !== KIND_CURVE) throw new Error(`unknown frame kind ${kind}`);
   if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
   const flags = dv.getUint16(6, true);
@@ -123,4 +129,66 @@ export function decodeMeshFrame(buf) {
     normals[i] = qn[i] / 32767;
   }
   return { kind: 'mesh', part, design, revision, flags, origin, step, positions, normals, indices };
+}
+
+function checkStreamHead(buf, kind, header) {
+  if (!(buf instanceof ArrayBuffer) || buf.byteLength < header) throw new Error('drag message too short');
+  const dv = new DataView(buf);
+  for (let i = 0; i < 4; i++) if (dv.getUint8(i) !== MAGIC[i]) throw new Error('bad magic');
+  if (dv.getUint8(4) !== kind) throw new Error(`frame kind ${dv.getUint8(4)} is not ${kind}`);
+  if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
+  return dv;
+}
+
+/**
+ * Decodes a drag basis (kind 5): { kind: 'drag_basis', design, part, basis,
+ * reference, rho (Float32Array, one per control point) }. Throws on any
+ * malformed input.
+ */
+export function decodeDragBasis(buf) {
+  const dv = checkStreamHead(buf, KIND_DRAG_BASIS, 48);
+  const n = dv.getUint32(40, true);
+  if (n > MAX_GRID * MAX_GRID) throw new Error('drag basis size out of range');
+  if (buf.byteLength !== 48 + 4 * n) throw new Error(`drag basis is ${buf.byteLength} bytes, header says ${48 + 4 * n}`);
+  if (dv.getUint16(6, true) !== 0 || dv.getUint32(44, true) !== 0) throw new Error('drag basis zero bytes are not zero');
+  const rho = new Float32Array(buf, 48, n);
+  for (let k = 0; k < n; k++) if (!Number.isFinite(rho[k])) throw new Error('drag basis has a non-finite factor');
+  return {
+    kind: 'drag_basis',
+    design: Number(dv.getBigUint64(8, true)),
+    part: Number(dv.getBigUint64(16, true)),
+    basis: Number(dv.getBigUint64(24, true)),
+    reference: Number(dv.getBigUint64(32, true)),
+    rho,
+  };
+}
+
+/**
+ * Decodes a drag frame (kind 6): { kind: 'drag', design, part, revision,
+ * flags, basis, d: [x, y, z], icons }. Throws on any malformed input.
+ */
+export function decodeDragFrame(buf) {
+  const dv = checkStreamHead(buf, KIND_DRAG_FRAME, 72);
+  const m = dv.getUint32(64, true);
+  if (m > MAX_ICONS) throw new Error('drag frame icon count out of range');
+  if (buf.byteLength !== 72 + 24 * m) throw new Error(`drag frame is ${buf.byteLength} bytes, header says ${72 + 24 * m}`);
+  if (dv.getUint32(68, true) !== 0) throw new Error('drag frame zero bytes are not zero');
+  const d = [dv.getFloat64(40, true), dv.getFloat64(48, true), dv.getFloat64(56, true)];
+  if (!d.every(Number.isFinite)) throw new Error('drag frame d is not finite');
+  const icons = [];
+  for (let k = 0; k < m; k++) {
+    const o = 72 + 24 * k;
+    if (dv.getUint32(o + 20, true) !== 0) throw new Error('drag frame icon record padding is not zero');
+    icons.push({ id: Number(dv.getBigUint64(o, true)), xyz: [dv.getFloat32(o + 8, true), dv.getFloat32(o + 12, true), dv.getFloat32(o + 16, true)] });
+  }
+  return {
+    kind: 'drag',
+    design: Number(dv.getBigUint64(8, true)),
+    part: Number(dv.getBigUint64(16, true)),
+    revision: Number(dv.getBigUint64(24, true)),
+    flags: dv.getUint16(6, true),
+    basis: Number(dv.getBigUint64(32, true)),
+    d,
+    icons,
+  };
 }

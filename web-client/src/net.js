@@ -4,6 +4,7 @@
 // answered by `ack` or `error`.
 
 import { decodeFrame, PROTOCOL_VERSION } from './frame.js';
+import { DragStream } from './drag-stream.js';
 
 /** Why the server refused to let this page join, said so a person knows what to do; the link then stays closed. */
 export const REFUSALS = {
@@ -32,7 +33,9 @@ export class Link {
 
   connect() {
     const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
-    const ws = new WebSocket(`${proto}//${location.host}/ws`);
+    // drag_stream=1: a drag comes as ρ once and d per frame (protocol/README.md, "Drag stream").
+    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1`);
+    const stream = new DragStream();
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
     this.onStatus('connecting', 'connecting to the server…');
@@ -69,7 +72,8 @@ export class Link {
         this.onMessage(msg);
       } else {
         try {
-          this.onFrame(decodeFrame(ev.data));
+          const f = stream.take(decodeFrame(ev.data));
+          if (f) this.onFrame(f);
         } catch (e) {
           this.onStatus('error', `bad geometry frame: ${e.message}`);
         }

@@ -54,7 +54,7 @@ test('a curve frame that is cut short, too long, of another version or with v kn
     return b.buffer;
   };
   assert.throws(() => decodeFrame(patch(0, 0x55)), /magic/);
-  assert.throws(() => decodeFrame(patch(4, 5)), /kind/); // 3 is the mesh frame, 4 the body frame
+  assert.throws(() => decodeFrame(patch(4, 7)), /kind/); // 3 is the mesh frame, 4 the body frame, 5 and 6 the drag stream
   assert.throws(() => decodeFrame(patch(5, 1)), /version/);
   assert.throws(() => decodeFrame(patch(36, 2)), /nv = 1/, 'a curve with nv = 2');
   assert.throws(() => decodeFrame(patch(41, 1)), /degree v = 0/, 'a curve with a v degree');

@@ -1221,6 +1221,26 @@ impl Solver {
         self.checked(report, out, Some((group, t)))
     }
 
+    /// The cached basis of the drag fast path, read-only: the shape with
+    /// every drag input at zero and, for a uniform response, the scalar
+    /// field ρ (one value per control point) with which a drag frame is
+    /// `start + ρ·t`. `None` before the first drag or for a coupled
+    /// response. A caller comparing two answers can tell whether frames
+    /// came from the same basis; whether the current shape came from it at
+    /// all is the caller's to check (a full solve does not clear it).
+    pub fn drag_basis(&self) -> Option<(&[DVec3], &[f64])> {
+        match (&self.base, &self.response) {
+            (
+                Some(base),
+                Some(Response {
+                    kind: ResponseKind::Uniform(rho),
+                    ..
+                }),
+            ) => Some((&base.start, rho)),
+            _ => None,
+        }
+    }
+
     fn check_io(&self, reference: &[DVec3], out: &[DVec3]) -> Result<(), SolveError> {
         let n = self.dim();
         for len in [reference.len(), out.len()] {

@@ -86,6 +86,9 @@ struct Dirty {
     removed: bool,
     /// These parts moved.
     parts: std::collections::BTreeSet<u64>,
+    /// These parts' drags ended: their frames go out full, not as drag
+    /// frames, even when a drag of another part ran in the same batch.
+    rest: std::collections::BTreeSet<u64>,
 }
 
 impl Dirty {
@@ -464,6 +467,8 @@ struct Actor {
     dragging: BTreeMap<u64, (u64, u64)>,
     /// Whether the geometry published last came from a drag.
     drag_frame: bool,
+    /// The parts' drag streams (see [`super::drag_stream`]).
+    streams: super::drag_stream::DragStreams,
 }
 
 /// Starts the actor of design `id` from `doc`, with its committed versions;
@@ -504,6 +509,7 @@ pub fn spawn(
         persisting: None,
         dragging: BTreeMap::new(),
         drag_frame: false,
+        streams: Default::default(),
     };
     let task = tokio::spawn(actor.run(rx));
     Ok((DesignHandle { id, tx, retired }, task))
@@ -631,6 +637,8 @@ impl Actor {
                         self.changed();
                         self.announce_icon(icon);
                         geometry_dirty.parts(moved);
+                        geometry_dirty.parts(self.streams.at_rest(part));
+                        geometry_dirty.rest.insert(part);
                     }
                     if self.clients.remove(&client).is_some() {
                         self.broadcast_presence(client);
@@ -898,16 +906,27 @@ impl Actor {
     fn publish_geometry(&mut self, dirty: &Dirty) {
         self.rev += 1;
         let set = if dirty.all {
+            self.streams.clear();
             self.model.geometry_set(self.id, self.rev)
         } else {
             let mut set = (**self.geometry.borrow()).clone();
             set.parts
                 .retain(|id, _| self.model.doc().part(*id).is_some());
             for &part in &dirty.parts {
-                if let Some(g) = self
-                    .model
-                    .geometry(self.id, part, self.rev, self.drag_frame)
-                {
+                let g = if self.drag_frame && !dirty.rest.contains(&part) {
+                    let previous = set.parts.get(&part).cloned();
+                    self.model.drag_geometry(
+                        self.id,
+                        part,
+                        self.rev,
+                        previous.as_deref(),
+                        &mut self.streams,
+                    )
+                } else {
+                    self.streams.forget(part);
+                    self.model.geometry(self.id, part, self.rev, false)
+                };
+                if let Some(g) = g {
                     set.parts.insert(part, Arc::new(g));
                 }
             }
@@ -1109,6 +1128,8 @@ impl Actor {
                 }
                 if let Some((pp, prev)) = self.dragging.remove(&client) {
                     let _ = self.model.release(pp, prev);
+                    geometry_dirty.parts(self.streams.at_rest(pp));
+                    geometry_dirty.rest.insert(pp);
                 }
                 self.undo.push(self.model.to_doc());
                 self.model.grab(part, icon)?;
@@ -1153,6 +1174,8 @@ impl Actor {
                     return Ok(Ack::default());
                 }
                 let moved = self.model.release(part, icon)?;
+                geometry_dirty.parts(self.streams.at_rest(part));
+                geometry_dirty.rest.insert(part);
                 self.dragging.remove(&client);
                 self.set_holding(client, None);
                 self.changed();

@@ -12,6 +12,7 @@ pub mod curve_engine;
 pub mod demo;
 pub mod doc;
 pub mod dsm_engine;
+pub mod drag_stream;
 pub mod edit;
 pub mod engine;
 pub mod error;

@@ -37,6 +37,9 @@ pub struct Geometry {
     pub rev: u64,
     /// The binary WebSocket frame.
     pub frame: axum::body::Bytes,
+    /// The same shape as a drag-stream frame, for the clients that asked
+    /// for the stream (see [`super::drag_stream`]).
+    pub stream: Option<super::drag_stream::StreamFrame>,
 }
 
 /// The newest frame of every part: what the actor publishes (latest wins
@@ -46,6 +49,9 @@ pub struct GeometrySet {
     /// Frames by part id.
     pub parts: BTreeMap<u64, Arc<Geometry>>,
 }
+
+/// Icon ids and where they are on the solved shape.
+type IconPositions = Vec<(u64, DVec3)>;
 
 /// Document + the kernel product of its parts.
 pub struct DesignModel {
@@ -348,10 +354,15 @@ impl DesignModel {
             return Some(Geometry {
                 rev,
                 frame: n.frame(design, part, rev, drag),
+                stream: None,
             });
         }
         if let Some(frame) = self.engine.dsm().frame(design, part, rev, drag) {
-            return Some(Geometry { rev, frame });
+            return Some(Geometry {
+                rev,
+                frame,
+                stream: None,
+            });
         }
         if let Some(body) = self.bodies.get(part) {
             let flags = if drag {
@@ -362,8 +373,46 @@ impl DesignModel {
             return Some(Geometry {
                 rev,
                 frame: body.frame(design, part, rev, flags)?.into(),
+                stream: None,
             });
         }
+        let (points, icons) = self.frame_data(part)?;
+        let p = self.doc.part(part)?;
+        Some(Geometry {
+            rev,
+            frame: crate::convert::geometry_frame(design, rev, drag, p, points, &icons),
+            stream: None,
+        })
+    }
+
+    /// The encoded frame of a drag of `part` at revision `rev`, with its
+    /// drag-stream form when the drag is on the kernel's fast path
+    /// (`previous`: the part's frame published before).
+    pub fn drag_geometry(
+        &self,
+        design: u64,
+        part: u64,
+        rev: u64,
+        previous: Option<&Geometry>,
+        streams: &mut super::drag_stream::DragStreams,
+    ) -> Option<Geometry> {
+        let mut g = self.geometry(design, part, rev, true)?;
+        let (points, icons) = self.frame_data(part)?;
+        g.stream = streams.frame(super::drag_stream::DragInput {
+            design,
+            part,
+            revision: rev,
+            basis: self.engine.drag_basis(part),
+            points,
+            icons: &icons,
+            previous: previous.map(|p| (p.rev, &p.frame)),
+            full: &g.frame,
+        });
+        Some(g)
+    }
+
+    /// A part's control points and icon positions.
+    fn frame_data(&self, part: u64) -> Option<(&[DVec3], IconPositions)> {
         let p = self.doc.part(part)?;
         let points = self.engine.points(part)?;
         let icons: Vec<(u64, DVec3)> = p
@@ -379,10 +428,7 @@ impl DesignModel {
                 )
             })
             .collect();
-        Some(Geometry {
-            rev,
-            frame: crate::convert::geometry_frame(design, rev, drag, p, points, &icons),
-        })
+        Some((points, icons))
     }
 
     /// Every part's frame at revision `rev`.

@@ -341,6 +341,15 @@ impl ProductEngine {
         self.product.control_points(PartId(part))
     }
 
+    /// The drag fast path's cached basis `(start, ρ)` of a surface part's
+    /// own solver (read-only; see `Design::drag_basis`).
+    pub fn drag_basis(&self, part: u64) -> Option<(&[DVec3], &[f64])> {
+        match self.product.part(PartId(part))? {
+            Part::Surface(d) => d.drag_basis(),
+            Part::Curve(_) => None,
+        }
+    }
+
     /// Where icon `icon` of `part` is.
     pub fn icon_xyz(&self, part: u64, icon: u64) -> Option<DVec3> {
         self.readback(part, icon).map(|r| r.xyz)

@@ -250,6 +250,9 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
             compact,
             frames,
             sent,
+            drag_stream: query
+                .get("drag_stream")
+                .is_some_and(|v| v == "1" || v == "true"),
         },
     ));
     let mut session = Session {

@@ -36,23 +36,70 @@ pub enum Out {
 
 type Sink = SplitSink<WebSocket, Message>;
 
+/// What a client holds of each part's drag stream: the revision of the last
+/// full frame sent and the basis sent after it (see
+/// [`crate::design::drag_stream`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Held {
+    full: u64,
+    basis: Option<u64>,
+}
+
 /// Sends the frames of the parts whose revision this client has not had
 /// (every part the first time), and forgets parts that are gone: latest
 /// wins per part, and a frame of one part never stands in for another's.
+/// A client of the drag stream (`held` is `Some`) gets a drag frame where
+/// there is one, preceded by the reference frame and the basis it lacks.
 async fn send_geometry(
     sink: &mut Sink,
     joined: &mut Joined,
     sent: &mut BTreeMap<u64, u64>,
+    mut held: Option<&mut BTreeMap<u64, Held>>,
     metrics: &Metrics,
 ) -> Result<(), axum::Error> {
     let set = joined.geometry.borrow_and_update().clone();
     sent.retain(|part, _| set.parts.contains_key(part));
+    if let Some(h) = held.as_deref_mut() {
+        h.retain(|part, _| set.parts.contains_key(part));
+    }
     for (part, g) in &set.parts {
         if sent.get(part) == Some(&g.rev) {
             continue;
         }
-        metrics.frame_sent(g.frame.len());
-        sink.send(Message::Binary(g.frame.clone())).await?;
+        match (held.as_deref_mut(), &g.stream) {
+            (Some(held), Some(s)) => {
+                let h = held.entry(*part).or_default();
+                if h.full != s.basis.reference {
+                    metrics.frame_sent(s.basis.reference_frame.len());
+                    sink.send(Message::Binary(s.basis.reference_frame.clone()))
+                        .await?;
+                    *h = Held {
+                        full: s.basis.reference,
+                        basis: None,
+                    };
+                }
+                if h.basis != Some(s.basis.id) {
+                    metrics.frame_sent(s.basis.frame.len());
+                    sink.send(Message::Binary(s.basis.frame.clone())).await?;
+                    h.basis = Some(s.basis.id);
+                }
+                metrics.frame_sent(s.frame.len());
+                sink.send(Message::Binary(s.frame.clone())).await?;
+            }
+            (held, _) => {
+                metrics.frame_sent(g.frame.len());
+                sink.send(Message::Binary(g.frame.clone())).await?;
+                if let Some(held) = held {
+                    held.insert(
+                        *part,
+                        Held {
+                            full: g.rev,
+                            basis: None,
+                        },
+                    );
+                }
+            }
+        }
         sent.insert(*part, g.rev);
     }
     Ok(())
@@ -97,6 +144,8 @@ pub struct Delivery {
     /// The revision of each part's frame the connection already sent (the
     /// compact join's frames); the writer sends the others first.
     pub sent: BTreeMap<u64, u64>,
+    /// The client asked for the drag stream (`drag_stream=1` in the URL).
+    pub drag_stream: bool,
 }
 
 /// Runs until the reader drops its sender, a close is requested, the socket
@@ -115,11 +164,26 @@ pub async fn run(
         compact,
         frames,
         mut sent,
+        drag_stream,
     } = delivery;
+    // Frames sent before the writer started (the compact join's) are full.
+    let mut held: Option<BTreeMap<u64, Held>> = drag_stream.then(|| {
+        sent.iter()
+            .map(|(part, rev)| {
+                (
+                    *part,
+                    Held {
+                        full: *rev,
+                        basis: None,
+                    },
+                )
+            })
+            .collect()
+    });
     let mut geometry_live = true;
     let mut deleted = false;
     if frames
-        && send_geometry(&mut sink, &mut joined, &mut sent, &metrics)
+        && send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics)
             .await
             .is_err()
     {
@@ -211,7 +275,7 @@ pub async fn run(
                                 let snap = convert::snapshot(&j.view, !compact);
                                 joined = j;
                                 if sink.send(Message::Text(snap)).await.is_err()
-                                    || (frames && send_geometry(&mut sink, &mut joined, &mut sent, &metrics).await.is_err())
+                                    || (frames && send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await.is_err())
                                 {
                                     break;
                                 }
@@ -286,7 +350,7 @@ pub async fn run(
                     geometry_live = false;
                     continue;
                 }
-                if send_geometry(&mut sink, &mut joined, &mut sent, &metrics).await.is_err() {
+                if send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await.is_err() {
                     break;
                 }
             }
