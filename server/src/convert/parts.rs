@@ -137,9 +137,7 @@ pub fn body_material(b: &PartBody) -> MaterialEdit {
         // Network and DSM parts have no material; the wire's `material`
         // field gets the curve default as a placeholder (set_material on
         // them is refused).
-        PartBody::Network(_) | PartBody::Dsm(_) => {
-            MaterialEdit::Curve(CurveMaterialDoc::default())
-        }
+        PartBody::Network(_) | PartBody::Dsm(_) => MaterialEdit::Curve(CurveMaterialDoc::default()),
         // A body has no material: the wire's `material` field carries the
         // surface default, and `set_material` on a body is refused.
         PartBody::Body(_) => MaterialEdit::Surface(Default::default()),

@@ -45,9 +45,10 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             entity,
         };
         match &p.body {
-            PartBody::Surface(s) => {
-                out.push(named(p.name.clone(), IgesEntity::Surface(s.surface.to_iges())))
-            }
+            PartBody::Surface(s) => out.push(named(
+                p.name.clone(),
+                IgesEntity::Surface(s.surface.to_iges()),
+            )),
             PartBody::Curve(c) => out.push(named(p.name.clone(), curve(&c.curve))),
             // A network's styling curves, one entity 126 each, named
             // "<part> curve <k>".
