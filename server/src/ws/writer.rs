@@ -219,7 +219,7 @@ pub async fn run(
                                             let snap = convert::snapshot(&j.view, !compact);
                                             joined = j;
                                             if sink.send(Message::Text(snap)).await.is_err()
-                                                || (frames && send_geometry(&mut sink, &mut joined, &mut sent, &metrics).await.is_err())
+                                                || (frames && send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await.is_err())
                                             {
                                                 return;
                                             }
