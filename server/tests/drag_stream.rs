@@ -17,7 +17,7 @@ use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use tokio_tungstenite::tungstenite::Message;
 use vsculpt_protocol::GeometryFrame;
-use vsculpt_protocol::drag_frame::{DragBasis, DragFrame};
+use vsculpt_protocol::drag_frame::{DragBasis, DragFrame, KIND_DRAG_BASIS, KIND_DRAG_FRAME};
 
 type Stream =
     tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
@@ -83,12 +83,12 @@ impl StreamViewer {
                         self.shown.insert(f.part, (f.revision, net, false));
                         self.full.insert(f.part, (b.to_vec(), f));
                     }
-                    4 => {
+                    KIND_DRAG_BASIS => {
                         let basis = DragBasis::decode(&b).unwrap();
                         self.bases += 1;
                         self.basis.insert(basis.part, basis);
                     }
-                    5 => {
+                    KIND_DRAG_FRAME => {
                         let f = DragFrame::decode(&b).unwrap();
                         let basis = &self.basis[&f.part];
                         assert_eq!(basis.basis, f.basis, "a drag frame of a basis not held");
