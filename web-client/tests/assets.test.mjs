@@ -144,9 +144,14 @@ test('through a 2 Mbit/s link: a cold visit is bounded in bytes, a warm one asks
     const cachedAsked = link.requests.filter((r) => r.includes('/vendor/') || r.includes('?v='));
     assert.deepEqual(cachedAsked, [], 'a warm visit takes the versioned and hashed files from the cache');
     assert.ok(link.bytes.down < 64 * 1024, `warm visit: ${(link.bytes.down / 1024).toFixed(0)} KiB`);
-    const shown = await shownPoints(page);
     const token = new URL(server.viewer).searchParams.get('token');
     const rest = documentPoints(JSON.parse((await get(`/api/designs/1?token=${token}`)).body.toString()).design);
+    // The first picture is the first part drawn; the others follow it.
+    let shown = await shownPoints(page);
+    for (let k = 0; k < 300 && Object.keys(shown).length < Object.keys(rest).length; k++) {
+      await new Promise((r) => setTimeout(r, 100));
+      shown = await shownPoints(page);
+    }
     assert.deepEqual(Object.keys(shown), Object.keys(rest), 'every part is drawn');
     for (const [id, points] of Object.entries(rest)) {
       assert.equal(shown[id].length, points.length, `part ${id}`);

@@ -122,7 +122,8 @@ async function openScripted(access = 'editor', pageOptions = { viewport: { width
   const sent = [];
   const snap = snapshotWithoutPoints();
   const server = { ws: null, snapshot: snap };
-  await page.routeWebSocket(`ws://vsculpt.test/ws`, (ws) => {
+  // The page may add query parameters (`?drag_stream=1`).
+  await page.routeWebSocket(/^ws:\/\/vsculpt\.test\/ws(\?.*)?$/, (ws) => {
     server.ws = ws;
     ws.onMessage((text) => {
       const msg = JSON.parse(text);
@@ -393,7 +394,7 @@ test('a server of another protocol version: the page says so and stops trying', 
   const page = await browser.newPage();
   await serveFiles(page);
   let hellos = 0;
-  await page.routeWebSocket('ws://vsculpt.test/ws', (ws) => {
+  await page.routeWebSocket(/^ws:\/\/vsculpt\.test\/ws(\?.*)?$/, (ws) => {
     ws.onMessage((text) => {
       if (JSON.parse(text).type !== 'hello') return;
       hellos++;
