@@ -171,24 +171,7 @@ impl BodyFrame {
 
     /// Parses a body frame. Any byte string gives a frame or an error; never a panic.
     pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
-        if bytes.len() < BODY_HEADER_BYTES {
-            return Err(bad(format!(
-                "body frame of {} bytes is shorter than its header",
-                bytes.len()
-            )));
-        }
-        if bytes[0..4] != MAGIC {
-            return Err(bad("not a geometry frame (bad magic)"));
-        }
-        if bytes[4] != KIND_BODY {
-            return Err(bad(format!("frame kind {} is not a body", bytes[4])));
-        }
-        if bytes[5] as u32 != PROTOCOL_VERSION {
-            return Err(ProtocolError::new(
-                ErrorCode::BadVersion,
-                format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
-            ));
-        }
+        crate::frame::check_header(bytes, KIND_BODY, BODY_HEADER_BYTES, "body frame")?;
         let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
         let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));

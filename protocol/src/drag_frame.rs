@@ -37,27 +37,9 @@ fn not_finite() -> ProtocolError {
     ProtocolError::new(ErrorCode::NotFinite, "drag message has a non-finite number")
 }
 
-/// Checks magic, kind and version and the minimum length.
+/// The shared header checks (see [`crate::frame::check_header`]).
 fn check_head(bytes: &[u8], kind: u8, header: usize) -> Result<(), ProtocolError> {
-    if bytes.len() < header {
-        return Err(bad(format!(
-            "drag message of {} bytes is shorter than its header ({header})",
-            bytes.len()
-        )));
-    }
-    if bytes[0..4] != MAGIC {
-        return Err(bad("not a vsculpt frame (bad magic)"));
-    }
-    if bytes[4] != kind {
-        return Err(bad(format!("frame kind {} is not {kind}", bytes[4])));
-    }
-    if bytes[5] as u32 != PROTOCOL_VERSION {
-        return Err(ProtocolError::new(
-            ErrorCode::BadVersion,
-            format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
-        ));
-    }
-    Ok(())
+    crate::frame::check_header(bytes, kind, header, "drag message")
 }
 
 fn u32_at(b: &[u8], o: usize) -> u32 {

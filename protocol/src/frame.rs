@@ -87,6 +87,39 @@ fn bad(message: impl Into<String>) -> ProtocolError {
     ProtocolError::new(ErrorCode::Malformed, message)
 }
 
+/// The checks every binary message of one `kind` shares: at least `header`
+/// bytes, the magic, the kind and the protocol version (`what` names the
+/// message in the errors, e.g. "mesh frame").
+pub(crate) fn check_header(
+    bytes: &[u8],
+    kind: u8,
+    header: usize,
+    what: &str,
+) -> Result<(), ProtocolError> {
+    if bytes.len() < header {
+        return Err(bad(format!(
+            "{what} of {} bytes is shorter than its header ({header})",
+            bytes.len()
+        )));
+    }
+    if bytes[0..4] != MAGIC {
+        return Err(bad("not a geometry frame (bad magic)"));
+    }
+    if bytes[4] != kind {
+        return Err(bad(format!(
+            "frame kind {} is not {kind}: not a {what}",
+            bytes[4]
+        )));
+    }
+    if bytes[5] as u32 != PROTOCOL_VERSION {
+        return Err(ProtocolError::new(
+            ErrorCode::BadVersion,
+            format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
+        ));
+    }
+    Ok(())
+}
+
 fn pad8(n: usize) -> usize {
     n.div_ceil(8) * 8
 }
