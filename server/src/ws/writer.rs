@@ -148,6 +148,63 @@ pub struct Delivery {
     pub drag_stream: bool,
 }
 
+/// A client that fell too far behind its design's events.
+struct Lagged<'a> {
+    handle: &'a DesignHandle,
+    client: u64,
+    skipped: u64,
+    compact: bool,
+    frames: bool,
+}
+
+/// How a resync ended.
+enum Resynced {
+    /// The client has a fresh snapshot (and geometry).
+    Done,
+    /// The design is gone: no more geometry.
+    DesignGone,
+    /// The socket failed.
+    SocketFailed,
+}
+
+/// Brings a lagging client back: a fresh snapshot from the actor, sent,
+/// then its geometry.
+async fn resync(
+    lagged: Lagged<'_>,
+    sink: &mut Sink,
+    joined: &mut Joined,
+    sent: &mut BTreeMap<u64, u64>,
+    held: Option<&mut BTreeMap<u64, Held>>,
+    metrics: &Metrics,
+) -> Resynced {
+    let Lagged {
+        handle,
+        client,
+        skipped,
+        compact,
+        frames,
+    } = lagged;
+    tracing::info!(
+        design = handle.id,
+        skipped,
+        "client lagged; resyncing with a full snapshot"
+    );
+    let Ok(j) = handle.resync(client).await else {
+        return Resynced::DesignGone;
+    };
+    let snap = convert::snapshot(&j.view, !compact);
+    *joined = j;
+    if sink.send(Message::Text(snap)).await.is_err()
+        || (frames
+            && send_geometry(sink, joined, sent, held, metrics)
+                .await
+                .is_err())
+    {
+        return Resynced::SocketFailed;
+    }
+    Resynced::Done
+}
+
 /// Runs until the reader drops its sender, a close is requested, the socket
 /// fails or the design goes away; `delivery` says how geometry reaches this
 /// client.
@@ -213,18 +270,11 @@ pub async fn run(
                                 }
                                 Err(TryRecvError::Lagged(n)) => {
                                     // As below: too far behind, a fresh snapshot.
-                                    tracing::info!(design = handle.id, skipped = n, "client lagged; resyncing with a full snapshot");
-                                    match handle.resync(client).await {
-                                        Ok(j) => {
-                                            let snap = convert::snapshot(&j.view, !compact);
-                                            joined = j;
-                                            if sink.send(Message::Text(snap)).await.is_err()
-                                                || (frames && send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await.is_err())
-                                            {
-                                                return;
-                                            }
-                                        }
-                                        Err(_) => geometry_live = false,
+                                    let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames };
+                                    match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await {
+                                        Resynced::Done => {}
+                                        Resynced::DesignGone => geometry_live = false,
+                                        Resynced::SocketFailed => return,
                                     }
                                     break;
                                 }
@@ -269,20 +319,11 @@ pub async fn run(
                         }
                     }
                     Err(RecvError::Lagged(n)) => {
-                        tracing::info!(design = handle.id, skipped = n, "client lagged; resyncing with a full snapshot");
-                        match handle.resync(client).await {
-                            Ok(j) => {
-                                let snap = convert::snapshot(&j.view, !compact);
-                                joined = j;
-                                if sink.send(Message::Text(snap)).await.is_err()
-                                    || (frames && send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await.is_err())
-                                {
-                                    break;
-                                }
-                            }
-                            Err(_) => {
-                                geometry_live = false;
-                            }
+                        let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames };
+                        match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await {
+                            Resynced::Done => {}
+                            Resynced::DesignGone => geometry_live = false,
+                            Resynced::SocketFailed => break,
                         }
                     }
                     Err(RecvError::Closed) if !deleted => {
