@@ -76,18 +76,40 @@ export class DsmPanel {
           <button data-apply="${p.id}"${dis}>apply</button> <button data-remove="${p.id}"${dis}>remove</button></li>`);
       }
     });
+    // What the person has typed and not yet applied survives a redraw
+    // caused by someone else's edit: an input whose value differs from the
+    // value it was drawn with keeps it, if its primitive is still there.
+    const typed = [...this.section.querySelectorAll('input, select')]
+      .filter((i) => (i.tagName === 'SELECT' ? i.selectedIndex > 0 : i.value !== i.defaultValue))
+      .map((i) => [i.closest('li')?.dataset.id ?? null, i.name, i.value]);
     this.section.innerHTML = `<h2>DSM primitives <small>D_e ${num(dsm.de)} · ${dsm.cells} cells</small></h2>
       <ul class="dsm-list">${rows.join('')}</ul>
       <div class="dsm-add">add <select name="add-type"${dis}><option value="density_sphere">density sphere</option><option value="sphere">sphere</option><option value="box">box</option><option value="cylinder">cylinder</option></select>
       to group <input name="add-group" type="number" min="0" step="1" value="0"${dis}>
       at ${[0, 0, 0].map((x, i) => input(`add-at.${i}`, x)).join('')}
       <button data-add="1"${dis}>add</button></div>`;
+    for (const [id, name, value] of typed) {
+      const scope = id === null ? this.section.querySelector('.dsm-add') : this.section.querySelector(`li[data-id="${id}"]`);
+      const el = scope && scope.querySelector(`[name="${name}"]`);
+      if (el) el.value = value;
+    }
   }
 
   /** The value of input `name` inside `el`. */
   value(el, name) {
     const i = el.querySelector(`input[name="${name}"]`);
     return i ? Number(i.value) : NaN;
+  }
+
+  /**
+   * The value of parameter input `name` inside `el`: `exact` (the stored
+   * value) unless the person changed what the input was drawn with — the
+   * input shows six significant digits, and reading those back would be an
+   * edit nobody asked for.
+   */
+  edited(el, name, exact) {
+    const i = el.querySelector(`input[name="${name}"]`);
+    return i && i.value !== i.defaultValue ? Number(i.value) : exact;
   }
 
   click(e) {
@@ -102,14 +124,14 @@ export class DsmPanel {
       const li = b.closest('li');
       const p = prims.find((q) => q.id === id);
       if (!p) return;
-      const at = [0, 1, 2].map((i) => this.value(li, `at.${i}`));
+      const at = [0, 1, 2].map((i) => this.edited(li, `at.${i}`, p.at[i]));
       if (at.some((x, i) => x !== p.at[i])) this.onEdit(this.part.id, { op: 'move_primitive', id, at });
       const s = p.shape;
       const shape = { ...s };
       let changed = false;
       for (const key of PARAMS[s.type]) {
-        if (Array.isArray(s[key])) shape[key] = s[key].map((_, i) => this.value(li, `${key}.${i}`));
-        else shape[key] = this.value(li, key);
+        if (Array.isArray(s[key])) shape[key] = s[key].map((x, i) => this.edited(li, `${key}.${i}`, x));
+        else shape[key] = this.edited(li, key, s[key]);
         if (JSON.stringify(shape[key]) !== JSON.stringify(s[key])) changed = true;
       }
       if (!changed) return;

@@ -92,7 +92,8 @@ test('a dsm part created, moved and reshaped from the panel reaches a second bro
   assert.ok(offSpheres(m, [[[0.75, 0, -0.5], 1]]) <= tolerance(m), `moved: ${offSpheres(m, [[[0.75, 0, -0.5], 1]])}`);
 
   // Change its density from the panel: D = e³ makes r = 3/2.
-  await editor.waitForFunction(() => document.querySelector('#dsm-section li[data-id="1"] input[name="at.0"]').value === '0.75');
+  // The editor has heard of the move (its own echo) before the next apply.
+  await editor.waitForFunction((id) => window.vsculpt.design.parts.get(id).dsm.groups[0].primitives[0].at[0] === 0.75, part);
   await editor.fill(`${row} input[name="density"]`, String(Math.E ** 3));
   await editor.click(`${row} button[data-apply="1"]`);
   m = await meshAfter(viewer, part, m.revision);
@@ -127,4 +128,30 @@ test('the add DSM button makes a part the page draws', async () => {
   assert.ok(m.indices.length > 0);
   assert.deepEqual(page.errors, []);
   await page.close();
+});
+
+test('what the editor has typed and not applied survives a redraw caused by another edit', async () => {
+  const d = await freshDesign('dsm-typed');
+  const editor = await openClient(browser, d.editor);
+  const other = await openClient(browser, d.editor);
+  const spec = { name: 'blob', shape: { kind: 'dsm', dsm: { de: 1, cells: 16, groups: [{ op: 'add', primitives: [{ id: 1, at: [0, 0, 0], shape: { type: 'density_sphere', density: 5, reducing: 2 } }] }] } } };
+  await editor.evaluate((s) => window.vsculpt.send({ type: 'create_part', spec: s }), spec);
+  const part = await (await editor.waitForFunction(() => [...window.vsculpt.design.parts.values()].find((p) => p.kind === 'dsm')?.id, null, { timeout: 20000 })).jsonValue();
+  await editor.evaluate((id) => window.vsculpt.selectPart(id), part);
+  const row = '#dsm-section li[data-id="1"]';
+  await editor.waitForSelector(row);
+  await editor.fill(`${row} input[name="density"]`, '9');
+  await editor.fill('#dsm-section input[name="add-at.1"]', '2.5');
+  // Someone else moves the primitive: the panel redraws with the new centre ...
+  await other.waitForFunction((id) => window.vsculpt.design.parts.has(id), part);
+  await other.evaluate((id) => window.vsculpt.send({ type: 'dsm_edit', part: id, edit: { op: 'move_primitive', id: 1, at: [1, 2, 3] } }), part);
+  await editor.waitForFunction(() => document.querySelector('#dsm-section li[data-id="1"] input[name="at.2"]')?.value === '3', null, { timeout: 20000 });
+  // ... and keeps what this editor typed.
+  assert.equal(await editor.inputValue(`${row} input[name="density"]`), '9');
+  assert.equal(await editor.inputValue('#dsm-section input[name="add-at.1"]'), '2.5');
+  assert.equal(await editor.inputValue(`${row} input[name="reducing"]`), '2');
+  assert.deepEqual(editor.errors, []);
+  assert.deepEqual(other.errors, []);
+  await editor.close();
+  await other.close();
 });
