@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{ErrorCode, ProtocolError};
 use crate::limits::MAX_MESSAGE_BYTES;
 use crate::parts::{PartMaterial, PartSpec, RelationSpec};
-use crate::types::{Anchor, ClientKind, DeviceCondition, IconSpec, IconState, Role, Vec3};
+use crate::types::{Anchor, Camera, ClientKind, DeviceCondition, IconSpec, IconState, Role, Vec3};
 
 /// A client message with its optional request number.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -210,11 +210,15 @@ pub enum ClientMessage {
         /// The version number.
         version: u64,
     },
-    /// Tell others where this client's pointer or hand is.
+    /// Tell others where this client's pointer or hand and its view camera
+    /// are. Each message states both: a field left out means "none".
     Presence {
         /// The pointer, if any.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         pointer: Option<Vec3>,
+        /// The view camera, if any (others may follow it).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        camera: Option<Camera>,
     },
     /// Liveness check (answered with `pong`, carrying `req`).
     Ping,

@@ -290,6 +290,20 @@ pub struct DesignTokens {
     pub device: String,
 }
 
+/// Where a client's view camera is, so that others can follow it (a
+/// customer following the designer's view). Model coordinates, the design's
+/// up axis is +z for every client.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// The eye position.
+    pub eye: Vec3,
+    /// The point looked at (the orbit centre); differs from `eye`.
+    pub target: Vec3,
+    /// The vertical field of view in degrees, in (0, 180).
+    pub fov: f64,
+}
+
 /// One connected client, for presence.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -306,6 +320,9 @@ pub struct PresenceEntry {
     /// Where its pointer or hand is, if it says.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pointer: Option<Vec3>,
+    /// Where its view camera is, if it says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<Camera>,
 }
 
 /// A device's condition, as the bridge reports it.

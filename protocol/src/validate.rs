@@ -6,7 +6,7 @@ use crate::client::ClientMessage;
 use crate::error::{ErrorCode, ProtocolError};
 use crate::limits::*;
 use crate::parts::{CurveData, PartMaterial, PartShape, PartSpec, is_colour};
-use crate::types::{Anchor, IconSpec, Knots, Material, SurfaceData, UvCurve};
+use crate::types::{Anchor, Camera, IconSpec, Knots, Material, SurfaceData, UvCurve};
 
 fn number(name: &str, x: f64) -> Result<(), ProtocolError> {
     if !x.is_finite() {
@@ -230,6 +230,28 @@ fn part_spec(p: &PartSpec) -> Result<(), ProtocolError> {
     p.colour.as_deref().map_or(Ok(()), colour)
 }
 
+/// A view camera: finite, its eye away from its target, its field of view
+/// an angle a camera can have.
+fn view_camera(c: &Camera) -> Result<(), ProtocolError> {
+    numbers("camera.eye", &c.eye)?;
+    numbers("camera.target", &c.target)?;
+    number("camera.fov", c.fov)?;
+    let d: f64 = (0..3).map(|i| (c.eye[i] - c.target[i]).powi(2)).sum();
+    if d.sqrt() <= 1e-9 * (1.0 + c.eye.iter().fold(0.0f64, |m, x| m.max(x.abs()))) {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            "camera.eye is at camera.target",
+        ));
+    }
+    if !(c.fov > 0.0 && c.fov < 180.0) {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            format!("camera.fov = {} is not in (0, 180) degrees", c.fov),
+        ));
+    }
+    Ok(())
+}
+
 impl ClientMessage {
     /// Checks everything that can be checked without the design.
     pub fn validate(&self) -> Result<(), ProtocolError> {
@@ -300,7 +322,12 @@ impl ClientMessage {
                 c.as_deref().map_or(Ok(()), colour)
             }
             Commit { message } => string("message", message),
-            Presence { pointer: Some(p) } => numbers("pointer", p),
+            Presence { pointer, camera } => {
+                if let Some(p) = pointer {
+                    numbers("pointer", p)?;
+                }
+                camera.as_ref().map_or(Ok(()), view_camera)
+            }
             _ => Ok(()),
         }
     }

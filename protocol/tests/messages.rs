@@ -118,3 +118,44 @@ fn arbitrary_text_never_panics() {
         assert!(parse_client(&soup).is_err() || soup.contains("type"));
     }
 }
+
+#[test]
+fn a_presence_camera_must_be_a_camera() {
+    let ok =
+        r#"{"type": "presence", "camera": {"eye": [3, -3, 3], "target": [0, 0, 0], "fov": 45}}"#;
+    let env = parse_client(ok).expect("a camera");
+    match env.msg {
+        ClientMessage::Presence {
+            pointer: None,
+            camera: Some(c),
+        } => {
+            assert_eq!(c.eye, [3.0, -3.0, 3.0]);
+            assert_eq!(c.fov, 45.0);
+        }
+        m => panic!("{m:?}"),
+    }
+    // The eye at the target, a field of view no camera has, a far-away eye, unknown fields.
+    let at_target =
+        r#"{"type": "presence", "camera": {"eye": [1, 2, 3], "target": [1, 2, 3], "fov": 45}}"#;
+    assert_eq!(code(at_target), ErrorCode::OutOfRange);
+    for fov in ["0", "180", "-10", "400"] {
+        let t = format!(
+            r#"{{"type": "presence", "camera": {{"eye": [3, 0, 0], "target": [0, 0, 0], "fov": {fov}}}}}"#
+        );
+        assert_eq!(code(&t), ErrorCode::OutOfRange, "{fov}");
+    }
+    let far =
+        r#"{"type": "presence", "camera": {"eye": [1e12, 0, 0], "target": [0, 0, 0], "fov": 45}}"#;
+    assert_eq!(code(far), ErrorCode::OutOfRange);
+    let extra = r#"{"type": "presence", "camera": {"eye": [3, 0, 0], "target": [0, 0, 0], "fov": 45, "roll": 1}}"#;
+    assert_eq!(code(extra), ErrorCode::Malformed);
+    let m = ClientMessage::Presence {
+        pointer: None,
+        camera: Some(vsculpt_protocol::Camera {
+            eye: [f64::NAN, 0.0, 0.0],
+            target: [0.0; 3],
+            fov: 45.0,
+        }),
+    };
+    assert_eq!(m.validate().unwrap_err().code, ErrorCode::NotFinite);
+}

@@ -473,3 +473,54 @@ async fn presence_travels_by_deltas() {
     );
     server.stop().await;
 }
+
+/// The reviewer's "follow the designer": an editor's presence carries its
+/// view camera to everyone, a late joiner finds it in its snapshot, a
+/// pointer-only presence clears it, and a camera that is not one is refused
+/// without changing anybody's presence.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_editors_camera_reaches_viewers_through_presence() {
+    let server = TestServer::start(common::data_dir("camera")).await;
+    let d = server.demo().clone();
+    let mut a = Client::connect(server.addr, d.id, &d.editor, "ann").await;
+    let mut v = Client::connect(server.addr, d.id, &d.viewer, "vic").await;
+    let ann = a.welcome["client_id"].clone();
+    let camera = json!({"eye": [310.5, -220.25, 140.0], "target": [12.0, 8.0, -3.5], "fov": 40.0});
+    a.ok(json!({"type": "presence", "camera": camera.clone()}))
+        .await;
+    let seen = loop {
+        let p = v.wait_for("presence_changed").await;
+        if p["client"]["client"] == ann && p["client"].get("camera").is_some() {
+            break p["client"].clone();
+        }
+    };
+    assert_eq!(seen["camera"], camera);
+    assert_eq!(seen["access"], "editor");
+
+    // Refused: the eye at the target; ann's camera stays.
+    a.refused(
+        json!({"type": "presence", "camera": {"eye": [1, 1, 1], "target": [1, 1, 1], "fov": 40}}),
+        "out_of_range",
+    )
+    .await;
+    let w = Client::connect(server.addr, d.id, &d.viewer, "wes").await;
+    let entry = w.snapshot["presence"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["client"] == ann)
+        .unwrap()
+        .clone();
+    assert_eq!(entry["camera"], camera, "a late joiner sees the camera");
+
+    // A presence without a camera says "none".
+    a.ok(json!({"type": "presence", "pointer": [1.0, 2.0, 3.0]}))
+        .await;
+    let cleared = loop {
+        let p = v.wait_for("presence_changed").await;
+        if p["client"]["client"] == ann && p["client"].get("pointer").is_some() {
+            break p["client"].clone();
+        }
+    };
+    assert!(cleared.get("camera").is_none(), "{cleared}");
+}

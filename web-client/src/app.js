@@ -23,6 +23,7 @@ import { BodyView } from './body-view.js';
 import { deviation, sameDomain, versionSurface } from './compare.js';
 import { DsmView } from './dsm-view.js';
 import { DsmPanel } from './dsm-panel.js';
+import { Follow } from './follow.js';
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -215,6 +216,20 @@ function keepSelection() {
   }
 }
 
+// Following another person's view; this page's own camera goes out in its presence.
+const follow = new Follow({
+  view,
+  send: (msg) => !!state.online && link.send(msg) !== null,
+  button: $('follow'),
+  onChange: () => renderPanels(),
+});
+$('presence').addEventListener('click', (e) => {
+  const b = e.target.closest('button[data-follow]');
+  if (!b) return;
+  const id = Number(b.dataset.follow);
+  if (follow.following === id) follow.stop();
+  else follow.follow(id);
+});
 const dsmPanel = new DsmPanel({ section: $('dsm-section'), onEdit: (part, edit) => dsmEdit(part, edit) });
 const partsPanel = new PartsPanel({
   list: $('parts'),
@@ -251,7 +266,9 @@ function renderPanels() {
   document.body.classList.toggle('viewer', !editor);
   $('role').textContent = state.access ? `${state.access} · design ${designId}` : '';
   $('presence').innerHTML = state.presence
-    .map((p) => `<li>${escape(p.name)} <small>${p.access}</small>${p.holding ? ` holds icon ${p.holding}` : ''}</li>`)
+    .map((p) => `<li>${escape(p.name)} <small>${p.access}</small>${p.holding ? ` holds icon ${p.holding}` : ''}${
+      p.camera && p.client !== state.clientId ? ` <button data-follow="${p.client}" aria-pressed="${follow.following === p.client}">${follow.following === p.client ? 'following' : 'follow'}</button>` : ''
+    }</li>`)
     .join('');
   $('history').innerHTML = state.versions
     .slice()
@@ -307,6 +324,7 @@ function onMessage(msg) {
     }
     case 'welcome':
       state.access = msg.access;
+      state.clientId = msg.client_id;
       break;
     case 'snapshot':
       shellDesign(msg.design);
@@ -317,6 +335,8 @@ function onMessage(msg) {
       for (const id of [...state.hidden]) if (!design.parts.has(id)) state.hidden.delete(id);
       state.versions = msg.versions;
       state.presence = msg.presence;
+      follow.setPresence(state.presence, state.clientId);
+      follow.joined();
       state.revision = msg.revision;
       keepSelection();
       setHistory(msg.can_undo, msg.can_redo);
@@ -352,15 +372,18 @@ function onMessage(msg) {
       break;
     case 'presence':
       state.presence = msg.clients;
+      follow.setPresence(state.presence, state.clientId);
       break;
     case 'presence_changed': {
       const i = state.presence.findIndex((p) => p.client === msg.client.client);
       if (i >= 0) state.presence[i] = msg.client;
       else state.presence.push(msg.client);
+      follow.setPresence(state.presence, state.clientId);
       break;
     }
     case 'presence_left':
       state.presence = state.presence.filter((p) => p.client !== msg.client);
+      follow.setPresence(state.presence, state.clientId);
       break;
     case 'history':
       setHistory(msg.can_undo, msg.can_redo);
@@ -1095,4 +1118,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, follow, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

@@ -196,18 +196,18 @@ test('a viewer compares the live shape with a committed version: zero deviation 
   await connected(editor);
   const n0 = await editor.evaluate(() => window.vsculpt.state.versions.length);
   await editor.evaluate(() => window.vsculpt.send({ type: 'commit', message: 'before the pull' }));
-  await editor.waitForFunction((n) => window.vsculpt.state.versions.length === n + 1, n0, { timeout: 10000 });
+  await editor.waitForFunction((n) => window.vsculpt.state.versions.length === n + 1, n0, { timeout: 30000 });
   const version = await editor.evaluate(() => window.vsculpt.state.versions.at(-1).version);
   const viewer = await openClient(browser, server.viewer);
   await connected(viewer);
   await viewer.click(`button[data-compare="${version}"]`);
-  await viewer.waitForFunction(() => window.vsculpt.state.compare && window.vsculpt.state.compare.max !== undefined, null, { timeout: 10000 });
+  await viewer.waitForFunction(() => window.vsculpt.state.compare && window.vsculpt.state.compare.max !== undefined, null, { timeout: 30000 });
   assert.ok((await viewer.evaluate(() => window.vsculpt.state.compare.max)) < 1e-3, 'the shape equals the version it was committed as');
   assert.ok(await viewer.isVisible('#compare-legend'));
   // The editor pulls a point up by 2 (a position constraint dragged): the viewer's deviation follows live.
   const before = await editor.evaluate(() => window.vsculpt.state.icons.size);
   await editor.evaluate(() => window.vsculpt.createIcon({ kind: 'point', u: 0.45, v: 0.55 }, { kind: 'position' }));
-  await editor.waitForFunction((k) => window.vsculpt.state.icons.size === k + 1, before, { timeout: 10000 });
+  await editor.waitForFunction((k) => window.vsculpt.state.icons.size === k + 1, before, { timeout: 30000 });
   const id = await editor.evaluate(() => Math.max(...window.vsculpt.state.icons.keys()));
   await editor.evaluate((i) => {
     const { send, state } = window.vsculpt;
@@ -216,7 +216,7 @@ test('a viewer compares the live shape with a committed version: zero deviation 
     send({ type: 'drag', icon: i, xyz: [p[0], p[1], p[2] + 2] });
     send({ type: 'drag_end', icon: i });
   }, id);
-  await viewer.waitForFunction(() => window.vsculpt.state.compare.max > 1.5, null, { timeout: 15000 });
+  await viewer.waitForFunction(() => window.vsculpt.state.compare.max > 1.5, null, { timeout: 30000 });
   // At the sample nearest the pulled point the surface rose by 2 (the constraint's own move): its
   // deviation along the normal is 2·n_z there. (Elsewhere the plate may swing further: the rim is free.)
   const at = await viewer.evaluate(() => {

@@ -124,8 +124,13 @@ pub enum Inbound {
     Ping,
     /// A design command.
     Command(Command),
-    /// The client's pointer (presence).
-    Pointer(Option<DVec3>),
+    /// The client's pointer and view camera (presence).
+    Presence {
+        /// The pointer, if any.
+        pointer: Option<DVec3>,
+        /// The view camera, if any.
+        camera: Option<wire::Camera>,
+    },
     /// A device sample (its position becomes the bridge's pointer).
     DeviceSample {
         /// Sensor name.
@@ -406,6 +411,7 @@ fn presence_entry(p: &Presence) -> wire::PresenceEntry {
         access: access(p.client.role),
         holding: p.holding,
         pointer: p.pointer,
+        camera: p.camera,
     }
 }
 
@@ -519,7 +525,10 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
         M::Undo => Inbound::Command(Command::Undo),
         M::Redo => Inbound::Command(Command::Redo),
         M::RestoreVersion { version } => Inbound::Command(Command::Restore { version }),
-        M::Presence { pointer } => Inbound::Pointer(pointer.map(DVec3::from)),
+        M::Presence { pointer, camera } => Inbound::Presence {
+            pointer: pointer.map(DVec3::from),
+            camera,
+        },
         M::DeviceSample {
             sensor, position, ..
         } => Inbound::DeviceSample {

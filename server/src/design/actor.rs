@@ -55,6 +55,8 @@ pub struct Presence {
     pub holding: Option<u64>,
     /// Where its pointer or hand is, if it said.
     pub pointer: Option<[f64; 3]>,
+    /// Where its view camera is, if it said (others may follow it).
+    pub camera: Option<vsculpt_protocol::Camera>,
 }
 
 /// The full state a client needs to (re)build its view.
@@ -222,6 +224,10 @@ pub enum Request {
         client: u64,
         /// Where, if anywhere.
         pointer: Option<[f64; 3]>,
+        /// The view camera: `Some` from a presence message (which states it,
+        /// `Some(None)` for none), `None` from a device sample (which moves
+        /// only the pointer and leaves the camera as it was).
+        camera: Option<Option<vsculpt_protocol::Camera>>,
     },
     /// The committed versions.
     Versions {
@@ -618,6 +624,7 @@ impl Actor {
                             client,
                             holding: None,
                             pointer: None,
+                            camera: None,
                         },
                     );
                     // Subscribe first so the newcomer hears the presence too.
@@ -666,13 +673,20 @@ impl Actor {
                         (None, Ok(_)) => {}
                     }
                 }
-                Request::Pointer { client, pointer } => {
+                Request::Pointer {
+                    client,
+                    pointer,
+                    camera,
+                } => {
                     let changed = match self.clients.get_mut(&client) {
-                        Some(p) if p.pointer != pointer => {
+                        Some(p) => {
+                            let camera = camera.unwrap_or(p.camera);
+                            let changed = p.pointer != pointer || p.camera != camera;
                             p.pointer = pointer;
-                            true
+                            p.camera = camera;
+                            changed
                         }
-                        _ => false,
+                        None => false,
                     };
                     if changed {
                         self.broadcast_presence(client);

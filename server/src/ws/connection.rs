@@ -346,7 +346,7 @@ impl Session {
                 Ok((
                     _,
                     Inbound::Command(crate::design::Command::Drag { .. })
-                    | Inbound::Pointer(_)
+                    | Inbound::Presence { .. }
                     | Inbound::DeviceSample { .. },
                 )) => rate::Class::Stream,
                 _ => rate::Class::Control,
@@ -402,12 +402,13 @@ impl Session {
                     Err(e) => self.error(id, WireError::from(e)).await,
                 }
             }
-            Inbound::Pointer(p) => {
+            Inbound::Presence { pointer, camera } => {
                 let _ = self
                     .handle
                     .send(crate::design::actor::Request::Pointer {
                         client: self.client,
-                        pointer: p.map(|p| p.to_array()),
+                        pointer: pointer.map(|p| p.to_array()),
+                        camera: Some(camera),
                     })
                     .await;
                 self.ack(id).await;
@@ -423,6 +424,7 @@ impl Session {
                     .send(crate::design::actor::Request::Pointer {
                         client: self.client,
                         pointer: Some(position.to_array()),
+                        camera: None,
                     })
                     .await;
                 self.ack(id).await;
