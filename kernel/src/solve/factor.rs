@@ -5,12 +5,17 @@
 //! spare buffer (so a failed one leaves the previous factor intact). The
 //! low-level API is used so that the factor's values and the scratch of the
 //! factorisation and of the solves are allocated once and reused.
+//!
+//! [`Factor::forward_gram`] answers aᵀK⁻¹b for sparse a, b without a full
+//! solve: with K = Pᵀ L Lᵀ P it is (L⁻¹Pa)·(L⁻¹Pb), and the forward solve of a
+//! sparse right-hand side only visits the supernodes on the paths from its
+//! nonzeros to the root of the elimination tree.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::mat::MatMut;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymmetricOrdering,
+    CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
 };
 use faer::{Conj, Par, Side};
@@ -33,6 +38,44 @@ pub struct Factor {
     solve_cols: usize,
     /// Right-hand sides solved so far.
     solved: u64,
+    /// The supernodal elimination tree, when the factor is supernodal.
+    tree: Option<SupernodeTree>,
+}
+
+/// Per column of L its supernode, and per supernode its parent in the
+/// elimination tree (`usize::MAX` at a root): the reach of a sparse
+/// right-hand side is the union of the paths from its supernodes up.
+struct SupernodeTree {
+    of_column: Vec<usize>,
+    parent: Vec<usize>,
+}
+
+impl SupernodeTree {
+    fn new(symbolic: &SymbolicCholesky<usize>) -> Option<Self> {
+        let SymbolicCholeskyRaw::Supernodal(sym) = symbolic.raw() else {
+            return None;
+        };
+        let count = sym.n_supernodes();
+        let mut of_column = vec![0; sym.nrows()];
+        for (s, (&b, &e)) in sym
+            .supernode_begin()
+            .iter()
+            .zip(sym.supernode_end())
+            .enumerate()
+        {
+            of_column[b..e].fill(s);
+        }
+        let ptr = sym.col_ptr_for_row_idx();
+        let parent = (0..count)
+            .map(|s| {
+                sym.row_idx()[ptr[s]..ptr[s + 1]]
+                    .iter()
+                    .min()
+                    .map_or(usize::MAX, |&r| of_column[r])
+            })
+            .collect();
+        Some(Self { of_column, parent })
+    }
 }
 
 impl std::fmt::Debug for Factor {
@@ -68,7 +111,9 @@ impl Factor {
         )
         .map_err(|e| SolveError::Factor(format!("solve scratch: {e:?}")))?;
         let len = symbolic.len_val();
+        let tree = SupernodeTree::new(&symbolic);
         let mut this = Self {
+            tree,
             stiffness,
             symbolic,
             l_vals: vec![0.0; len],
@@ -126,6 +171,83 @@ impl Factor {
     /// The number of unknowns.
     pub fn dim(&self) -> usize {
         self.stiffness.dim()
+    }
+
+    /// The Gram matrix aᵢᵀ K⁻¹ aⱼ (row-major, k × k) of k sparse vectors
+    /// (`(indices, weights)`, indices below [`Self::dim`]), by forward
+    /// solves that visit only the elimination-tree paths of their nonzeros:
+    /// a fraction of one full solve each. `None` when the factor is not
+    /// supernodal (small problems: the caller solves in full).
+    pub fn forward_gram(&self, columns: &[(&[usize], &[f64])]) -> Option<Vec<f64>> {
+        let tree = self.tree.as_ref()?;
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            return None;
+        };
+        let n = self.dim();
+        let inv = self.symbolic.perm().map(|p| p.arrays().1);
+        let begin = sym.supernode_begin();
+        let end = sym.supernode_end();
+        let row_ptr = sym.col_ptr_for_row_idx();
+        let val_ptr = sym.col_ptr_for_val();
+        let rows = sym.row_idx();
+        let mut marked = vec![false; tree.parent.len()];
+        let mut solved: Vec<(Vec<f64>, Vec<usize>)> = Vec::with_capacity(columns.len());
+        for (indices, weights) in columns {
+            let mut x = vec![0.0; n];
+            let mut reach: Vec<usize> = Vec::new();
+            for (&i, &w) in indices.iter().zip(*weights) {
+                let p = inv.map_or(i, |inv| inv[i]);
+                x[p] += w;
+                let mut s = tree.of_column[p];
+                while s != usize::MAX && !marked[s] {
+                    marked[s] = true;
+                    reach.push(s);
+                    s = tree.parent[s];
+                }
+            }
+            // A parent comes after its children: increasing order is a
+            // topological order of the tree.
+            reach.sort_unstable();
+            for &s in &reach {
+                marked[s] = false;
+                let (b, size) = (begin[s], end[s] - begin[s]);
+                let pattern = &rows[row_ptr[s]..row_ptr[s + 1]];
+                let height = size + pattern.len();
+                let l = &self.l_vals[val_ptr[s]..val_ptr[s + 1]];
+                for j in 0..size {
+                    let col = &l[j * height..(j + 1) * height];
+                    let xj = x[b + j] / col[j];
+                    x[b + j] = xj;
+                    if xj == 0.0 {
+                        continue;
+                    }
+                    for i in j + 1..size {
+                        x[b + i] -= col[i] * xj;
+                    }
+                    for (&r, &v) in pattern.iter().zip(&col[size..]) {
+                        x[r] -= v * xj;
+                    }
+                }
+            }
+            solved.push((x, reach));
+        }
+        let k = columns.len();
+        let mut gram = vec![0.0; k * k];
+        for a in 0..k {
+            for b in a..k {
+                // x_b is zero outside its reach.
+                let (xa, xb) = (&solved[a].0, &solved[b].0);
+                let v: f64 = solved[b]
+                    .1
+                    .iter()
+                    .flat_map(|&s| begin[s]..end[s])
+                    .map(|i| xa[i] * xb[i])
+                    .sum();
+                gram[a * k + b] = v;
+                gram[b * k + a] = v;
+            }
+        }
+        Some(gram)
     }
 
     /// Overwrites every column of `rhs` (dim × k) with K⁻¹ times it. The

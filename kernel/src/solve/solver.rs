@@ -11,7 +11,11 @@
 //! of K⁻¹b and Y are combinations of the columns Z = K⁻¹[a_c], computed in
 //! one batched solve when the problem changes and cached by row (and kept a
 //! while after their row leaves), so adding one icon solves only for its new
-//! rows. S is assembled from the small Gram matrix G = Aᵀ Z. S⁻¹ is a
+//! rows — and not even those at once: a few new equation rows are left
+//! pending, their entries of G taken from the existing columns (K⁻¹ is
+//! symmetric) and a sparse forward solve (see `Factor::forward_gram`), and
+//! their columns are solved in one batch when the shape next moves. S is
+//! assembled from the small Gram matrix G = Aᵀ Z. S⁻¹ is a
 //! Cholesky inverse when S is provably well conditioned, else a
 //! pseudo-inverse by symmetric eigendecomposition: redundant equations
 //! (eigenvalues below 1e-12 of the largest) are dropped and contradictory
@@ -245,6 +249,14 @@ impl Column {
             values: values.into(),
         }
     }
+
+    /// A column not solved yet (see [`Solver::pending`]): no values.
+    fn pending() -> Self {
+        Self {
+            values: Arc::from(Vec::new()),
+            norm: f64::NAN,
+        }
+    }
 }
 
 /// The last full solve, for [`Solver::still_optimal`].
@@ -292,6 +304,12 @@ pub struct Solver {
     /// (an icon switched off and on again, an undo): oldest first, at most
     /// [`RETIRED_BYTES`] of them. Valid until the stiffness changes.
     retired: VecDeque<(RowKey, Column)>,
+    /// Columns of Z not solved yet (placeholders in `z`): a few new
+    /// equation rows whose entries of G came from existing columns and a
+    /// sparse forward solve (see [`LAZY_COLUMNS`]). Solved in one batch by
+    /// [`Self::solve_pending`] before anything reads them: a new icon that
+    /// holds the shape where it is costs no full sparse solve.
+    pending: Vec<usize>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -323,6 +341,7 @@ impl Solver {
             free_rows: Vec::new(),
             z: Vec::new(),
             retired: VecDeque::new(),
+            pending: Vec::new(),
             g: Vec::new(),
             eqs: Vec::new(),
             loads: Vec::new(),
@@ -389,6 +408,7 @@ impl Solver {
         self.rows.clear();
         self.free_rows.clear();
         self.z.clear();
+        self.pending.clear();
         self.retired.clear();
         self.response = None;
     }
@@ -546,7 +566,7 @@ impl Solver {
             foldable.clone()
         };
         let mut refactored = false;
-        let (z, g, s_pinv, rank_deficiency, s_exact) = loop {
+        let (z, pending, g, s_pinv, rank_deficiency, s_exact) = loop {
             if pinned != self.pinned || !same_folds(&fold, &self.folded) {
                 if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
                     if refactored {
@@ -556,7 +576,7 @@ impl Solver {
                 }
                 refactored = true;
             }
-            let (z, g, s) = self.schur(&rows, &free_rows, &eqs);
+            let (z, pending, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
             // Same factor: S⁻¹ by block updates of the current one when
             // they are exact enough, else from scratch.
             let updated = if refactored {
@@ -574,7 +594,7 @@ impl Solver {
                     // the factor and try again.
                     fold = foldable.clone();
                 }
-                Ok((p, dropped, exact)) => break (z, g, p, dropped, exact),
+                Ok((p, dropped, exact)) => break (z, pending, g, p, dropped, exact),
                 Err(e) => {
                     if refactored {
                         self.restore_factor(old);
@@ -617,6 +637,7 @@ impl Solver {
         self.rows = rows;
         self.free_rows = free_rows;
         self.z = z;
+        self.pending = pending;
         self.g = g;
         self.eqs = eqs;
         self.loads = loads;
@@ -635,13 +656,17 @@ impl Solver {
     }
 
     /// Z = K̃⁻¹[free rows] (cached columns reused, the rest in one batched
-    /// solve), G = Aᵀ Z and S over the scalar equations.
+    /// solve), G = Aᵀ Z and S over the scalar equations. A few new rows
+    /// that are only equations (no load) are left pending (returned) when
+    /// the factor gives their block of G by forward solves: their entries
+    /// against solved columns are a_newᵀ z_c (K⁻¹ is symmetric).
     fn schur(
         &mut self,
         rows: &[ScalarRow],
         free_rows: &[ScalarRow],
         eqs: &[ScalarEq],
-    ) -> (Vec<Column>, Vec<f64>, Mat<f64>) {
+        loads: &[LoadCol],
+    ) -> (Vec<Column>, Vec<usize>, Vec<f64>, Mat<f64>) {
         let n = self.dim();
         // Z: reuse cached columns, solve for the rest in one batch.
         let old: HashMap<RowKey, usize> = self
@@ -650,11 +675,16 @@ impl Solver {
             .enumerate()
             .map(|(c, r)| (row_key(r), c))
             .collect();
+        let mut was_pending = vec![false; self.z.len()];
+        for &c in &self.pending {
+            was_pending[c] = true;
+        }
         let mut z: Vec<Option<Column>> = rows
             .iter()
             .map(|r| {
                 let key = row_key(r);
                 match old.get(&key) {
+                    Some(&oc) if was_pending[oc] => None,
                     Some(&oc) => Some(self.z[oc].clone()),
                     None => self
                         .retired
@@ -665,32 +695,78 @@ impl Solver {
             })
             .collect();
         let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].is_none()).collect();
-        if !missing.is_empty() {
-            let mut rhs = Mat::<f64>::zeros(n, missing.len());
-            for (m, &c) in missing.iter().enumerate() {
-                for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
-                    rhs[(i, m)] += w;
+        let mut is_load = vec![false; rows.len()];
+        for l in loads {
+            is_load[l.col] = true;
+        }
+        let gram = if !missing.is_empty()
+            && missing.len() <= LAZY_COLUMNS
+            && missing.iter().all(|&c| !is_load[c])
+        {
+            let columns: Vec<(&[usize], &[f64])> = missing
+                .iter()
+                .map(|&c| {
+                    (
+                        free_rows[c].indices.as_slice(),
+                        free_rows[c].weights.as_slice(),
+                    )
+                })
+                .collect();
+            self.factor.forward_gram(&columns)
+        } else {
+            None
+        };
+        let pending = if gram.is_some() {
+            for &c in &missing {
+                z[c] = Some(Column::pending());
+            }
+            missing.clone()
+        } else {
+            if !missing.is_empty() {
+                let mut rhs = Mat::<f64>::zeros(n, missing.len());
+                for (m, &c) in missing.iter().enumerate() {
+                    for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
+                        rhs[(i, m)] += w;
+                    }
+                }
+                self.factor.solve_in_place(rhs.as_mut());
+                for (m, &c) in missing.iter().enumerate() {
+                    z[c] = Some(Column::new(rhs.col_as_slice(m)));
                 }
             }
-            self.factor.solve_in_place(rhs.as_mut());
-            for (m, &c) in missing.iter().enumerate() {
-                z[c] = Some(Column::new(rhs.col_as_slice(m)));
-            }
-        }
+            Vec::new()
+        };
         let z: Vec<Column> = z.into_iter().flatten().collect();
         debug_assert_eq!(z.len(), rows.len());
         // G = Aᵀ Z (Z is zero at the pinned points: the free rows suffice).
         let nc = rows.len();
+        let mut is_pending = vec![false; nc];
+        for &c in &pending {
+            is_pending[c] = true;
+        }
+        let dot = |row: &ScalarRow, col: &Column| -> f64 {
+            row.indices
+                .iter()
+                .zip(&row.weights)
+                .map(|(&i, &w)| w * col.values[i])
+                .sum()
+        };
         let mut g = vec![0.0; nc * nc];
-        for (a, row) in free_rows.iter().enumerate() {
+        for a in 0..nc {
             for b in 0..nc {
-                let zb = &z[b].values;
-                g[a * nc + b] = row
-                    .indices
-                    .iter()
-                    .zip(&row.weights)
-                    .map(|(&i, &w)| w * zb[i])
-                    .sum();
+                g[a * nc + b] = match (is_pending[a], is_pending[b]) {
+                    (_, false) => dot(&free_rows[a], &z[b]),
+                    (false, true) => dot(&free_rows[b], &z[a]),
+                    (true, true) => 0.0,
+                };
+            }
+        }
+        if let Some(gram) = gram {
+            let k = pending.len();
+            for (i, &a) in pending.iter().enumerate() {
+                for (j, &b) in pending.iter().enumerate() {
+                    g[a * nc + b] = gram[i * k + j];
+                }
             }
         }
         // S = C K⁻¹ Cᵀ and its pseudo-inverse.
@@ -708,7 +784,26 @@ impl Solver {
                 s[(f, e)] = v;
             }
         }
-        (z, g, s)
+        (z, pending, g, s)
+    }
+
+    /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
+    fn solve_pending(&mut self) {
+        if self.pending.is_empty() {
+            return;
+        }
+        let pending = std::mem::take(&mut self.pending);
+        let mut rhs = Mat::<f64>::zeros(self.dim(), pending.len());
+        for (m, &c) in pending.iter().enumerate() {
+            let row = &self.free_rows[c];
+            for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                rhs[(i, m)] += w;
+            }
+        }
+        self.factor.solve_in_place(rhs.as_mut());
+        for (m, &c) in pending.iter().enumerate() {
+            self.z[c] = Column::new(rhs.col_as_slice(m));
+        }
     }
 
     /// S⁻¹ for the new equations `eqs` (over `rows`, S = `s`) from the
@@ -956,8 +1051,8 @@ impl Solver {
             z.iter().map(|c| c.values.as_ptr()).collect();
         self.retired
             .retain(|(_, col)| !kept.contains(&col.values.as_ptr()));
-        for (r, col) in self.rows.iter().zip(&self.z) {
-            if !kept.contains(&col.values.as_ptr()) {
+        for (c, (r, col)) in self.rows.iter().zip(&self.z).enumerate() {
+            if !kept.contains(&col.values.as_ptr()) && !self.pending.contains(&c) {
                 self.retired.push_back((row_key(r), col.clone()));
             }
         }
@@ -984,6 +1079,7 @@ impl Solver {
             });
             return self.checked(self.report(out, None, DVec3::ZERO), out, None);
         }
+        self.solve_pending();
         let inputs = self.inputs(None, DVec3::ZERO);
         let (delta, lambda) = if self.at_rest(&inputs, reference) {
             (vec![DVec3::ZERO; self.dim()], vec![0.0; self.eqs.len()])
@@ -1175,6 +1271,9 @@ impl Solver {
             .iter()
             .position(|g| g.key == key)
             .ok_or(SolveError::UnknownGroup(key))?;
+        // Nothing pending on the fast path (a solve or an earlier frame
+        // solved it): only the first frame pays.
+        self.solve_pending();
         if !cached {
             let inputs = self.inputs(None, DVec3::ZERO);
             let start = if self.at_rest(&inputs, reference) {
@@ -1999,6 +2098,11 @@ const MAX_REFINEMENT_STEPS: usize = 12;
 /// round-off (6.7e-15) at worst, so iterative refinement stops there (the
 /// usual Oettli–Prager stopping rule): a step would add noise, not digits.
 const NOISE_BACKWARD_ERROR: f64 = 1e-14;
+
+/// Most new equation rows whose columns of Z a problem change leaves
+/// pending (see `Solver::pending`); more are solved at once in one batch
+/// (a batch streams the factor once, so many columns cost less together).
+const LAZY_COLUMNS: usize = 8;
 
 /// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
 const RETIRED_BYTES: usize = 16 << 20;

@@ -1,0 +1,290 @@
+//! New constraint rows whose columns of Z are left pending (a supernodal
+//! factor: the 81 × 159 paper scene and anything large): their block of
+//! S comes from sparse forward solves, the full column is solved only when
+//! the shape moves. Checked against full solves and a dense KKT solve.
+
+use glam::DVec3;
+use vsculpt_kernel::bspline::BSplineSurface;
+use vsculpt_kernel::energy::{Stiffness, SurfaceMaterial};
+use vsculpt_kernel::icon::surface_row;
+use vsculpt_kernel::solve::{Equation, Factor, Group, Load, Problem, ScalarRow, Solver};
+
+/// Large enough for a supernodal factor (checked below).
+const N: usize = 30;
+
+fn plate(n: usize) -> BSplineSurface {
+    BSplineSurface::plane(1.0, 1.0, n, n, 3).unwrap()
+}
+
+fn stiffness(s: &BSplineSurface) -> Stiffness {
+    let m = SurfaceMaterial {
+        alpha11: 0.1,
+        alpha12: 0.0,
+        alpha22: 0.1,
+        beta11: 1.0,
+        beta12: 1.0,
+        beta22: 1.0,
+        rest: 1e-3,
+    };
+    Stiffness::surface(s.u_knots(), s.v_knots(), &m).unwrap()
+}
+
+fn pin(s: &BSplineSurface, key: u64, u: f64, v: f64, target: DVec3) -> Group {
+    Group {
+        key,
+        equations: vec![Equation::Vector {
+            row: surface_row(s, u, v, 0, 0),
+            target,
+        }],
+        loads: vec![],
+    }
+}
+
+/// The KKT system [K Cᵀ; C 0] [δ; λ] = [b; d − C P_ref] of one coordinate,
+/// solved densely (LU with partial pivoting), independent of the solver.
+fn dense_kkt(k: &Stiffness, rows: &[(Vec<usize>, Vec<f64>, f64)], b: &[f64]) -> Vec<f64> {
+    use faer::linalg::solvers::Solve;
+    let n = k.dim();
+    let m = rows.len();
+    let mut a = faer::Mat::<f64>::zeros(n + m, n + m);
+    let lower = k.lower();
+    let (cp, ri, v) = (
+        lower.symbolic().col_ptr(),
+        lower.symbolic().row_idx(),
+        lower.val(),
+    );
+    for c in 0..n {
+        for e in cp[c]..cp[c + 1] {
+            a[(ri[e], c)] = v[e];
+            a[(c, ri[e])] = v[e];
+        }
+    }
+    let mut rhs = faer::Mat::<f64>::zeros(n + m, 1);
+    for (i, x) in b.iter().enumerate() {
+        rhs[(i, 0)] = *x;
+    }
+    for (e, (idx, w, target)) in rows.iter().enumerate() {
+        for (&i, &wi) in idx.iter().zip(w) {
+            a[(n + e, i)] = wi;
+            a[(i, n + e)] = wi;
+        }
+        rhs[(n + e, 0)] = *target;
+    }
+    let x = a.partial_piv_lu().solve(&rhs);
+    (0..n).map(|i| x[(i, 0)]).collect()
+}
+
+/// The exact answer of `problem` (vector equations and loads; the group
+/// `dragged`'s load force shifted by t · gain) from the reference `p`, by
+/// a dense KKT solve per coordinate.
+fn dense_answer(
+    k: &Stiffness,
+    p: &[DVec3],
+    problem: &Problem,
+    dragged: Option<(u64, DVec3)>,
+) -> Vec<DVec3> {
+    let mut out = p.to_vec();
+    for c in 0..3 {
+        let rows: Vec<(Vec<usize>, Vec<f64>, f64)> = problem
+            .groups
+            .iter()
+            .flat_map(|g| g.equations.iter())
+            .map(|eq| match eq {
+                Equation::Vector { row, target } => (
+                    row.indices.clone(),
+                    row.weights.clone(),
+                    target[c] - row.apply(p)[c],
+                ),
+                Equation::Projected { .. } => unreachable!(),
+            })
+            .collect();
+        let mut b = vec![0.0; p.len()];
+        for g in &problem.groups {
+            for l in &g.loads {
+                let force = match dragged {
+                    Some((key, t)) if key == g.key => l.force + t * l.drag_gain,
+                    _ => l.force,
+                };
+                for (&i, &w) in l.row.indices.iter().zip(&l.row.weights) {
+                    b[i] += w * force[c];
+                }
+            }
+        }
+        for (o, d) in out.iter_mut().zip(dense_kkt(k, &rows, &b)) {
+            o[c] += d;
+        }
+    }
+    out
+}
+
+fn max_gap(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - *q).abs().max_element())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn forward_gram_equals_the_gram_of_full_solves() {
+    let s = plate(N);
+    let k = stiffness(&s);
+    let rows: Vec<ScalarRow> = vec![
+        surface_row(&s, 0.3, 0.6, 0, 0),
+        surface_row(&s, 0.31, 0.62, 0, 0),
+        surface_row(&s, 0.8, 0.15, 1, 0),
+        surface_row(&s, 0.5, 0.5, 0, 1),
+    ];
+    let factor = Factor::new(k.clone()).unwrap();
+    let columns: Vec<(&[usize], &[f64])> = rows
+        .iter()
+        .map(|r| (r.indices.as_slice(), r.weights.as_slice()))
+        .collect();
+    let gram = factor
+        .forward_gram(&columns)
+        .expect("the factor of a 30 × 30 plate is supernodal");
+    // Independent: full solves z_j = K⁻¹ a_j, then a_i · z_j.
+    let mut factor = factor;
+    let n = k.dim();
+    let mut z = faer::Mat::<f64>::zeros(n, rows.len());
+    for (j, r) in rows.iter().enumerate() {
+        for (&i, &w) in r.indices.iter().zip(&r.weights) {
+            z[(i, j)] += w;
+        }
+    }
+    factor.solve_in_place(z.as_mut());
+    let k_rows = rows.len();
+    let want = |a: usize, b: usize| -> f64 {
+        let r = &rows[a];
+        r.indices
+            .iter()
+            .zip(&r.weights)
+            .map(|(&i, &w)| w * z[(i, b)])
+            .sum()
+    };
+    let scale = (0..k_rows).map(|a| want(a, a).abs()).fold(0.0, f64::max);
+    for a in 0..k_rows {
+        for b in 0..k_rows {
+            let got = gram[a * k_rows + b];
+            assert!(
+                (got - want(a, b)).abs() <= 1e-12 * scale,
+                "({a}, {b}): {got} vs {}",
+                want(a, b)
+            );
+        }
+    }
+    // A small factor is simplicial: no forward Gram (the solver then solves
+    // new columns in full, as before).
+    let small = plate(6);
+    assert!(
+        Factor::new(stiffness(&small))
+            .unwrap()
+            .forward_gram(&columns[..0])
+            .is_none()
+    );
+}
+
+/// New pins where the surface is cost no full solve; the pending columns
+/// are solved when a drag needs them; a pending column dropped before it
+/// was solved is not kept as a retired column (re-adding its row and moving
+/// the shape must not read an empty column), and every answer equals the
+/// dense KKT solution.
+#[test]
+fn pending_columns_are_solved_when_the_shape_moves_and_answers_stay_exact() {
+    let s = plate(N);
+    let k = stiffness(&s);
+    let p = s.points().to_vec();
+    let mut groups: Vec<Group> = [(0.05, 0.05), (0.95, 0.05), (0.05, 0.95), (0.95, 0.95)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(u, v))| pin(&s, i as u64 + 1, u, v, s.point(u, v)))
+        .collect();
+    groups.push(Group {
+        key: 10,
+        equations: vec![],
+        loads: vec![Load {
+            row: surface_row(&s, 0.5, 0.45, 0, 0),
+            force: DVec3::new(0.0, 0.0, 0.5),
+            drag_gain: 2.0,
+        }],
+    });
+    let mut solver = Solver::new(k.clone()).unwrap();
+    solver
+        .set_problem(Problem {
+            groups: groups.clone(),
+        })
+        .unwrap();
+    let mut out = vec![DVec3::ZERO; p.len()];
+    solver.solve(&p, &mut out).unwrap();
+    let problem = Problem {
+        groups: groups.clone(),
+    };
+    assert!(max_gap(&out, &dense_answer(&k, &p, &problem, None)) < 1e-9);
+    let solved = {
+        let mut t = s.clone();
+        t.set_points(out.clone()).unwrap();
+        t
+    };
+    // Two pins where the solved surface is: no column solved, the shape
+    // kept exactly.
+    let before = solver.columns_solved();
+    let shape = out.clone();
+    for (key, (u, v)) in [(20u64, (0.3, 0.6)), (21, (0.62, 0.35))] {
+        groups.push(pin(&s, key, u, v, solved.point(u, v)));
+        solver
+            .set_problem(Problem {
+                groups: groups.clone(),
+            })
+            .unwrap();
+        solver.solve(&p, &mut out).unwrap();
+    }
+    assert_eq!(solver.columns_solved(), before, "the new columns wait");
+    assert_eq!(out, shape);
+    // A drag frame needs them: solved (one batch), and the frame is the
+    // dense KKT answer, the new pins held.
+    let t = DVec3::new(0.1, -0.2, 0.7);
+    solver.drag(10, t, &p, &mut out).unwrap();
+    assert!(solver.columns_solved() > before);
+    let problem = Problem {
+        groups: groups.clone(),
+    };
+    let want = dense_answer(&k, &p, &problem, Some((10, t)));
+    let gap = max_gap(&out, &want);
+    assert!(gap < 1e-9, "drag frame off the dense answer by {gap:e}");
+    let mut dragged = s.clone();
+    dragged.set_points(out.clone()).unwrap();
+    for (u, v) in [(0.3, 0.6), (0.62, 0.35)] {
+        let held = (dragged.point(u, v) - solved.point(u, v))
+            .abs()
+            .max_element();
+        assert!(held < 1e-9, "pin at ({u}, {v}) moved by {held:e}");
+    }
+    // A pin added and dropped before anything solved its column, then
+    // added again with a lifted target: the shape moves, exactly.
+    let extra = pin(&s, 30, 0.4, 0.2, solved.point(0.4, 0.2));
+    let mut with_extra = groups.clone();
+    with_extra.push(extra.clone());
+    solver
+        .set_problem(Problem {
+            groups: with_extra.clone(),
+        })
+        .unwrap();
+    solver
+        .set_problem(Problem {
+            groups: groups.clone(),
+        })
+        .unwrap();
+    let mut lifted = groups.clone();
+    lifted.push(pin(
+        &s,
+        30,
+        0.4,
+        0.2,
+        solved.point(0.4, 0.2) + DVec3::new(0.0, 0.05, 0.2),
+    ));
+    let problem = Problem { groups: lifted };
+    solver.set_problem(problem.clone()).unwrap();
+    let report = solver.solve(&p, &mut out).unwrap();
+    assert!(report.constraint_residual < 1e-9, "{report:?}");
+    let gap = max_gap(&out, &dense_answer(&k, &p, &problem, None));
+    assert!(gap < 1e-9, "moving solve off the dense answer by {gap:e}");
+}
