@@ -28,6 +28,8 @@ import { SectionGrid } from './body-section.js';
 const LINE_COLOURS = [0xe05050, 0x50c050, 0x5080f0];
 /** Morph time step per animation frame while playing (about 2 s for 0 → 1 at 60 Hz). */
 const PLAY_STEP = 1 / 120;
+/** det J varying by less than this fraction over a section counts as constant (the frame's lattice is f32). */
+const SPREAD = 1e-5;
 /** The faces' names, per direction: [at the start, at the end]. */
 const FACE_NAMES = [['u_min', 'u_max'], ['v_min', 'v_max'], ['w_min', 'w_max']];
 /** The det J colour scale, low to high (viridis, sampled). */
@@ -75,7 +77,7 @@ export class BodyView {
     this.selection = null;
     /** Edits sent and not answered yet, by request id. */
     this.pending = new Map();
-    /** The last refused edit: { message, at: [x, y, z] | null }. */
+    /** The last refused edit: { message, at: [x, y, z] | null, part, edit (body_edit's) }. */
     this.refused = null;
     const prev = view.bounds;
     view.bounds = () => {
@@ -166,7 +168,7 @@ export class BodyView {
       sel.start = null;
       if (delta.lengthSq() > 0) {
         const req = this.send({ type: 'body_edit', part: sel.part, edit: { select: sel.select, delta: [delta.x, delta.y, delta.z] } });
-        if (req != null) this.pending.set(req, { part: sel.part });
+        if (req != null) this.pending.set(req, { part: sel.part, edit: { select: sel.select, delta: [delta.x, delta.y, delta.z] } });
       }
     });
     g.addEventListener('objectChange', () => {
@@ -402,9 +404,11 @@ export class BodyView {
     b.group.updateMatrixWorld(true);
     this.clip.applyMatrix4(b.group.matrixWorld);
     c.offsetValue.textContent = `${'xyz'[axis]} = ${offset.toFixed(2)}`;
+    // A spread below f32 rounding of the lattice is no spread: one colour, the scale's middle.
     const range = sec.detMax - sec.detMin;
+    const spread = range > SPREAD * Math.max(Math.abs(sec.detMax), Math.abs(sec.detMin));
     const colours = new Float32Array(sec.positions.length);
-    for (let v = 0; v < sec.det.length; v++) colours.set(scaleColour(range > 0 ? (sec.det[v] - sec.detMin) / range : 0.5), 3 * v);
+    for (let v = 0; v < sec.det.length; v++) colours.set(scaleColour(spread ? (sec.det[v] - sec.detMin) / range : 0.5), 3 * v);
     const g = b.section.geometry;
     g.setAttribute('position', new THREE.BufferAttribute(sec.positions, 3));
     g.setAttribute('color', new THREE.BufferAttribute(colours, 3));
@@ -571,7 +575,7 @@ export class BodyView {
     const f = face ? BodyView.faceOf(b.frame.counts, ijk) : null;
     const select = f ? { face: f } : { point: ijk };
     const req = this.send({ type: 'body_edit', part, edit: { select, delta } });
-    if (req != null) this.pending.set(req, { part });
+    if (req != null) this.pending.set(req, { part, edit: { select, delta } });
     return req;
   }
 
@@ -593,7 +597,7 @@ export class BodyView {
       return;
     }
     const at = foldPlace(msg.message);
-    this.refused = { message: msg.message, at };
+    this.refused = { message: msg.message, at, part: p.part, edit: p.edit };
     fold.textContent = `edit refused: ${msg.message}`;
     fold.hidden = false;
     if (at && b) {
