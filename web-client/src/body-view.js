@@ -6,8 +6,8 @@
 // Editing: a handle pressed and dragged moves that point (with Shift held,
 // its face) in the screen's plane; a handle clicked selects, by the chosen
 // mode, that point, a face it lies on or an edge it lies on (clicking it
-// again cycles through its faces or edges), and a TransformControls gizmo
-// moves the selection. Each drag is sent as one `body_edit` when released;
+// again cycles through its faces or edges; Escape lets go), and a
+// TransformControls gizmo moves the selection. Each drag is sent as one `body_edit` when released;
 // the server refuses an edit that folds the body and says where: the page
 // shows the message and marks the place, and the handles go back.
 //
@@ -99,6 +99,11 @@ export class BodyView {
     el.addEventListener('pointerdown', (e) => this.pointerDown(e), true);
     el.addEventListener('pointermove', (e) => this.pointerMove(e), true);
     el.addEventListener('pointerup', (e) => this.pointerUp(e), true);
+    document.addEventListener('keydown', (e) => {
+      const t = e.target;
+      const typing = t instanceof HTMLElement && (t.isContentEditable || ['INPUT', 'TEXTAREA'].includes(t.tagName));
+      if (e.key === 'Escape' && !typing && this.selection && !this.gizmo.dragging) this.deselect();
+    });
   }
 
   makeControls(panel) {
@@ -166,9 +171,17 @@ export class BodyView {
       }
       const delta = this.proxy.position.clone().sub(sel.start || this.proxy.position);
       sel.start = null;
-      if (delta.lengthSq() > 0) {
-        const req = this.send({ type: 'body_edit', part: sel.part, edit: { select: sel.select, delta: [delta.x, delta.y, delta.z] } });
-        if (req != null) this.pending.set(req, { part: sel.part, edit: { select: sel.select, delta: [delta.x, delta.y, delta.z] } });
+      const req = delta.lengthSq() > 0 ? this.send({ type: 'body_edit', part: sel.part, edit: { select: sel.select, delta: [delta.x, delta.y, delta.z] } }) : null;
+      if (req != null) {
+        this.pending.set(req, { part: sel.part, edit: { select: sel.select, delta: [delta.x, delta.y, delta.z] } });
+        return;
+      }
+      // Nothing sent: the handles, the section and the gizmo go back to the frame.
+      const b = this.bodies.get(sel.part);
+      if (b && b.frame) {
+        this.fill(b, b.frame);
+        this.drawSection(b);
+        this.placeGizmo();
       }
     });
     g.addEventListener('objectChange', () => {
@@ -181,6 +194,8 @@ export class BodyView {
       for (const i of sel.indices) pos.setXYZ(i, b.frame.lattice[3 * i] + d.x, b.frame.lattice[3 * i + 1] + d.y, b.frame.lattice[3 * i + 2] + d.z);
       pos.needsUpdate = true;
       this.showChosen(b);
+      // The section follows the previewed lattice: the interior distribution as the edit would make it.
+      if (this.cut.on && Number(this.controls.part.value) === b.id) this.drawSection(b, pos.array);
     });
   }
 
@@ -373,9 +388,10 @@ export class BodyView {
   /**
    * Draws body `b`'s section by the cutting plane when it is on and `b` is
    * the chosen body (its volume sampled once per frame), and clips its
-   * boundary beyond the plane; else shows the whole body.
+   * boundary beyond the plane; else shows the whole body. With `lattice`
+   * (a preview during a gizmo drag) the section is of that lattice instead.
    */
-  drawSection(b) {
+  drawSection(b, lattice = null) {
     const c = this.controls;
     const chosen = Number(c.part.value) === b.id;
     const show = this.cut.on && chosen && b.frame && b.frame.degrees;
@@ -393,9 +409,11 @@ export class BodyView {
     }
     if (!b.grid) b.grid = new SectionGrid(BSplineVolume.fromFrame(b.frame));
     const axis = this.cut.axis;
+    // The plane stays where the shown body puts it while a preview changes the body.
     const [lo, hi] = b.grid.range(axis);
     const offset = lo + this.cut.at * (hi - lo);
-    const sec = b.grid.cut(axis, offset);
+    const grid = lattice ? new SectionGrid(BSplineVolume.fromFrame({ ...b.frame, lattice })) : b.grid;
+    const sec = grid.cut(axis, offset);
     this.lastSection = { part: b.id, axis, offset, section: sec };
     // Keep x_axis ≤ offset: the plane's normal points back along the axis.
     const n = new THREE.Vector3();
@@ -610,6 +628,7 @@ export class BodyView {
     }
     if (b && b.frame) {
       this.fill(b, b.frame);
+      this.drawSection(b);
       if (this.selection && this.selection.part === b.id) this.placeGizmo();
     }
     this.view.drawn();

@@ -438,15 +438,30 @@ test('the lattice gizmo: a face selected by a click and dragged along x moves fo
     const unit = await screenOf(page, [o[0] + 1, o[1], o[2]]);
     return { from: p1, dir: [p1.x - p0.x, p1.y - p0.y], perMm: Math.hypot(unit.x - p0.x, unit.y - p0.y), length };
   };
-  const dragAlong = async (page, a, mm) => {
+  const dragAlong = async (page, a, mm, held = async () => {}) => {
     const n = Math.hypot(...a.dir);
     const px = mm * a.perMm;
     await page.mouse.move(a.from.x, a.from.y);
     await page.mouse.down();
     for (let k = 1; k <= 10; k++) await page.mouse.move(a.from.x + (a.dir[0] / n) * px * (k / 10), a.from.y + (a.dir[1] / n) * px * (k / 10));
+    await held();
     await page.mouse.up();
   };
-  await dragAlong(editor, await arrow(editor), 12);
+  // The cutting plane on (y = its middle): while the gizmo is held, the section is of the previewed lattice.
+  await editor.check('#body-section-on');
+  await editor.selectOption('#body-section-axis', '1');
+  const sectionReach = () => editor.evaluate(() => {
+    const s = window.vsculpt.bodyView.lastSection.section;
+    return Math.max(...s.positions.filter((_, i) => i % 3 === 0));
+  });
+  assert.ok(Math.abs((await sectionReach()) - 30) < 1e-3, 'the cube\'s section reaches x = 30');
+  let preview = null;
+  await dragAlong(editor, await arrow(editor), 12, async () => {
+    const held = await editor.evaluate(() => window.vsculpt.bodyView.gizmoOrigin()[0] - 30);
+    preview = { held, reach: await sectionReach() };
+  });
+  assert.ok(preview.held > 6, `the gizmo was held ${preview.held} mm along`);
+  assert.ok(Math.abs(preview.reach - (30 + preview.held)) < 1e-3, `the previewed section reaches x = ${preview.reach}`);
   const moved = await waitBody(viewer, id, before.revision);
   const res = await fetch(`${server.base}/api/designs/${d.id}?token=${d.tokens.editor}`);
   const stored = (await res.json()).design.parts.find((p) => p.id === id).body.lattice.points;
@@ -463,9 +478,10 @@ test('the lattice gizmo: a face selected by a click and dragged along x moves fo
   // The viewer's body follows: its boundary now reaches x = 30 + dx.
   const xs = moved.positions.filter((_, i) => i % 3 === 0);
   assert.ok(Math.abs(Math.max(...xs) - (30 + dx)) < 1e-3, `the boundary reaches x = ${Math.max(...xs)}`);
+  await editor.waitForFunction(([id, rev]) => window.vsculpt.bodyView.bodies.get(id).frame.revision > rev, [id, before.revision]);
+  assert.ok(Math.abs((await sectionReach()) - (30 + dx)) < 1e-3, 'the section of the edited body');
 
   // A drag of the same face 90 mm back, past the opposite face: the server refuses it as a fold.
-  await editor.waitForFunction((rev) => window.vsculpt.bodyView.bodies.get([...window.vsculpt.bodyView.bodies.keys()][0]).frame.revision > rev, before.revision);
   const back = await arrow(editor);
   await dragAlong(editor, { ...back, dir: [-back.dir[0], -back.dir[1]] }, 90);
   await editor.waitForFunction(() => window.vsculpt.bodyView.refused !== null, null, { timeout: 15000 });
