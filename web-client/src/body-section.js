@@ -106,6 +106,8 @@ export class SectionGrid {
     const corner = [0, 0, 0, 0, 0, 0, 0, 0];
     const cijk = [];
     for (let q = 0; q < 8; q++) cijk.push([0, 0, 0]);
+    const tv = [0, 0, 0, 0];
+    const tijk = [null, null, null, null];
     const vertexOn = (a, b) => {
       const key = a < b ? a * nodes + b : b * nodes + a;
       let v = edges.get(key);
@@ -133,7 +135,14 @@ export class SectionGrid {
             hi = Math.max(hi, x);
           }
           if (!(lo < 0 && hi >= 0)) continue;
-          for (const tet of TETS) this.cutTet(tet.map((q) => corner[q]), tet.map((q) => cijk[q]), g, vertexOn, tris, outline);
+          const edge = i === 0 || j === 0 || k === 0 || i === A - 1 || j === B - 1 || k === C - 1;
+          for (const tet of TETS) {
+            for (let q = 0; q < 4; q++) {
+              tv[q] = corner[tet[q]];
+              tijk[q] = cijk[tet[q]];
+            }
+            this.cutTet(tv, edge ? tijk : null, g, vertexOn, tris, outline);
+          }
         }
       }
     }
@@ -154,10 +163,14 @@ export class SectionGrid {
     };
   }
 
-  /** Marching tetrahedra on one tetrahedron (node ids `v`, grid indices `ijk`); a tet face on the cube's boundary adds its outline segment. */
+  /**
+   * Marching tetrahedra on one tetrahedron (node ids `v`); with its nodes'
+   * grid indices `ijk` (a cell at the grid's boundary), a tet face on the
+   * parameter cube's boundary adds its outline segment.
+   */
   cutTet(v, ijk, g, vertexOn, tris, outline) {
-    const inside = v.map((id) => g(id) < 0);
-    const nIn = inside.filter(Boolean).length;
+    const inside = [g(v[0]) < 0, g(v[1]) < 0, g(v[2]) < 0, g(v[3]) < 0];
+    const nIn = inside[0] + inside[1] + inside[2] + inside[3];
     if (nIn === 0 || nIn === 4) return;
     // The crossed edges, in an order that walks around the section polygon.
     const ins = [0, 1, 2, 3].filter((x) => inside[x]);
@@ -171,6 +184,7 @@ export class SectionGrid {
       const q = [vertexOn(v[a], v[c]), vertexOn(v[a], v[d]), vertexOn(v[b], v[d]), vertexOn(v[b], v[c])];
       tris.push(q[0], q[1], q[2], q[0], q[2], q[3]);
     }
+    if (!ijk) return;
     for (const f of FACES) {
       if (!this.onBoundary(f.map((x) => ijk[x]))) continue;
       const fi = f.filter((x) => inside[x]);

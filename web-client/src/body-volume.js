@@ -40,30 +40,32 @@ export function findSpan(knots, p, n, t) {
  * scratch of length ≥ 3·(p + 1) + (p + 1)².
  */
 export function basisWithDerivative(knots, p, s, t, N, dN, work) {
-  const left = work.subarray(0, p + 1);
-  const right = work.subarray(p + 1, 2 * (p + 1));
-  // ndu[j][r] (as the book's table): basis values of degree j in the upper triangle, knot differences in the lower.
+  // work: left[0..p], right[0..p], then ndu[j][r] (as the book's table, row-major, w = p + 1 wide):
+  // basis values of degree j in the upper triangle, knot differences in the lower.
   const w = p + 1;
-  const ndu = work.subarray(2 * w, 2 * w + w * w);
-  ndu[0] = 1;
+  const L = 0;
+  const R = w;
+  const U = 2 * w;
+  work[U] = 1;
   for (let j = 1; j <= p; j++) {
-    left[j] = t - knots[s + 1 - j];
-    right[j] = knots[s + j] - t;
+    work[L + j] = t - knots[s + 1 - j];
+    work[R + j] = knots[s + j] - t;
     let saved = 0;
     for (let r = 0; r < j; r++) {
-      ndu[j * w + r] = right[r + 1] + left[j - r];
-      const tmp = ndu[r * w + (j - 1)] / ndu[j * w + r];
-      ndu[r * w + j] = saved + right[r + 1] * tmp;
-      saved = left[j - r] * tmp;
+      const diff = work[R + r + 1] + work[L + j - r];
+      work[U + j * w + r] = diff;
+      const tmp = work[U + r * w + (j - 1)] / diff;
+      work[U + r * w + j] = saved + work[R + r + 1] * tmp;
+      saved = work[L + j - r] * tmp;
     }
-    ndu[j * w + j] = saved;
+    work[U + j * w + j] = saved;
   }
-  for (let j = 0; j <= p; j++) N[j] = ndu[j * w + p];
+  for (let j = 0; j <= p; j++) N[j] = work[U + j * w + p];
   // First derivative: p · (N_{r,p−1} / (t_{r+p} − t_r) − N_{r+1,p−1} / (t_{r+p+1} − t_{r+1})).
   for (let r = 0; r <= p; r++) {
     let d = 0;
-    if (r >= 1) d += ndu[(r - 1) * w + (p - 1)] / ndu[p * w + (r - 1)];
-    if (r <= p - 1) d -= ndu[r * w + (p - 1)] / ndu[p * w + r];
+    if (r >= 1) d += work[U + (r - 1) * w + (p - 1)] / work[U + p * w + (r - 1)];
+    if (r <= p - 1) d -= work[U + r * w + (p - 1)] / work[U + p * w + r];
     dN[r] = p * d;
   }
 }
@@ -85,6 +87,8 @@ export class BSplineVolume {
     this.knots = knots.map((k) => Float64Array.from(k));
     this.counts = counts.slice();
     this.points = Float64Array.from(points);
+    this.dom = [0, 1, 2].map((d) => [this.knots[d][this.degrees[d]], this.knots[d][this.counts[d]]]);
+    this.spanAt = new Int32Array(3);
     const m = Math.max(...degrees) + 1;
     this.b = [0, 1, 2].map(() => ({ N: new Float64Array(m), dN: new Float64Array(m) }));
     this.work = new Float64Array(3 * m + m * m);
@@ -97,7 +101,7 @@ export class BSplineVolume {
 
   /** The parameter domain [[u0, u1], [v0, v1], [w0, w1]]. */
   domain() {
-    return [0, 1, 2].map((d) => [this.knots[d][this.degrees[d]], this.knots[d][this.counts[d]]]);
+    return this.dom.map((r) => r.slice());
   }
 
   /** Knot spans (non-empty) per direction. */
@@ -115,11 +119,10 @@ export class BSplineVolume {
    * { p, du, dv, dw: [x, y, z], det } with det = det J = x_u · (x_v × x_w).
    */
   eval(u, v, w) {
-    const t = [u, v, w];
-    const dom = this.domain();
-    const spans = [0, 0, 0];
+    const dom = this.dom;
+    const spans = this.spanAt;
     for (let d = 0; d < 3; d++) {
-      const x = Math.min(dom[d][1], Math.max(dom[d][0], t[d]));
+      const x = Math.min(dom[d][1], Math.max(dom[d][0], d === 0 ? u : d === 1 ? v : w));
       const p = this.degrees[d];
       spans[d] = findSpan(this.knots[d], p, this.counts[d], x);
       basisWithDerivative(this.knots[d], p, spans[d], x, this.b[d].N, this.b[d].dN, this.work);
@@ -138,6 +141,7 @@ export class BSplineVolume {
         const nm = bu.N[a] * bv.N[b];
         const dnm = bu.dN[a] * bv.N[b];
         const ndm = bu.N[a] * bv.dN[b];
+        const pts = this.points;
         for (let c = 0; c <= r; c++) {
           const k = spans[2] - r + c;
           const o = 3 * ((i * nv + j) * nw + k);
@@ -146,13 +150,21 @@ export class BSplineVolume {
           const wu = dnm * L;
           const wv = ndm * L;
           const ww = nm * bw.dN[c];
-          for (let e = 0; e < 3; e++) {
-            const x = this.points[o + e];
-            P[e] += wP * x;
-            Du[e] += wu * x;
-            Dv[e] += wv * x;
-            Dw[e] += ww * x;
-          }
+          const x = pts[o];
+          const y = pts[o + 1];
+          const z = pts[o + 2];
+          P[0] += wP * x;
+          P[1] += wP * y;
+          P[2] += wP * z;
+          Du[0] += wu * x;
+          Du[1] += wu * y;
+          Du[2] += wu * z;
+          Dv[0] += wv * x;
+          Dv[1] += wv * y;
+          Dv[2] += wv * z;
+          Dw[0] += ww * x;
+          Dw[1] += ww * y;
+          Dw[2] += ww * z;
         }
       }
     }

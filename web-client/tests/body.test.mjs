@@ -256,11 +256,17 @@ function boundaryMesh(L, n) {
   return { positions, triangles };
 }
 
-/** Distance from p to the triangle mesh (flat positions, triangles). */
+/** Distance from p to the triangle mesh (flat positions, triangles); triangles whose bounding sphere is farther than the best so far are skipped. */
 function meshDistance(p, positions, triangles) {
   let best = Infinity;
   const v = (i) => [positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]];
-  for (let t = 0; t < triangles.length; t += 3) best = Math.min(best, pointTriangle(p, v(triangles[t]), v(triangles[t + 1]), v(triangles[t + 2])));
+  for (let t = 0; t < triangles.length; t += 3) {
+    const [a, b, c] = [v(triangles[t]), v(triangles[t + 1]), v(triangles[t + 2])];
+    const m = [0, 1, 2].map((e) => (a[e] + b[e] + c[e]) / 3);
+    const r = Math.max(...[a, b, c].map((q) => Math.hypot(q[0] - m[0], q[1] - m[1], q[2] - m[2])));
+    if (Math.hypot(p[0] - m[0], p[1] - m[1], p[2] - m[2]) - r >= best) continue;
+    best = Math.min(best, pointTriangle(p, a, b, c));
+  }
   return best;
 }
 
