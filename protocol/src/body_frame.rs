@@ -26,6 +26,8 @@ pub const MAX_FRAME_TRIANGLES: usize = 1 << 21;
 pub const MAX_FRAME_LINES: usize = 4096;
 /// Most samples along one isoparametric line.
 pub const MAX_LINE_SAMPLES: usize = 1024;
+/// Highest degree a body frame's lattice may have along a direction.
+pub const MAX_FRAME_DEGREE: u32 = crate::body::MAX_BODY_DEGREE;
 
 /// One evaluated body.
 #[derive(Clone, Debug, PartialEq)]
@@ -56,6 +58,10 @@ pub struct BodyFrame {
     pub line_dirs: Vec<u32>,
     /// The lines' points, `line_samples` per line, line after line.
     pub line_points: Vec<[f32; 3]>,
+    /// The lattice's degrees along u, v, w.
+    pub degrees: [u32; 3],
+    /// The lattice's clamped knots along u, v, w: `counts[d] + degrees[d] + 1` each.
+    pub knots: [Vec<f32>; 3],
 }
 
 fn bad(message: impl Into<String>) -> ProtocolError {
@@ -71,6 +77,8 @@ impl BodyFrame {
             + 12 * self.triangles.len()
             + 4 * self.line_dirs.len()
             + 12 * self.line_points.len()
+            + 12
+            + 4 * self.knots.iter().map(Vec::len).sum::<usize>()
     }
 
     /// Checks sizes, numbers and indices (the checks `decode` makes).
@@ -99,6 +107,7 @@ impl BodyFrame {
         if self.line_dirs.iter().any(|&d| d > 2) {
             return Err(bad("a line direction is not 0, 1 or 2"));
         }
+        check_spline(self.counts, self.degrees, &self.knots)?;
         let finite = |p: &[f32; 3]| p.iter().all(|x| x.is_finite());
         if !self.t.is_finite()
             || !self.lattice.iter().all(finite)
@@ -165,6 +174,12 @@ impl BodyFrame {
             out.extend_from_slice(&d.to_le_bytes());
         }
         put3(&mut out, &self.line_points);
+        for d in self.degrees {
+            out.extend_from_slice(&d.to_le_bytes());
+        }
+        for x in self.knots.iter().flatten() {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
         debug_assert_eq!(out.len(), self.byte_len());
         Ok(out)
     }
@@ -197,7 +212,22 @@ impl BodyFrame {
                 "body frame exceeds the size limits",
             ));
         }
-        let total = BODY_HEADER_BYTES + 12 * n + 24 * v + 12 * t + 4 * l + 12 * l * s;
+        // The spline section follows the lines: 3 degrees, then the knots.
+        let spline = BODY_HEADER_BYTES + 12 * n + 24 * v + 12 * t + 4 * l + 12 * l * s;
+        if bytes.len() < spline + 12 {
+            return Err(bad(format!(
+                "body frame has {} bytes, too few for its header's sizes and the degrees",
+                bytes.len()
+            )));
+        }
+        let degrees = [0, 1, 2].map(|d| u32_at(spline + 4 * d));
+        if degrees.iter().any(|&p| p == 0 || p > MAX_FRAME_DEGREE) {
+            return Err(bad(format!(
+                "a body frame's degrees must be 1..={MAX_FRAME_DEGREE}"
+            )));
+        }
+        let lens = [0, 1, 2].map(|d| counts[d] as usize + degrees[d] as usize + 1);
+        let total = spline + 12 + 4 * lens.iter().sum::<usize>();
         if bytes.len() != total {
             return Err(bad(format!(
                 "body frame has {} bytes, its header says {total}",
@@ -231,8 +261,55 @@ impl BodyFrame {
             line_samples: s as u32,
             line_dirs: (0..l).map(|k| u32_at(dirs + 4 * k)).collect(),
             line_points: vec3s(pts, l * s),
+            degrees,
+            knots: {
+                let mut at = spline + 12;
+                lens.map(|len| {
+                    let k = (0..len).map(|i| f32_at(at + 4 * i)).collect();
+                    at += 4 * len;
+                    k
+                })
+            },
         };
         frame.check()?;
         Ok(frame)
     }
+}
+
+/// A lattice's degrees and knots agree with its counts: degrees
+/// 1..=[`MAX_FRAME_DEGREE`], at least degree + 1 points, `counts + degree
+/// + 1` finite, non-decreasing knots per direction.
+fn check_spline(
+    counts: [u32; 3],
+    degrees: [u32; 3],
+    knots: &[Vec<f32>; 3],
+) -> Result<(), ProtocolError> {
+    for d in 0..3 {
+        let (n, p) = (counts[d] as usize, degrees[d] as usize);
+        if p == 0 || p > MAX_FRAME_DEGREE as usize {
+            return Err(bad(format!(
+                "a body frame's degrees must be 1..={MAX_FRAME_DEGREE}"
+            )));
+        }
+        if n < p + 1 {
+            return Err(bad(
+                "a body frame's lattice has fewer than degree + 1 points along a direction",
+            ));
+        }
+        if knots[d].len() != n + p + 1 {
+            return Err(bad(
+                "a body frame's knots do not match its counts and degrees",
+            ));
+        }
+        if !knots[d].iter().all(|x| x.is_finite()) {
+            return Err(ProtocolError::new(
+                ErrorCode::NotFinite,
+                "body frame has a non-finite knot",
+            ));
+        }
+        if knots[d].windows(2).any(|w| w[1] < w[0]) {
+            return Err(bad("a body frame's knots decrease"));
+        }
+    }
+    Ok(())
 }

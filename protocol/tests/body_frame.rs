@@ -6,8 +6,9 @@
 use vsculpt_protocol::body_frame::KIND_BODY;
 use vsculpt_protocol::{BodyFrame, ErrorCode, parse_client};
 
-/// N = 2·1·1 lattice points, V = 3 vertices, T = 1 triangle, L = 1 line of
-/// S = 2 samples, at the README's offsets.
+/// N = 2·2·2 lattice points (trilinear), V = 3 vertices, T = 1 triangle,
+/// L = 1 line of S = 2 samples, degrees (1, 1, 1) and knots (0, 0, 1, 1) per
+/// direction, at the README's offsets.
 fn hand_written() -> Vec<u8> {
     let mut b = Vec::new();
     b.extend_from_slice(b"VSGF");
@@ -18,7 +19,7 @@ fn hand_written() -> Vec<u8> {
         b.extend_from_slice(&x.to_le_bytes());
     }
     b.extend_from_slice(&0.25f32.to_le_bytes());
-    for x in [2u32, 1, 1, 3, 1, 1, 2] {
+    for x in [2u32, 2, 2, 3, 1, 1, 2] {
         b.extend_from_slice(&x.to_le_bytes());
     }
     assert_eq!(b.len(), 64);
@@ -26,14 +27,32 @@ fn hand_written() -> Vec<u8> {
         xs.iter()
             .for_each(|x| b.extend_from_slice(&x.to_le_bytes()))
     };
-    f32s(&mut b, &[0.0, 0.0, 0.0, 1.0, 2.0, 3.0]);
+    let lattice: Vec<f32> = (0..8)
+        .flat_map(|n| {
+            [
+                (n >> 2) as f32,
+                ((n >> 1) & 1) as f32 * 2.0,
+                (n & 1) as f32 * 3.0,
+            ]
+        })
+        .collect();
+    f32s(&mut b, &lattice);
     f32s(&mut b, &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
     f32s(&mut b, &[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
     for i in [0u32, 1, 2, 2] {
         b.extend_from_slice(&i.to_le_bytes());
     }
     f32s(&mut b, &[0.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
-    assert_eq!(b.len(), 64 + 12 * 2 + 24 * 3 + 12 + 4 + 12 * 2);
+    for p in [1u32, 1, 1] {
+        b.extend_from_slice(&p.to_le_bytes());
+    }
+    for _ in 0..3 {
+        f32s(&mut b, &[0.0, 0.0, 1.0, 1.0]);
+    }
+    assert_eq!(
+        b.len(),
+        64 + 12 * 8 + 24 * 3 + 12 + 4 + 12 * 2 + 12 + 4 * 12
+    );
     b
 }
 
@@ -45,8 +64,11 @@ fn decodes_hand_written_bytes_and_encodes_them_back() {
         (f.design, f.part, f.revision, f.flags, f.t),
         (7, 9, 42, 1, 0.25)
     );
-    assert_eq!(f.counts, [2, 1, 1]);
-    assert_eq!(f.lattice, vec![[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]]);
+    assert_eq!(f.counts, [2, 2, 2]);
+    assert_eq!(f.lattice[1], [0.0, 0.0, 3.0]);
+    assert_eq!(f.lattice[6], [1.0, 2.0, 0.0]);
+    assert_eq!(f.degrees, [1, 1, 1]);
+    assert_eq!(f.knots, [0, 1, 2].map(|_| vec![0.0, 0.0, 1.0, 1.0]));
     assert_eq!(f.triangles, vec![[0, 1, 2]]);
     assert_eq!(f.line_dirs, vec![2]);
     assert_eq!(f.line_samples, 2);
@@ -68,9 +90,22 @@ fn refuses_truncated_corrupt_and_oversized_frames() {
         b
     };
     // A triangle naming vertex 3 of 3; a line direction 3; a huge lattice.
-    let tri = 64 + 24 + 72;
+    let tri = 64 + 96 + 72;
     assert!(BodyFrame::decode(&patched(tri + 8, 3)).is_err());
     assert!(BodyFrame::decode(&patched(tri + 12, 3)).is_err());
+    // The spline section: a degree 0 or 6, a degree that needs more knots
+    // than sent, decreasing knots, a NaN knot.
+    let spline = tri + 12 + 4 + 24;
+    assert!(BodyFrame::decode(&patched(spline, 0)).is_err());
+    assert!(BodyFrame::decode(&patched(spline + 4, 6)).is_err());
+    assert!(BodyFrame::decode(&patched(spline + 8, 2)).is_err());
+    let knot = |k: usize, x: f32| patched(spline + 12 + 4 * k, x.to_bits());
+    assert!(BodyFrame::decode(&knot(5, -1.0)).is_err());
+    assert_eq!(
+        BodyFrame::decode(&knot(9, f32::NAN)).unwrap_err().code,
+        ErrorCode::NotFinite
+    );
+    assert!(BodyFrame::decode(&knot(9, 0.5)).is_ok());
     let e = BodyFrame::decode(&patched(36, u32::MAX)).unwrap_err();
     assert_eq!(e.code, ErrorCode::TooLarge);
     // NaN in the lattice.

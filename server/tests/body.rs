@@ -31,7 +31,7 @@ struct Peer {
 
 enum In {
     Text(Value),
-    Body(BodyFrame),
+    Body(Box<BodyFrame>),
 }
 
 impl Peer {
@@ -65,7 +65,7 @@ impl Peer {
             match m {
                 Message::Text(t) => return In::Text(serde_json::from_str(t.as_str()).unwrap()),
                 Message::Binary(b) if b.len() > 4 && b[4] == KIND_BODY => {
-                    return In::Body(BodyFrame::decode(&b).expect("a valid body frame"));
+                    return In::Body(Box::new(BodyFrame::decode(&b).expect("a valid body frame")));
                 }
                 _ => {}
             }
@@ -107,7 +107,7 @@ impl Peer {
                 && f.part == part
                 && f.revision >= after
             {
-                return f;
+                return *f;
             }
         }
     }

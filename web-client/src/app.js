@@ -312,7 +312,10 @@ function escape(s) {
 }
 
 function onMessage(msg) {
-  if (msg.type === 'ack' || msg.type === 'error') networkView.answered(msg.req);
+  if (msg.type === 'ack' || msg.type === 'error') {
+    networkView.answered(msg.req);
+    bodyView.answered(msg);
+  }
   switch (msg.type) {
     case 'network_changed': {
       const p = design.parts.get(msg.part);

@@ -42,6 +42,10 @@ pub struct BodyShape {
     pub line_dirs: Vec<u32>,
     /// Line points, [`LINE_SAMPLES`] per line.
     pub line_points: Vec<[f32; 3]>,
+    /// The lattice's degrees along u, v, w.
+    pub degrees: [u32; 3],
+    /// The lattice's knots along u, v, w.
+    pub knots: [Vec<f32>; 3],
 }
 
 /// The isoparametric lines of `vol` on its boundary: for each direction d
@@ -84,6 +88,8 @@ pub fn evaluate(vol: &BSplineVolume, display: &mut BodyDisplay) -> BodyShape {
             .iter()
             .map(|p| p.as_vec3().to_array())
             .collect(),
+        degrees: vol.degrees().map(|p| p as u32),
+        knots: Dir::ALL.map(|d| vol.knots(d).knots().iter().map(|&x| x as f32).collect()),
         ..Default::default()
     };
     for face in &display.faces {
@@ -201,6 +207,8 @@ impl BodyEngine {
             line_samples: LINE_SAMPLES as u32,
             line_dirs: s.line_dirs.clone(),
             line_points: s.line_points.clone(),
+            degrees: s.degrees,
+            knots: s.knots.clone(),
         }
         .encode()
         .ok()
