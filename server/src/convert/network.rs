@@ -4,18 +4,18 @@
 //! meetings and faces for snapshots, `part_created` and `network_changed`;
 //! a fairing job's `fairing_progress` and `fairing_ended`.
 
+use crate::design::fairing_job::{JobEnded, JobOutcome, JobProgress};
 use crate::design::network_engine::{
     DEFAULT_FAIRING_ITERATIONS, FairingDoc, GoalDoc, MeasureDoc, NetworkEditDoc, NetworkView,
 };
-use crate::design::fairing_job::{JobEnded, JobOutcome, JobProgress};
 use crate::design::part::{CurveDoc, NetworkPart};
 use axum::extract::ws::Utf8Bytes;
 use vsculpt_protocol as wire;
+use vsculpt_protocol::ServerMessage;
 use vsculpt_protocol::network::{
     FaceSide, FairingGoal, FairingOutcome, FairingProgress, FairnessMeasure, Meeting, NetworkData,
     NetworkEdit, NetworkFace,
 };
-use vsculpt_protocol::ServerMessage;
 
 fn curve_from_wire(c: &wire::CurveData) -> CurveDoc {
     CurveDoc {

@@ -665,8 +665,7 @@ impl Actor {
                     reply,
                 } => {
                     let role = self.role(client);
-                    self.jobs
-                        .start(&self.model, client, role, part, &f, reply);
+                    self.jobs.start(&self.model, client, role, part, &f, reply);
                 }
                 Request::FairingDone(done) => {
                     if let Some(apply) = self.jobs.finish(*done, &self.model) {

@@ -42,7 +42,7 @@ use vsculpt_kernel::fairing::{Control, FairingError, Progress};
 /// The shortest time between two progress events of one job.
 pub const PROGRESS_INTERVAL: Duration = Duration::from_millis(100);
 /// Most fairing jobs running at once in one design.
-pub const MAX_JOBS: usize = 4;
+pub const MAX_JOBS: usize = 16;
 
 /// Whether `command` asks for a fairing (answered when its job ends).
 pub fn is_fair(command: &super::command::Command) -> bool {
@@ -175,7 +175,11 @@ pub fn fraction(p: &Progress, first: f64, max_iterations: usize) -> f64 {
         0.0
     };
     let f = by_sweeps.max(by_moves);
-    if f.is_finite() { f.clamp(0.0, 1.0) } else { 0.0 }
+    if f.is_finite() {
+        f.clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
 }
 
 impl FairingJobs {
@@ -235,9 +239,10 @@ impl FairingJobs {
             }
             (_, None) => return Err(CommandError::new(ErrorKind::Forbidden, "not joined")),
         }
-        let doc = model.doc().part(part).ok_or_else(|| {
-            CommandError::new(ErrorKind::UnknownPart, format!("no part {part}"))
-        })?;
+        let doc = model
+            .doc()
+            .part(part)
+            .ok_or_else(|| CommandError::new(ErrorKind::UnknownPart, format!("no part {part}")))?;
         if !matches!(doc.body, PartBody::Network(_)) {
             return Err(CommandError::new(
                 ErrorKind::Incompatible,
@@ -402,11 +407,18 @@ impl FairingJobs {
                 return None;
             }
         };
-        if !model.network(part).is_some_and(|n| n.face_is_as(&job.input)) {
+        if !model
+            .network(part)
+            .is_some_and(|n| n.face_is_as(&job.input))
+        {
             let message = format!(
                 "face {face} of part {part} changed while it was faired (a curve of it moved, an undo, curves added or removed): the result fits a mesh that is gone and was discarded; fair it again"
             );
-            self.ended(end(JobOutcome::Discarded, faired.iterations, message.clone()));
+            self.ended(end(
+                JobOutcome::Discarded,
+                faired.iterations,
+                message.clone(),
+            ));
             send(job.reply, Err(conflict(message)));
             return None;
         }
