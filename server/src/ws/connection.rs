@@ -395,9 +395,11 @@ impl Session {
                 }
                 if crate::design::fairing_job::is_fair(&cmd) {
                     // A fair's answer comes when its job ends: wait for it
-                    // aside, so this client can go on (and cancel it).
+                    // aside, so this client can go on (and cancel it). The
+                    // reply queue is held weakly: a client that leaves
+                    // meanwhile does not keep its writer waiting for the job.
                     let (handle, client, out) =
-                        (self.handle.clone(), self.client, self.out.clone());
+                        (self.handle.clone(), self.client, self.out.downgrade());
                     let metrics = self.state.metrics.clone();
                     tokio::spawn(async move {
                         let text = match handle.command(client, cmd).await {
@@ -407,7 +409,7 @@ impl Session {
                                 Some(convert::error(id, &WireError::from(e)))
                             }
                         };
-                        if let Some(t) = text {
+                        if let (Some(t), Some(out)) = (text, out.upgrade()) {
                             let _ = out.send(Out::Msg(Message::Text(t))).await;
                         }
                     });
