@@ -275,12 +275,25 @@ pub enum ClientMessage {
     /// Reshape a network part (move a control point, drag a point of a
     /// curve, add or remove a curve) or fair one of its faces: answered
     /// `ack`, `network_changed` and a mesh frame (kind 3) of the part to
-    /// every client; a refused edit changes nothing.
+    /// every client; a refused edit changes nothing. A fair runs as a job
+    /// (`fairing_progress` to everyone while it runs, `fairing_ended` when
+    /// it ends); its `ack` comes when its result is applied, an error when
+    /// it is cancelled, discarded or refused.
     NetworkEdit {
         /// The network part.
         part: u64,
         /// What to change.
         edit: crate::network::NetworkEdit,
+    },
+    /// Cancel the fairing job running on face `face` of network part
+    /// `part` (editors only): it stops within one sweep, nothing changes,
+    /// every client gets `fairing_ended` with `cancelled`. No job there is
+    /// `out_of_range`.
+    CancelFairing {
+        /// The network part.
+        part: u64,
+        /// The face.
+        face: u32,
     },
     /// Move lattice points of a body part (one point, a face's or an
     /// edge's) by a delta; answered `ack` and a body frame (kind 4) to
@@ -339,6 +352,7 @@ pub const CLIENT_TYPES: &[&str] = &[
     "unrelate",
     "dsm_edit",
     "network_edit",
+    "cancel_fairing",
     "body_edit",
     "body_morph",
 ];

@@ -53,7 +53,10 @@ pub use dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};
 pub use mesh_frame::MeshFrame;
-pub use network::{FairingGoal, FairingRequest, FairnessMeasure, NetworkData, NetworkEdit};
+pub use network::{
+    FairingGoal, FairingOutcome, FairingProgress, FairingRequest, FairnessMeasure, NetworkData,
+    NetworkEdit,
+};
 pub use parts::*;
 pub use server::ServerMessage;
 pub use types::*;

@@ -2,6 +2,9 @@
 //! the meetings and faces the server finds between them, the faces it has
 //! faired, and the edits a client sends (`network_edit`): move a control
 //! point, drag a point of a curve, add or remove a curve, fair a face.
+//! A fair runs as a job off the design's thread: its progress
+//! ([`FairingProgress`]) and how it ended ([`FairingOutcome`]) go to every
+//! client; an editor may cancel it (`cancel_fairing`).
 //!
 //! The filled patches travel as mesh frames (kind 3, [`crate::mesh_frame`]):
 //! one mesh of every face of the part, faces one after another in face
@@ -160,6 +163,48 @@ pub enum NetworkEdit {
     /// Fair one face's point mesh toward curvature goals (paper 004 §8);
     /// the faired mesh replaces the face's patch until its curves change.
     Fair(FairingRequest),
+}
+
+/// How a fairing job ended (`fairing_ended`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum FairingOutcome {
+    /// The faired mesh replaced the face's patch: one undoable edit
+    /// (`network_changed` and a mesh frame follow or came just before).
+    Applied,
+    /// An editor cancelled it (or its part was deleted): nothing changed.
+    Cancelled,
+    /// The face changed while it ran (a curve of the face moved, an undo):
+    /// the result fits a mesh that is gone, so nothing changed.
+    Discarded,
+    /// The kernel refused the run (no fit at a point, divergence): nothing
+    /// changed.
+    Failed,
+}
+
+/// A fairing job's state after a sweep (`fairing_progress`, at most ten a
+/// second per job; iteration 0 when it starts).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FairingProgress {
+    /// The network part.
+    pub part: u64,
+    /// The face being faired.
+    pub face: u32,
+    /// The client that asked for it.
+    pub client: u64,
+    /// Sweeps done.
+    pub iteration: u32,
+    /// Sweeps at most.
+    pub max_iterations: u32,
+    /// The largest move of the last sweep (model units; 0 before the first).
+    pub max_move: f64,
+    /// The move below which the run has converged (model units).
+    pub threshold: f64,
+    /// An estimate of the fraction done in [0, 1]: the larger of the
+    /// sweeps' fraction and how far the largest move has come down (on a
+    /// log scale) from the first sweep's toward the threshold.
+    pub fraction: f64,
 }
 
 fn bad(code: ErrorCode, message: impl Into<String>) -> ProtocolError {

@@ -216,6 +216,26 @@ pub enum ServerMessage {
         /// The network as it is now.
         network: crate::network::NetworkData,
     },
+    /// A fairing job's progress (to every client, at most ten a second
+    /// per job; iteration 0 when it starts).
+    FairingProgress(crate::network::FairingProgress),
+    /// A fairing job ended (to every client).
+    FairingEnded {
+        /// The network part.
+        part: u64,
+        /// The face.
+        face: u32,
+        /// The client that asked for it.
+        client: u64,
+        /// How it ended.
+        outcome: crate::network::FairingOutcome,
+        /// Sweeps run.
+        iterations: u32,
+        /// Whether the run converged (`applied` only; false otherwise).
+        converged: bool,
+        /// Why, in words.
+        message: String,
+    },
     /// A DSM part's shape data changed (`dsm_edit`); its new mesh follows
     /// as a mesh frame (kind 3).
     DsmChanged {

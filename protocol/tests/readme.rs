@@ -66,6 +66,8 @@ fn every_server_example_parses_and_round_trips() {
         "part_changed",
         "relation_created",
         "relation_deleted",
+        "fairing_progress",
+        "fairing_ended",
     ] {
         assert!(seen.contains(t), "README has no example of {t}");
     }

@@ -325,9 +325,18 @@ function onMessage(msg) {
       }
       break;
     }
+    case 'fairing_progress':
+    case 'fairing_ended':
+      networkView.fairing(msg);
+      if (msg.type === 'fairing_ended' && msg.outcome !== 'applied' && msg.outcome !== 'cancelled') toast(msg.message);
+      renderFairing();
+      break;
     case 'welcome':
       state.access = msg.access;
       state.clientId = msg.client_id;
+      // Jobs are announced again by their next progress.
+      networkView.jobs.clear();
+      renderFairing();
       break;
     case 'snapshot':
       shellDesign(msg.design);
@@ -862,9 +871,30 @@ $('create').addEventListener('change', (e) => {
 });
 $('add-plane').addEventListener('click', addPlane);
 $('add-curve').addEventListener('click', addCurve);
+/** The network parts the fair button acts on: the selected one, or every one. */
+function fairTargets() {
+  return [...design.parts.values()].filter((p) => p.kind === 'network' && (state.selectedPart === null || state.selectedPart === undefined || state.selectedPart === p.id)).map((p) => p.id);
+}
+/**
+ * The fair button while fairing jobs run: it shows their progress and
+ * cancels them; the progress bar beside it is shown to viewers too.
+ */
+function renderFairing() {
+  const all = networkView.progress();
+  const mine = fairTargets().reduce((n, id) => n + networkView.jobsOf(id).length, 0);
+  const pct = Math.round(100 * all.fraction);
+  const button = $('fair-network');
+  button.textContent = mine ? `cancel fairing (${pct} %)` : 'fair network';
+  button.classList.toggle('running', mine > 0);
+  $('fairing').hidden = all.count === 0;
+  $('fair-progress').value = all.fraction;
+  $('fair-status').textContent = all.count ? `fairing ${all.count} face${all.count === 1 ? '' : 's'}: ${pct} % (sweep ${all.iteration})` : '';
+}
 $('fair-network').addEventListener('click', () => {
-  const ids = [...design.parts.values()].filter((p) => p.kind === 'network' && (state.selectedPart === null || state.selectedPart === undefined || state.selectedPart === p.id)).map((p) => p.id);
-  for (const id of ids) networkView.fairAll(id);
+  const ids = fairTargets();
+  const running = ids.filter((id) => networkView.jobsOf(id).length);
+  if (running.length) for (const id of running) networkView.cancelJobs(id);
+  else for (const id of ids) networkView.fairAll(id);
 });
 $('add-dsm').addEventListener('click', addDsm);
 $('finish-curve').addEventListener('click', finishCurve);

@@ -4,7 +4,9 @@
 // of a point of a curve (`network_edit` drag_point: the server keeps the
 // curve's meetings where they are). One drag message in flight at a time;
 // the newest pointer position goes next. Fairing a part's faces is
-// `fairAll` (one `network_edit` fair per face).
+// `fairAll` (one `network_edit` fair per face); each runs as a job on the
+// server, whose `fairing_progress` and `fairing_ended` (to every client)
+// keep `jobs` current; `cancelJobs` cancels them.
 
 import * as THREE from 'three';
 import { curveDerivs } from './bspline.js';
@@ -51,6 +53,10 @@ export class NetworkView {
     this.pending = new Map();
     /** The drag under way: { part, curve, t, plane, pending, inFlight }. */
     this.drag = null;
+    /** Fairing jobs running on the server, by `part:face`: their newest `fairing_progress`. */
+    this.jobs = new Map();
+    /** The last `fairing_ended`. */
+    this.lastEnded = null;
     const previous = view.bounds;
     view.bounds = () => {
       const box = previous() || new THREE.Box3();
@@ -236,14 +242,51 @@ export class NetworkView {
     this.view.controls.enabled = true;
   }
 
-  /** Fairs every face of network part `id` toward its boundary's mean curvature. Returns the number of requests sent. */
-  fairAll(id, maxIterations = 100) {
+  /**
+   * Fairs every face of network part `id` toward its boundary's mean
+   * curvature (`options`: `relaxation`, `tolerance` of the request). Returns
+   * the number of requests sent.
+   */
+  fairAll(id, maxIterations = 100, options = {}) {
     const d = this.parts.get(id);
     if (!d) return 0;
     let sent = 0;
     d.network.faces.forEach((_, face) => {
-      if (this.send({ type: 'network_edit', part: id, edit: { op: 'fair', face, measure: 'mean', goal: 'from_boundary', max_iterations: maxIterations } }) !== null) sent++;
+      if (this.send({ type: 'network_edit', part: id, edit: { op: 'fair', face, measure: 'mean', goal: 'from_boundary', max_iterations: maxIterations, ...options } }) !== null) sent++;
     });
     return sent;
+  }
+
+  /** A `fairing_progress` or `fairing_ended` from the server. */
+  fairing(msg) {
+    const key = `${msg.part}:${msg.face}`;
+    if (msg.type === 'fairing_progress') this.jobs.set(key, msg);
+    else {
+      this.jobs.delete(key);
+      this.lastEnded = msg;
+    }
+  }
+
+  /** The jobs running on network part `id` (every part's when `id` is null). */
+  jobsOf(id = null) {
+    return [...this.jobs.values()].filter((j) => id === null || j.part === id);
+  }
+
+  /** Cancels the jobs of part `id` (every part's when null); returns how many cancels were sent. */
+  cancelJobs(id = null) {
+    let sent = 0;
+    for (const j of this.jobsOf(id)) if (this.send({ type: 'cancel_fairing', part: j.part, face: j.face }) !== null) sent++;
+    return sent;
+  }
+
+  /** The jobs' progress: { count, fraction (mean), iteration (largest) }. */
+  progress(id = null) {
+    const jobs = this.jobsOf(id);
+    if (!jobs.length) return { count: 0, fraction: 0, iteration: 0 };
+    return {
+      count: jobs.length,
+      fraction: jobs.reduce((s, j) => s + j.fraction, 0) / jobs.length,
+      iteration: Math.max(...jobs.map((j) => j.iteration)),
+    };
   }
 }

@@ -6,6 +6,9 @@
 // vertex of its mesh frame within the frame's quantisation of a curve,
 // measured by Newton's method on the curves the viewer was sent); the
 // fairing button fairs the faces and the boundary stays on the curves.
+// Fairing runs as a job: both browsers show its progress, the editor's
+// fair button turns into a cancel button (the viewer's is not shown) that
+// cancels it and changes nothing; a finished fairing is drawn.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -166,6 +169,69 @@ test('a curve point dragged in one browser: the other browser\'s patches still m
     faired = await measure(viewer);
   }
   assert.ok(faired.gap <= faired.quantum, `faired patches miss the curves by ${faired.gap}`);
+  assert.deepEqual(editor.errors, []);
+  assert.deepEqual(viewer.errors, []);
+  await editor.close();
+  await viewer.close();
+});
+
+/** The drawn patches' positions of network part 1 in `page`, and their frame's revision. */
+function drawn(page) {
+  return page.evaluate(() => {
+    const d = window.vsculpt.networkView.parts.get(1);
+    return { positions: Array.from(d.mesh.geometry.getAttribute('position').array), revision: d.frame.revision };
+  });
+}
+
+test('fairing runs as a job: progress in both browsers, the button cancels it, a finished fairing is drawn', async () => {
+  const d = await bottleDesign('bottle-job');
+  const editor = await openNetwork(d.editor);
+  const viewer = await openNetwork(d.viewer);
+  const before = await drawn(viewer);
+  assert.equal(await editor.evaluate(() => document.querySelector('#fair-network').textContent), 'fair network');
+
+  // Long runs of every face (steps of 0.1 %: tens of thousands of sweeps), sent as the button sends them.
+  const sent = await editor.evaluate(() => window.vsculpt.networkView.fairAll(1, 100000, { relaxation: 0.001, tolerance: 1e-14 }));
+  assert.equal(sent, 6);
+  // The editor's button shows the progress and becomes a cancel button.
+  await editor.waitForFunction(() => /^cancel fairing \(\d+ %\)$/.test(document.querySelector('#fair-network').textContent) && !document.querySelector('#fairing').hidden, null, { timeout: 15000 });
+  // The viewer sees the progress (sweeps counting up), read-only: no fair button shown.
+  await viewer.waitForFunction(
+    () => !document.querySelector('#fairing').hidden && /^fairing 6 faces: \d+ % \(sweep [1-9]\d*\)$/.test(document.querySelector('#fair-status').textContent) && document.querySelector('#fair-progress').value >= 0,
+    null,
+    { timeout: 15000 },
+  );
+  assert.equal(await viewer.evaluate(() => document.querySelector('#fair-network').offsetParent), null, 'a viewer sees no fair button');
+  assert.equal(await viewer.evaluate(() => window.vsculpt.networkView.jobs.size), 6);
+
+  // The button cancels every job: both browsers see them end, nothing changed.
+  await editor.click('#fair-network');
+  for (const page of [editor, viewer]) {
+    await page.waitForFunction(() => window.vsculpt.networkView.jobs.size === 0 && document.querySelector('#fairing').hidden, null, { timeout: 15000 });
+    assert.equal(await page.evaluate(() => window.vsculpt.networkView.lastEnded.outcome), 'cancelled');
+    assert.equal(await page.evaluate(() => window.vsculpt.networkView.parts.get(1).network.faired.length), 0);
+  }
+  assert.equal(await editor.evaluate(() => document.querySelector('#fair-network').textContent), 'fair network');
+  const cancelled = await drawn(viewer);
+  assert.equal(cancelled.revision, before.revision, 'a cancelled fairing sent new patches');
+  assert.deepEqual(cancelled.positions, before.positions);
+
+  // The button again (100 sweeps): the faired patches are drawn in the viewer.
+  await editor.click('#fair-network');
+  await viewer.waitForFunction(() => {
+    const d = window.vsculpt.networkView.parts.get(1);
+    return d.network.faired.length === 6 && window.vsculpt.networkView.jobs.size === 0;
+  }, null, { timeout: 30000 });
+  let after = await drawn(viewer);
+  for (let k = 0; k < 50 && after.revision <= before.revision; k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    after = await drawn(viewer);
+  }
+  assert.ok(after.revision > before.revision, 'no faired patches drawn');
+  assert.equal(after.positions.length, before.positions.length);
+  const moved = after.positions.reduce((m, x, i) => Math.max(m, Math.abs(x - before.positions[i])), 0);
+  assert.ok(moved > 1e-4, `the drawn patches moved by ${moved}`);
+  assert.equal(await viewer.evaluate(() => window.vsculpt.networkView.lastEnded.outcome), 'applied');
   assert.deepEqual(editor.errors, []);
   assert.deepEqual(viewer.errors, []);
   await editor.close();

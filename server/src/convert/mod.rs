@@ -496,6 +496,10 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
             },
         }),
         M::BodyMorph { part, t } => Inbound::Command(Command::BodyMorph { part, t }),
+        M::CancelFairing { part, face } => Inbound::Command(Command::CancelFairing {
+            part,
+            face: face as usize,
+        }),
         M::CreatePart { spec } => edit(parts::create_part(&spec)),
         M::DeletePart { part } => edit(Edit::DeletePart { part }),
         M::SetPart {
@@ -548,7 +552,7 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
     Ok((req, inbound))
 }
 
-fn text(m: &ServerMessage) -> Utf8Bytes {
+pub(crate) fn text(m: &ServerMessage) -> Utf8Bytes {
     // Server messages hold finite floats and plain data: serialising them
     // cannot fail.
     serde_json::to_string(m).unwrap_or_default().into()
@@ -708,6 +712,8 @@ pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
             part: *part,
             network: network::network_to_wire(v),
         }),
+        DesignEvent::FairingProgress(p) => network::fairing_progress_to_wire(p),
+        DesignEvent::FairingEnded(e) => network::fairing_ended_to_wire(e),
         DesignEvent::DsmChanged(p) => match &p.body {
             PartBody::Dsm(d) => text(&ServerMessage::DsmChanged {
                 part: p.id,

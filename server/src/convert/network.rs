@@ -1,15 +1,20 @@
 //! Network parts between the wire (`vsculpt_protocol::network`) and the
 //! design (`design::part::NetworkPart`, `design::network_engine`): decoding
 //! a network shape and `network_edit`, encoding a network with its
-//! meetings and faces for snapshots, `part_created` and `network_changed`.
+//! meetings and faces for snapshots, `part_created` and `network_changed`;
+//! a fairing job's `fairing_progress` and `fairing_ended`.
 
+use crate::design::fairing_job::{JobEnded, JobOutcome, JobProgress};
 use crate::design::network_engine::{
     DEFAULT_FAIRING_ITERATIONS, FairingDoc, GoalDoc, MeasureDoc, NetworkEditDoc, NetworkView,
 };
 use crate::design::part::{CurveDoc, NetworkPart};
+use axum::extract::ws::Utf8Bytes;
 use vsculpt_protocol as wire;
+use vsculpt_protocol::ServerMessage;
 use vsculpt_protocol::network::{
-    FaceSide, FairingGoal, FairnessMeasure, Meeting, NetworkData, NetworkEdit, NetworkFace,
+    FaceSide, FairingGoal, FairingOutcome, FairingProgress, FairnessMeasure, Meeting, NetworkData,
+    NetworkEdit, NetworkFace,
 };
 
 fn curve_from_wire(c: &wire::CurveData) -> CurveDoc {
@@ -108,4 +113,36 @@ pub fn edit_from_wire(e: &NetworkEdit) -> NetworkEditDoc {
                 .map_or(DEFAULT_FAIRING_ITERATIONS, |n| n as usize),
         }),
     }
+}
+
+/// A fairing job's progress on the wire.
+pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
+    super::text(&ServerMessage::FairingProgress(FairingProgress {
+        part: p.part,
+        face: p.face as u32,
+        client: p.client,
+        iteration: p.iteration as u32,
+        max_iterations: p.max_iterations as u32,
+        max_move: p.max_move,
+        threshold: p.threshold,
+        fraction: p.fraction,
+    }))
+}
+
+/// A fairing job's end on the wire.
+pub fn fairing_ended_to_wire(e: &JobEnded) -> Utf8Bytes {
+    super::text(&ServerMessage::FairingEnded {
+        part: e.part,
+        face: e.face as u32,
+        client: e.client,
+        outcome: match e.outcome {
+            JobOutcome::Applied => FairingOutcome::Applied,
+            JobOutcome::Cancelled => FairingOutcome::Cancelled,
+            JobOutcome::Discarded => FairingOutcome::Discarded,
+            JobOutcome::Failed => FairingOutcome::Failed,
+        },
+        iterations: e.iterations as u32,
+        converged: e.converged,
+        message: e.message.clone(),
+    })
 }

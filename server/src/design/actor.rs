@@ -154,6 +154,10 @@ pub enum DesignEvent {
     NetworkChanged(u64, Arc<super::network_engine::NetworkView>),
     /// A DSM part's shape data changed (its mesh follows as a frame).
     DsmChanged(PartDoc),
+    /// A fairing job's progress (see [`super::fairing_job`]).
+    FairingProgress(Box<super::fairing_job::JobProgress>),
+    /// A fairing job ended.
+    FairingEnded(Box<super::fairing_job::JobEnded>),
     /// A relation was created.
     RelationCreated(RelationDoc),
     /// A relation was removed.
@@ -255,6 +259,8 @@ pub enum Request {
         /// The answer.
         reply: oneshot::Sender<Result<Ack, CommandError>>,
     },
+    /// A fairing job's run came back (see [`super::fairing_job`]).
+    FairingDone(Box<super::fairing_job::JobDone>),
     /// The design was deleted: tell clients and stop.
     Delete,
     /// Flush the working state and stop.
@@ -475,6 +481,8 @@ struct Actor {
     drag_frame: bool,
     /// The parts' drag streams (see [`super::drag_stream`]).
     streams: super::drag_stream::DragStreams,
+    /// The fairing jobs running off the actor.
+    jobs: super::fairing_job::FairingJobs,
 }
 
 /// Starts the actor of design `id` from `doc`, with its committed versions;
@@ -493,6 +501,8 @@ pub fn spawn(
     let geometry = watch::channel(Arc::new(model.geometry_set(id, 0))).0;
     metrics.design_open(1);
     let retired = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let events = broadcast::channel(EVENT_CAPACITY).0;
+    let jobs = super::fairing_job::FairingJobs::new(tx.downgrade(), events.clone());
     let actor = Actor {
         _open: OpenGauge(metrics.clone()),
         retired: retired.clone(),
@@ -505,7 +515,7 @@ pub fn spawn(
         clients: BTreeMap::new(),
         feedback: BTreeMap::new(),
         refusals: BTreeMap::new(),
-        events: broadcast::channel(EVENT_CAPACITY).0,
+        events,
         geometry,
         doc,
         versions: Arc::new(versions),
@@ -516,6 +526,7 @@ pub fn spawn(
         dragging: BTreeMap::new(),
         drag_frame: false,
         streams: Default::default(),
+        jobs,
     };
     let task = tokio::spawn(actor.run(rx));
     Ok((DesignHandle { id, tx, retired }, task))
@@ -653,6 +664,25 @@ impl Actor {
                 }
                 Request::Command {
                     client,
+                    command:
+                        Command::Edit(super::model::Edit::Network {
+                            part,
+                            edit: super::network_engine::NetworkEditDoc::Fair(f),
+                        }),
+                    reply,
+                } => {
+                    let role = self.role(client);
+                    self.jobs.start(&self.model, client, role, part, &f, reply);
+                }
+                Request::FairingDone(done) => {
+                    if let Some(apply) = self.jobs.finish(*done, &self.model) {
+                        let edit = Command::Edit(apply.edit.clone());
+                        let out = self.command(0, edit, &mut geometry_dirty).await;
+                        self.jobs.applied(apply, out);
+                    }
+                }
+                Request::Command {
+                    client,
                     command,
                     reply,
                 } => {
@@ -741,6 +771,9 @@ impl Actor {
                 #[cfg(feature = "fault-injection")]
                 Request::Panic => panic!("fault injection: design {} actor panics", self.id),
             }
+        }
+        if !self.jobs.is_empty() {
+            self.jobs.cancel_orphans(&self.model);
         }
         if !geometry_dirty.is_empty() && !stop {
             self.publish_geometry(&geometry_dirty);
@@ -1197,6 +1230,7 @@ impl Actor {
                 geometry_dirty.parts(moved);
                 Ok(Ack::default())
             }
+            Command::CancelFairing { part, face } => self.jobs.cancel(part, face, client),
             Command::BodyMorph { part, t } => {
                 heavy(|| self.model.set_morph_time(part, t))?;
                 geometry_dirty.parts(vec![part]);

@@ -49,6 +49,14 @@ pub enum Command {
         /// Version number.
         version: u64,
     },
+    /// Cancel the fairing job on a face of a network part (see
+    /// `fairing_job`).
+    CancelFairing {
+        /// The network part.
+        part: u64,
+        /// The face.
+        face: usize,
+    },
     /// Show a body part at morph time `t` (not stored, not undone).
     BodyMorph {
         /// The body part.
@@ -68,6 +76,7 @@ impl Command {
                 | Command::Drag { .. }
                 | Command::Release { .. }
                 | Command::BodyMorph { .. }
+                | Command::CancelFairing { .. }
         )
     }
 }

@@ -17,6 +17,7 @@ pub mod edit;
 pub mod engine;
 pub mod error;
 pub mod exchange;
+pub mod fairing_job;
 pub mod hub;
 pub mod legacy;
 pub mod model;

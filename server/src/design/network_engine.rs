@@ -18,7 +18,8 @@ use std::collections::BTreeMap;
 use vsculpt_kernel::bspline::{BSplineCurve, KnotVector, basis_derivs};
 use vsculpt_kernel::fairing::quadric::solve_dense;
 use vsculpt_kernel::fairing::{
-    Control, FairingError, FairingOptions, Goals, Measure, PointMesh, fair_implicit, resolve,
+    Control, FairingError, FairingOptions, Goals, Measure, PointMesh, Progress, fair_implicit,
+    resolve,
 };
 use vsculpt_kernel::network::{CurveNetwork, NetworkError, NetworkOptions, Patch, PatchSampler};
 
@@ -97,6 +98,65 @@ pub enum NetworkEditDoc {
     RemoveCurve(usize),
     /// Fair a face.
     Fair(FairingDoc),
+    /// Set a face's faired mesh (a fairing job's result; refused when the
+    /// face's mesh has another number of points).
+    SetFaired(FairedFaceDoc),
+}
+
+/// A snapshot of one face's mesh with a fairing run's settings: what a
+/// fairing job runs on, off the design's thread.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FairingInput {
+    /// The face.
+    pub face: usize,
+    /// Its samples when the snapshot was taken.
+    pub points: Vec<DVec3>,
+    /// Its triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Which samples are on its boundary.
+    pub boundary: Vec<bool>,
+    /// The goals.
+    pub goal: GoalDoc,
+    /// The run's settings.
+    pub options: FairingOptions,
+}
+
+impl FairingInput {
+    /// Runs the fairing (the kernel's global sweeps, [`fair_implicit`]);
+    /// `progress` hears of every sweep and may cancel (then the error is
+    /// the kernel's `Cancelled`). The same input gives the same result to
+    /// the bit wherever it runs.
+    pub fn run(
+        &self,
+        progress: impl FnMut(&Progress) -> Control,
+    ) -> Result<FairedFaceDoc, CommandError> {
+        self.run_kernel(progress).map_err(fairing_error)
+    }
+
+    /// [`Self::run`] with the kernel's error as it is (a job tells a
+    /// cancellation from a refusal).
+    pub fn run_kernel(
+        &self,
+        progress: impl FnMut(&Progress) -> Control,
+    ) -> Result<FairedFaceDoc, FairingError> {
+        let mut mesh = PointMesh::new(
+            self.points.clone(),
+            self.triangles.clone(),
+            self.boundary.clone(),
+        )?;
+        let goals = match self.goal {
+            GoalDoc::Constant(g) => Goals::Constant(g),
+            GoalDoc::FromBoundary => Goals::FromBoundary,
+        };
+        let goals = resolve(&mesh, self.options.measure, &goals)?;
+        let report = fair_implicit(&mut mesh, &goals, &self.options, progress)?;
+        Ok(FairedFaceDoc {
+            face: self.face,
+            points: mesh.points.iter().map(|p| p.to_array()).collect(),
+            iterations: report.iterations,
+            converged: report.converged,
+        })
+    }
 }
 
 fn invalid(msg: impl Into<String>) -> CommandError {
@@ -295,6 +355,7 @@ impl NetworkEngine {
                 self.rebuild(curves)
             }
             NetworkEditDoc::Fair(f) => self.fair(f).map(|()| vec![f.face]),
+            NetworkEditDoc::SetFaired(f) => self.set_faired(f).map(|()| vec![f.face]),
         }
     }
 
@@ -433,7 +494,19 @@ impl NetworkEngine {
         Ok(moved)
     }
 
+    /// Fairs a face here and now (the synchronous run; the server runs
+    /// fairs as jobs, see `fairing_job`, which apply
+    /// [`NetworkEditDoc::SetFaired`] with the same result).
     fn fair(&mut self, f: &FairingDoc) -> Result<(), CommandError> {
+        let faired = self.fairing_input(f)?.run(|_| Control::Continue)?;
+        self.set_faired(&faired)
+    }
+
+    /// What a fairing run of `f` needs, taken from the face as it is now
+    /// (a snapshot a job can run on elsewhere); refused here: an unknown
+    /// face, a sweep count out of range, goals in another measure than the
+    /// mean curvature.
+    pub fn fairing_input(&self, f: &FairingDoc) -> Result<FairingInput, CommandError> {
         let face = self
             .faces
             .get(f.face)
@@ -443,13 +516,6 @@ impl NetworkEngine {
                 "max_iterations must be 1 ..= {MAX_FAIRING_ITERATIONS}"
             )));
         }
-        let dm = face.sampler.mesh();
-        let mut mesh = PointMesh::new(
-            face.points.clone(),
-            dm.triangles.clone(),
-            dm.boundary.clone(),
-        )
-        .map_err(fairing_error)?;
         let measure = match f.measure {
             MeasureDoc::Mean => Measure::Mean,
             MeasureDoc::Gaussian => Measure::Gaussian,
@@ -461,22 +527,51 @@ impl NetworkEngine {
                 "fairing toward {measure:?} curvature goals is refused: the kernel fairs toward mean-curvature goals only"
             )));
         }
-        let goals = match f.goal {
-            GoalDoc::Constant(g) => Goals::Constant(g),
-            GoalDoc::FromBoundary => Goals::FromBoundary,
-        };
-        let goals = resolve(&mesh, measure, &goals).map_err(fairing_error)?;
-        let options = FairingOptions {
-            measure,
-            relaxation: f.relaxation,
-            tolerance: f.tolerance,
-            max_iterations: f.max_iterations,
-        };
-        let report = fair_implicit(&mut mesh, &goals, &options, |_| Control::Continue)
-            .map_err(fairing_error)?;
-        let face = &mut self.faces[f.face];
-        face.points = mesh.points;
-        face.faired = Some((report.iterations, report.converged));
+        let dm = face.sampler.mesh();
+        Ok(FairingInput {
+            face: f.face,
+            points: face.points.clone(),
+            triangles: dm.triangles.clone(),
+            boundary: dm.boundary.clone(),
+            goal: f.goal,
+            options: FairingOptions {
+                measure,
+                relaxation: f.relaxation,
+                tolerance: f.tolerance,
+                max_iterations: f.max_iterations,
+            },
+        })
+    }
+
+    /// Whether face `input.face` still has the mesh `input` was taken
+    /// from (the same points and triangles, bit for bit): then a run on
+    /// `input` is exactly the run on the face as it is now.
+    pub fn face_is_as(&self, input: &FairingInput) -> bool {
+        self.faces.get(input.face).is_some_and(|f| {
+            f.points == input.points && f.sampler.mesh().triangles == input.triangles
+        })
+    }
+
+    fn set_faired(&mut self, f: &FairedFaceDoc) -> Result<(), CommandError> {
+        let face = self
+            .faces
+            .get_mut(f.face)
+            .ok_or_else(|| invalid(format!("no face {}", f.face)))?;
+        if f.points.len() != face.points.len() {
+            return Err(invalid(format!(
+                "faired face {} has {} points, its mesh {}",
+                f.face,
+                f.points.len(),
+                face.points.len()
+            )));
+        }
+        let points = f
+            .points
+            .iter()
+            .map(|p| finite(*p))
+            .collect::<Result<Vec<_>, _>>()?;
+        face.points = points;
+        face.faired = Some((f.iterations, f.converged));
         Ok(())
     }
 

@@ -393,6 +393,28 @@ impl Session {
                     self.error(id, WireError::from(forbidden(self.role))).await;
                     return;
                 }
+                if crate::design::fairing_job::is_fair(&cmd) {
+                    // A fair's answer comes when its job ends: wait for it
+                    // aside, so this client can go on (and cancel it). The
+                    // reply queue is held weakly: a client that leaves
+                    // meanwhile does not keep its writer waiting for the job.
+                    let (handle, client, out) =
+                        (self.handle.clone(), self.client, self.out.downgrade());
+                    let metrics = self.state.metrics.clone();
+                    tokio::spawn(async move {
+                        let text = match handle.command(client, cmd).await {
+                            Ok(ack) => convert::ack(id, &ack),
+                            Err(e) => {
+                                metrics.error_sent();
+                                Some(convert::error(id, &WireError::from(e)))
+                            }
+                        };
+                        if let (Some(t), Some(out)) = (text, out.upgrade()) {
+                            let _ = out.send(Out::Msg(Message::Text(t))).await;
+                        }
+                    });
+                    return;
+                }
                 match self.handle.command(self.client, cmd).await {
                     Ok(ack) => {
                         if let Some(t) = convert::ack(id, &ack) {
