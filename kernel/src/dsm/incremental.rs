@@ -97,7 +97,15 @@ impl LeafTree {
             expanded: BTreeSet::new(),
         };
         let mut n = 0;
-        tree.visit(model, IVec3::ZERO, size, &model.all_active(), &[], true, &mut n);
+        tree.visit(
+            model,
+            IVec3::ZERO,
+            size,
+            &model.all_active(),
+            &[],
+            true,
+            &mut n,
+        );
         tree
     }
 
@@ -236,10 +244,7 @@ pub fn edit_support(old: &Model, new: &Model) -> Option<Vec<Ball>> {
 }
 
 /// The ranges of `a` and `b` outside their common leading and trailing runs.
-fn unmatched<T: PartialEq>(
-    a: &[T],
-    b: &[T],
-) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+fn unmatched<T: PartialEq>(a: &[T], b: &[T]) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
     let lead = a.iter().zip(b).take_while(|(x, y)| x == y).count();
     let room = a.len().min(b.len()) - lead;
     let trail = a

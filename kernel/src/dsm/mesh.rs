@@ -17,6 +17,12 @@
 //! 5. Every crossing edge gives a quad of the four cells around it, oriented
 //!    outwards and split along its shorter diagonal.
 //!
+//! Steps 2–4 are per leaf and depend on nothing outside it (a crossing on a
+//! leaf face is found by each leaf that has it, with its own active set), so a
+//! leaf is kept between edits and only the leaves an edit reaches are meshed
+//! again ([`super::incremental`]). Vertices are numbered leaf by leaf in Morton
+//! order of the leaves, cell by cell (x fastest) within a leaf.
+//!
 //! The mesh is closed (every edge in two triangles) because the quads are the dual
 //! of the boundary between inside and outside grid corners. Known limit: one vertex
 //! per cell, so a cell cut by two separate sheets (features thinner than a cell)
@@ -166,7 +172,8 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active)
     for z in 0..=LEAF {
         for y in 0..=LEAF {
             for x in 0..=LEAF {
-                let smp = model.sample(grid.corner(origin + IVec3::new(x, y, z)), act, &mut scratch);
+                let smp =
+                    model.sample(grid.corner(origin + IVec3::new(x, y, z)), act, &mut scratch);
                 inside.push(smp.inside);
                 phi.push(smp.phi);
             }
@@ -298,7 +305,7 @@ pub(crate) fn assemble<'a>(leaves: impl Iterator<Item = &'a LeafMesh>) -> (Mesh,
         let &(li, base) = index.get(&lk)?;
         let leaf = list[li];
         let v = leaf.cell_vert[cell_index(cell - leaf.origin)];
-        (v != u32::MAX).then_some(base + v)
+        (v != u32::MAX).then(|| base + v)
     };
     for leaf in &list {
         for &(lc, axis, i0) in &leaf.crossings {
