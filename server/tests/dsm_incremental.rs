@@ -43,8 +43,11 @@ fn create(name: &str, dsm: Value) -> Value {
     json!({"type": "create_part", "spec": {"name": name, "shape": {"kind": "dsm", "dsm": dsm}}})
 }
 
+/// A frame's origin, step, positions, normals and triangles.
+type Geometry<'a> = (&'a [f32; 3], f32, &'a [[u16; 3]], &'a [[i16; 3]], &'a [[u32; 3]]);
+
 /// The frame's geometry (everything but the design, part, revision and flags).
-fn geometry(m: &MeshFrame) -> (&[f32; 3], f32, &[[u16; 3]], &[[i16; 3]], &[[u32; 3]]) {
+fn geometry(m: &MeshFrame) -> Geometry<'_> {
     (&m.origin, m.step, &m.positions, &m.normals, &m.triangles)
 }
 
