@@ -44,7 +44,13 @@ fn create(name: &str, dsm: Value) -> Value {
 }
 
 /// A frame's origin, step, positions, normals and triangles.
-type Geometry<'a> = (&'a [f32; 3], f32, &'a [[u16; 3]], &'a [[i16; 3]], &'a [[u32; 3]]);
+type Geometry<'a> = (
+    &'a [f32; 3],
+    f32,
+    &'a [[u16; 3]],
+    &'a [[i16; 3]],
+    &'a [[u32; 3]],
+);
 
 /// The frame's geometry (everything but the design, part, revision and flags).
 fn geometry(m: &MeshFrame) -> Geometry<'_> {
@@ -60,7 +66,7 @@ async fn edits_through_the_websocket_mesh_as_a_fresh_part_of_the_final_doc() {
     let mut ed = Client::connect(addr, design, &d.editor, "ann").await;
     let mut viewer = Client::connect(addr, design, &d.viewer, "bob").await;
 
-    let r = ed.request(create("edited", handset(40))).await;
+    let r = ed.request(create("edited", handset(64))).await;
     assert_eq!(r["type"], "ack", "{r}");
     let part = r["part"].as_u64().unwrap();
     let mut last = viewer.mesh_of_after(part, 0).await;
