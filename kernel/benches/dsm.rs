@@ -12,6 +12,14 @@
 //!   nets, a well-kept implicit mesher) on the same grid, with Φ sampled densely at
 //!   every corner (it has no culling of its own): the baseline of the same run.
 //!
+//! * `dsm_incremental`: the 20-primitive handset concept of
+//!   `tests/dsm_support` with one side button moved a small step (0.01, back and
+//!   forth) per frame, re-meshed from scratch (`full`) and by [`IncrementalMesh`]
+//!   (`incremental`), at the 40 cells the server's demo part uses and at 128;
+//!   both include building the model and its grid, as the server does. And the
+//!   thumb-rest charge (a sphere-based density primitive, a = 6) moved the same
+//!   step: its support (20.7 / a at τ = 1e-9) covers the whole part.
+//!
 //! Run: `cargo bench -p vsculpt-kernel --bench dsm -- --warm-up-time 1 --measurement-time 3`.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -19,6 +27,9 @@ use glam::{DVec2, DVec3};
 use std::hint::black_box;
 use vsculpt_kernel::dsm::shape_ops::rounded_box;
 use vsculpt_kernel::dsm::*;
+
+#[path = "../tests/dsm_support/mod.rs"]
+mod dsm_support;
 
 fn net() -> PassingPointsNet {
     let n = 20;
@@ -148,5 +159,51 @@ fn compare(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, net_drag, shape_remesh, compare);
+/// The handset with primitive `n` stepped back and forth along x, one step per call.
+fn stepper(n: usize) -> impl FnMut() -> Model {
+    let mut spec = dsm_support::handset();
+    let mut t = 0u32;
+    move || {
+        t = t.wrapping_add(1);
+        let d = if t.is_multiple_of(2) { -0.01 } else { 0.01 };
+        spec.translate(n, DVec3::new(d, 0.0, 0.0));
+        spec.model()
+    }
+}
+
+fn incremental(c: &mut Criterion) {
+    let mut g = c.benchmark_group("dsm_incremental");
+    g.sample_size(10);
+    // Primitive 4: the first side button; 19: the thumb-rest charge (group 3).
+    for (what, n) in [("button", 4usize), ("charge", 19)] {
+        for cells in [40usize, 128] {
+            if what == "charge" && cells == 128 {
+                continue;
+            }
+            let mut step = stepper(n);
+            g.bench_function(format!("full_{what}/{cells}"), |b| {
+                b.iter(|| {
+                    let m = step();
+                    black_box(mesh(&m, MeshOptions { cells }).unwrap())
+                })
+            });
+            let mut step = stepper(n);
+            let m = step();
+            let grid = Grid::for_model(&m, cells).unwrap();
+            let mut inc = IncrementalMesh::new(m, grid);
+            g.bench_function(format!("incremental_{what}/{cells}"), |b| {
+                b.iter(|| {
+                    let m = step();
+                    let grid = Grid::for_model(&m, cells).unwrap();
+                    let st = inc.update(m, grid);
+                    assert!(!st.full);
+                    black_box(inc.mesh())
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, net_drag, shape_remesh, compare, incremental);
 criterion_main!(benches);

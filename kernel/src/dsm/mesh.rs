@@ -17,20 +17,25 @@
 //! 5. Every crossing edge gives a quad of the four cells around it, oriented
 //!    outwards and split along its shorter diagonal.
 //!
+//! Steps 2–4 are per leaf and depend on nothing outside it (a crossing on a
+//! leaf face is found by each leaf that has it, with its own active set), so a
+//! leaf is kept between edits and only the leaves an edit reaches are meshed
+//! again ([`super::incremental`]). Vertices are numbered leaf by leaf in Morton
+//! order of the leaves, cell by cell (x fastest) within a leaf.
+//!
 //! The mesh is closed (every edge in two triangles) because the quads are the dual
 //! of the boundary between inside and outside grid corners. Known limit: one vertex
 //! per cell, so a cell cut by two separate sheets (features thinner than a cell)
 //! joins them at a non-manifold vertex — Manifold Dual Contouring would split it.
 
 use super::error::DsmError;
-use super::interval::Tri;
 use super::model::{Active, Model};
 use super::qef::Qef;
 use glam::{DVec3, IVec3};
 use std::collections::HashMap;
 
 /// Leaf size in cells.
-const LEAF: i32 = 8;
+pub(crate) const LEAF: i32 = 8;
 
 /// A triangle mesh with unit normals.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -77,12 +82,23 @@ pub struct MeshStats {
     pub features: usize,
 }
 
-struct Leaf {
-    origin: IVec3,
-    inside: Vec<bool>,
-    phi: Vec<f64>,
-    active: Active,
-    verts: Vec<u32>,
+/// One sampled and contoured leaf (8³ cells): what the mesher keeps per leaf
+/// between edits. It depends only on the leaf's origin, its active primitives
+/// (in order) and the model's group structure, never on other leaves, so a leaf
+/// the edit cannot reach is reused as it is.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct LeafMesh {
+    /// Grid corner of the leaf's first cell.
+    pub(crate) origin: IVec3,
+    /// Per cell (x fastest): index into `verts`, or u32::MAX.
+    cell_vert: Vec<u32>,
+    /// (position, unit normal) of each mixed cell's vertex, in cell order.
+    verts: Vec<(DVec3, DVec3)>,
+    /// Crossing edges from the leaf's own corners (0..8 per axis): (cell, axis,
+    /// whether the lower end is inside), in the order quads are emitted.
+    crossings: Vec<(IVec3, u8, bool)>,
+    projected: usize,
+    features: usize,
 }
 
 fn corner_index(l: IVec3) -> usize {
@@ -141,194 +157,187 @@ pub fn mesh(model: &Model, opts: MeshOptions) -> Result<(Mesh, MeshStats), DsmEr
 
 /// Meshes S on a given grid.
 pub fn mesh_on(model: &Model, grid: &Grid) -> (Mesh, MeshStats) {
-    let mut stats = MeshStats::default();
-    // 1–2: octree descent to undecided leaves.
-    let mut size = LEAF;
-    while size < grid.dims.max_element() {
-        size *= 2;
-    }
-    let mut leaves: Vec<Leaf> = Vec::new();
-    let mut index: HashMap<IVec3, usize> = HashMap::new();
-    let mut stack = vec![(IVec3::ZERO, size, model.all_active())];
-    let mut scratch = Vec::new();
-    while let Some((o, s, parent)) = stack.pop() {
-        if o.cmpge(grid.dims).any() {
-            continue;
-        }
-        let c = grid.origin + (o.as_dvec3() + DVec3::splat(s as f64 * 0.5)) * grid.h;
-        let r = s as f64 * grid.h * 0.5 * 3f64.sqrt();
-        let act = model.cull(&parent, c, r);
-        if model.classify(c, r, &act) != Tri::Maybe {
-            continue;
-        }
-        if s > LEAF {
-            let hs = s / 2;
-            for k in 0..8 {
-                let d = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * hs;
-                stack.push((o + d, hs, act.clone()));
-            }
-            continue;
-        }
-        let n = (LEAF + 1) as usize;
-        let mut inside = Vec::with_capacity(n * n * n);
-        let mut phi = Vec::with_capacity(n * n * n);
-        for z in 0..=LEAF {
-            for y in 0..=LEAF {
-                for x in 0..=LEAF {
-                    let smp =
-                        model.sample(grid.corner(o + IVec3::new(x, y, z)), &act, &mut scratch);
-                    inside.push(smp.inside);
-                    phi.push(smp.phi);
-                }
-            }
-        }
-        index.insert(o / LEAF, leaves.len());
-        leaves.push(Leaf {
-            origin: o,
-            inside,
-            phi,
-            active: act,
-            verts: vec![u32::MAX; (LEAF * LEAF * LEAF) as usize],
-        });
-    }
-    stats.leaves = leaves.len();
+    super::incremental::LeafTree::build(model, grid).assemble()
+}
 
-    // 3–4: one vertex per mixed cell.
-    let mut mesh = Mesh::default();
+/// Steps 2–4 for the leaf at `origin` with active primitives `act`: corner
+/// samples, Hermite data (per leaf: a crossing on a leaf face is computed by
+/// each leaf that has it, with its own active set), one vertex per mixed cell,
+/// and the leaf's crossing edges for step 5.
+pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active) -> LeafMesh {
+    let n = (LEAF + 1) as usize;
+    let mut scratch = Vec::new();
+    let mut inside = Vec::with_capacity(n * n * n);
+    let mut phi = Vec::with_capacity(n * n * n);
+    for z in 0..=LEAF {
+        for y in 0..=LEAF {
+            for x in 0..=LEAF {
+                let smp =
+                    model.sample(grid.corner(origin + IVec3::new(x, y, z)), act, &mut scratch);
+                inside.push(smp.inside);
+                phi.push(smp.phi);
+            }
+        }
+    }
+    let mut leaf = LeafMesh {
+        origin,
+        cell_vert: vec![u32::MAX; (LEAF * LEAF * LEAF) as usize],
+        verts: Vec::new(),
+        crossings: Vec::new(),
+        projected: 0,
+        features: 0,
+    };
     let mut edges: HashMap<(IVec3, u8), (DVec3, DVec3)> = HashMap::new();
-    #[allow(clippy::needless_range_loop)] // leaves[li] is re-borrowed mutably below
-    for li in 0..leaves.len() {
-        for z in 0..LEAF {
-            for y in 0..LEAF {
-                for x in 0..LEAF {
-                    let lc = IVec3::new(x, y, z);
-                    let leaf = &leaves[li];
-                    let mut mask = 0u8;
-                    for k in 0..8 {
-                        let d = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-                        if leaf.inside[corner_index(lc + d)] {
-                            mask |= 1 << k;
+    for z in 0..LEAF {
+        for y in 0..LEAF {
+            for x in 0..LEAF {
+                let lc = IVec3::new(x, y, z);
+                let mut mask = 0u8;
+                for k in 0..8 {
+                    let d = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+                    if inside[corner_index(lc + d)] {
+                        mask |= 1 << k;
+                    }
+                }
+                if mask == 0 || mask == 255 {
+                    continue;
+                }
+                let mut qef = Qef::default();
+                for axis in 0..3u8 {
+                    let e = [IVec3::X, IVec3::Y, IVec3::Z][axis as usize];
+                    let (b, c) = (
+                        [IVec3::Y, IVec3::Z, IVec3::X][axis as usize],
+                        [IVec3::Z, IVec3::X, IVec3::Y][axis as usize],
+                    );
+                    for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let a0 = lc + b * i + c * j;
+                        let a1 = a0 + e;
+                        let (i0, i1) = (inside[corner_index(a0)], inside[corner_index(a1)]);
+                        if i0 == i1 {
+                            continue;
                         }
+                        let (p, n) = *edges.entry((a0, axis)).or_insert_with(|| {
+                            hermite(
+                                model,
+                                grid,
+                                act,
+                                origin + a0,
+                                e,
+                                phi[corner_index(a0)],
+                                phi[corner_index(a1)],
+                                i0,
+                            )
+                        });
+                        qef.add(p, n);
                     }
-                    if mask == 0 || mask == 255 {
-                        continue;
+                }
+                let sol = qef.solve().expect("a mixed cell has a crossing");
+                let cmin = grid.corner(origin + lc);
+                let cmax = cmin + DVec3::splat(grid.h);
+                let tol = 1e-9 * grid.h;
+                let in_cell = |p: DVec3| p.cmpge(cmin - tol).all() && p.cmple(cmax + tol).all();
+                let mut v = if in_cell(sol.point) {
+                    sol.point
+                } else {
+                    sol.mass_point
+                };
+                let nsum = sol.normal_sum.normalize_or_zero();
+                let mut normal = nsum;
+                if sol.rank <= 1 {
+                    if let Some(pv) = project(model, grid, act, v, nsum) {
+                        v = pv;
                     }
-                    let mut qef = Qef::default();
-                    for axis in 0..3u8 {
-                        let e = [IVec3::X, IVec3::Y, IVec3::Z][axis as usize];
-                        let (b, c) = (
-                            [IVec3::Y, IVec3::Z, IVec3::X][axis as usize],
-                            [IVec3::Z, IVec3::X, IVec3::Y][axis as usize],
-                        );
-                        for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                            let a0 = lc + b * i + c * j;
-                            let a1 = a0 + e;
-                            let (i0, i1) =
-                                (leaf.inside[corner_index(a0)], leaf.inside[corner_index(a1)]);
-                            if i0 == i1 {
-                                continue;
-                            }
-                            let key = (leaf.origin + a0, axis);
-                            let (p, n) = *edges.entry(key).or_insert_with(|| {
-                                hermite(
-                                    model,
-                                    grid,
-                                    &leaf.active,
-                                    leaf.origin + a0,
-                                    e,
-                                    leaf.phi[corner_index(a0)],
-                                    leaf.phi[corner_index(a1)],
-                                    i0,
-                                )
-                            });
-                            qef.add(p, n);
-                        }
+                    let g = model.piece_gradient(v, act);
+                    normal = if g.dot(nsum) < 0.0 { -g } else { g };
+                    leaf.projected += 1;
+                } else {
+                    leaf.features += 1;
+                }
+                leaf.cell_vert[cell_index(lc)] = leaf.verts.len() as u32;
+                leaf.verts.push((v, normal));
+            }
+        }
+    }
+    for z in 0..LEAF {
+        for y in 0..LEAF {
+            for x in 0..LEAF {
+                let lc = IVec3::new(x, y, z);
+                let i0 = inside[corner_index(lc)];
+                for axis in 0..3u8 {
+                    let e = [IVec3::X, IVec3::Y, IVec3::Z][axis as usize];
+                    if i0 != inside[corner_index(lc + e)] {
+                        leaf.crossings.push((lc, axis, i0));
                     }
-                    let sol = qef.solve().expect("a mixed cell has a crossing");
-                    let cmin = grid.corner(leaf.origin + lc);
-                    let cmax = cmin + DVec3::splat(grid.h);
-                    let tol = 1e-9 * grid.h;
-                    let in_cell = |p: DVec3| p.cmpge(cmin - tol).all() && p.cmple(cmax + tol).all();
-                    let mut v = if in_cell(sol.point) {
-                        sol.point
-                    } else {
-                        sol.mass_point
-                    };
-                    let nsum = sol.normal_sum.normalize_or_zero();
-                    let mut normal = nsum;
-                    if sol.rank <= 1 {
-                        if let Some(pv) = project(model, grid, &leaf.active, v, nsum) {
-                            v = pv;
-                        }
-                        let g = model.piece_gradient(v, &leaf.active);
-                        normal = if g.dot(nsum) < 0.0 { -g } else { g };
-                        stats.projected += 1;
-                    } else {
-                        stats.features += 1;
-                    }
-                    let id = mesh.positions.len() as u32;
-                    mesh.positions.push(v);
-                    mesh.normals.push(normal);
-                    leaves[li].verts[cell_index(lc)] = id;
                 }
             }
         }
+    }
+    leaf
+}
+
+/// Step 5 over `leaves` (in the order their vertices are numbered): the
+/// vertices, then one quad per crossing edge owned by a leaf, oriented outwards
+/// and split along its shorter diagonal.
+pub(crate) fn assemble<'a>(leaves: impl Iterator<Item = &'a LeafMesh>) -> (Mesh, MeshStats) {
+    let mut stats = MeshStats::default();
+    let mut mesh = Mesh::default();
+    let mut index: HashMap<IVec3, (usize, u32)> = HashMap::new();
+    let mut list: Vec<&LeafMesh> = Vec::new();
+    for leaf in leaves {
+        let base = mesh.positions.len() as u32;
+        index.insert(leaf.origin / LEAF, (list.len(), base));
+        list.push(leaf);
+        for &(p, n) in &leaf.verts {
+            mesh.positions.push(p);
+            mesh.normals.push(n);
+        }
+        stats.leaves += 1;
+        stats.projected += leaf.projected;
+        stats.features += leaf.features;
     }
     stats.vertices = mesh.positions.len();
-
-    // 5: one quad per crossing edge owned by a leaf.
     let vertex_of = |cell: IVec3| -> Option<u32> {
         let lk = IVec3::new(
             cell.x.div_euclid(LEAF),
             cell.y.div_euclid(LEAF),
             cell.z.div_euclid(LEAF),
         );
-        let leaf = &leaves[*index.get(&lk)?];
-        let v = leaf.verts[cell_index(cell - leaf.origin)];
-        (v != u32::MAX).then_some(v)
+        let &(li, base) = index.get(&lk)?;
+        let leaf = list[li];
+        let v = leaf.cell_vert[cell_index(cell - leaf.origin)];
+        (v != u32::MAX).then(|| base + v)
     };
-    for leaf in &leaves {
-        for z in 0..LEAF {
-            for y in 0..LEAF {
-                for x in 0..LEAF {
-                    let lc = IVec3::new(x, y, z);
-                    for axis in 0..3usize {
-                        let e = [IVec3::X, IVec3::Y, IVec3::Z][axis];
-                        let (b, c) = (
-                            [IVec3::Y, IVec3::Z, IVec3::X][axis],
-                            [IVec3::Z, IVec3::X, IVec3::Y][axis],
-                        );
-                        let i0 = leaf.inside[corner_index(lc)];
-                        if i0 == leaf.inside[corner_index(lc + e)] {
-                            continue;
-                        }
-                        let g = leaf.origin + lc;
-                        let cells = [g - b - c, g - c, g, g - b];
-                        let mut q = [0u32; 4];
-                        let mut ok = true;
-                        for (k, cell) in cells.iter().enumerate() {
-                            match vertex_of(*cell) {
-                                Some(v) => q[k] = v,
-                                None => ok = false,
-                            }
-                        }
-                        if !ok {
-                            continue;
-                        }
-                        // Counter-clockwise seen from +axis; outward is +axis when the lower end is inside.
-                        if !i0 {
-                            q.reverse();
-                        }
-                        let p = |i: usize| mesh.positions[q[i] as usize];
-                        if (p(0) - p(2)).length_squared() <= (p(1) - p(3)).length_squared() {
-                            mesh.triangles.push([q[0], q[1], q[2]]);
-                            mesh.triangles.push([q[0], q[2], q[3]]);
-                        } else {
-                            mesh.triangles.push([q[0], q[1], q[3]]);
-                            mesh.triangles.push([q[1], q[2], q[3]]);
-                        }
-                    }
+    for leaf in &list {
+        for &(lc, axis, i0) in &leaf.crossings {
+            let axis = axis as usize;
+            let (b, c) = (
+                [IVec3::Y, IVec3::Z, IVec3::X][axis],
+                [IVec3::Z, IVec3::X, IVec3::Y][axis],
+            );
+            let g = leaf.origin + lc;
+            let cells = [g - b - c, g - c, g, g - b];
+            let mut q = [0u32; 4];
+            let mut ok = true;
+            for (k, cell) in cells.iter().enumerate() {
+                match vertex_of(*cell) {
+                    Some(v) => q[k] = v,
+                    None => ok = false,
                 }
+            }
+            if !ok {
+                continue;
+            }
+            // Counter-clockwise seen from +axis; outward is +axis when the lower end is inside.
+            if !i0 {
+                q.reverse();
+            }
+            let p = |i: usize| mesh.positions[q[i] as usize];
+            if (p(0) - p(2)).length_squared() <= (p(1) - p(3)).length_squared() {
+                mesh.triangles.push([q[0], q[1], q[2]]);
+                mesh.triangles.push([q[0], q[2], q[3]]);
+            } else {
+                mesh.triangles.push([q[0], q[1], q[3]]);
+                mesh.triangles.push([q[1], q[2], q[3]]);
             }
         }
     }

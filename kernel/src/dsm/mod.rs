@@ -14,6 +14,8 @@
 //! * [`net_drag`] — a node drag re-solved from the drag's first factorisation.
 //! * [`surface`] — the explicit equal density surface h(u, v) (eqs. 12–13) and its curvature.
 //! * [`mesh`], [`qef`] — dual contouring of the object.
+//! * [`incremental`] — the mesher's leaves kept between edits, re-meshed only
+//!   within an edit's support.
 //! * [`shape_ops`] — round corners, shape mapping onto a box face or a cylinder (§4).
 //! * [`interval`] — interval bounds used to cull and to skip empty space.
 //!
@@ -25,6 +27,7 @@ pub mod density;
 pub mod distribution;
 pub mod error;
 pub mod geometric;
+pub mod incremental;
 pub mod interval;
 pub mod inverse;
 pub mod jet;
@@ -41,6 +44,7 @@ pub use density::{DensityPrimitive, DensityShape, HalfSpace, Sheet};
 pub use distribution::{Charge, Distribution};
 pub use error::DsmError;
 pub use geometric::{GeometricPrimitive, GeometricShape};
+pub use incremental::{IncrementalMesh, UpdateStats, edit_support};
 pub use inverse::{InverseOptions, InverseReport, PassingPointsNet, inverse_transform};
 pub use jet::{Jet, Jet2};
 pub use mesh::{Grid, Mesh, MeshOptions, MeshStats, mesh, mesh_on};

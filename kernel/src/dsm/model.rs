@@ -214,6 +214,13 @@ impl Model {
         self.scales[k] = g.density.iter().map(|d| d.reducing).fold(0.0, f64::max);
     }
 
+    /// Group k's largest reducing factor: the scale of Φ's density-sum terms
+    /// ([`Self::sample`]), so a change of it changes Φ wherever the group's
+    /// density primitives reach.
+    pub fn scale(&self, k: usize) -> f64 {
+        self.scales[k]
+    }
+
     /// The effective influence range of density primitive i of group k.
     pub fn range(&self, k: usize, i: usize) -> f64 {
         self.ranges[k][i]

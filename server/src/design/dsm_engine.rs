@@ -14,6 +14,14 @@
 //! * A part with no positive primitive meshes to the empty mesh.
 //! * The mesh is rebuilt only when the part's data changed (an unchanged part
 //!   keeps its mesh across rebuilds of other parts).
+//! * An edit re-meshes incrementally: the part keeps the kernel's
+//!   [`IncrementalMesh`] (every sampled leaf), the edited document is built
+//!   into a fresh model, and only the leaves within the changed primitives'
+//!   influence are sampled again; the kernel re-meshes everything when the
+//!   grid (which spans the model's bounds) or the groups' structure changed.
+//!   The mesh is the one a part built from the edited document has, vertex
+//!   for vertex. A new part, a load and a part whose model is empty mesh from
+//!   scratch; an edit that fails changes nothing.
 
 use super::doc::IconDoc;
 use super::error::{CommandError, ErrorKind};
@@ -22,9 +30,9 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use vsculpt_kernel::dsm::{
-    DEFAULT_TAU, DensityPrimitive, DensityShape, GeometricPrimitive, GeometricShape, Group,
-    InverseOptions, Mesh, MeshOptions, Model, PassingPointsNet, Placement, Sign, inverse_transform,
-    mesh,
+    DEFAULT_TAU, DensityPrimitive, DensityShape, GeometricPrimitive, GeometricShape, Grid, Group,
+    IncrementalMesh, InverseOptions, Mesh, MeshOptions, Model, PassingPointsNet, Placement, Sign,
+    inverse_transform, mesh,
 };
 use vsculpt_protocol::dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
 use vsculpt_protocol::{ErrorCode, ProtocolError, mesh_frame::MeshFrame};
@@ -366,10 +374,24 @@ pub fn export_mesh(data: &DsmData, max_vertices: usize) -> Result<MeshData, Comm
     }
 }
 
-/// One DSM part as the engine holds it: its data and its mesh.
+/// One DSM part as the engine holds it: its data, its mesh and what the
+/// mesher sampled (None when the model is empty).
 struct Shape {
     data: DsmData,
     mesh: Mesh,
+    sampled: Option<IncrementalMesh>,
+}
+
+/// The kernel model of `data` and its grid at the part's resolution (None:
+/// nothing is positive, the mesh is empty).
+fn model_and_grid(data: &DsmData) -> Result<Option<(Model, Grid)>, CommandError> {
+    let model = build_model(data)?;
+    if model.bounds().is_none() {
+        return Ok(None);
+    }
+    let grid = Grid::for_model(&model, data.cells as usize)
+        .map_err(|e| invalid(format!("dsm mesh: {e}")))?;
+    Ok(Some((model, grid)))
 }
 
 /// The DSM parts of a design with their meshes.
@@ -380,18 +402,31 @@ pub struct DsmEngine {
 
 impl DsmEngine {
     /// Builds and meshes part `id` from `part` (kept as it is when its data
-    /// did not change). On error nothing changes.
+    /// did not change; re-meshed incrementally when the part was meshed
+    /// before). On error nothing changes.
     pub fn insert(&mut self, id: u64, part: &DsmPart) -> Result<(), CommandError> {
         part.validate()?;
         if self.parts.get(&id).is_some_and(|s| s.data == part.dsm) {
             return Ok(());
         }
-        let mesh = mesh_at(&part.dsm, part.dsm.cells)?;
+        let built = model_and_grid(&part.dsm)?;
+        let previous = self.parts.remove(&id).and_then(|s| s.sampled);
+        let sampled = built.map(|(model, grid)| match previous {
+            Some(mut inc) => {
+                inc.update(model, grid);
+                inc
+            }
+            None => IncrementalMesh::new(model, grid),
+        });
+        let mesh = sampled
+            .as_ref()
+            .map_or_else(Mesh::default, |inc| inc.mesh().0);
         self.parts.insert(
             id,
             Shape {
                 data: part.dsm.clone(),
                 mesh,
+                sampled,
             },
         );
         Ok(())

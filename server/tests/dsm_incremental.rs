@@ -1,0 +1,130 @@
+//! A DSM part edited through the real server re-meshes incrementally (the
+//! kernel's `IncrementalMesh`): after a sequence of `dsm_edit`s — moves, a
+//! resize, a density change, primitives added, removed and moved between
+//! groups — its mesh frame is the one a fresh part built from the final
+//! document gets, quantum for quantum and triangle for triangle.
+
+mod common;
+
+use common::TestServer;
+use common::data_dir;
+use common::http::get;
+use common::ws::Client;
+use serde_json::{Value, json};
+use vsculpt_protocol::MeshFrame;
+
+/// A handset-like part: a body with end caps, a dimple, a button, a screen
+/// recess and a camera boss (add); a lanyard hole (subtract); a grip ball
+/// (no term) incorporated by a thumb rest (add).
+fn handset(cells: u32) -> Value {
+    json!({"de": 1.0, "cells": cells, "groups": [
+        {"op": "add", "primitives": [
+            {"id": 1, "at": [0.0, 0.0, 0.0], "shape": {"type": "box", "half": [1.6, 0.8, 0.3]}},
+            {"id": 2, "at": [1.5, 0.0, 0.0], "shape": {"type": "density_sphere", "density": 3.0, "reducing": 3.0}},
+            {"id": 3, "at": [-1.5, 0.0, 0.0], "shape": {"type": "density_sphere", "density": 3.0, "reducing": 3.0}},
+            {"id": 4, "at": [1.3, 0.0, 0.38], "shape": {"type": "sphere", "radius": 0.12, "negative": true}},
+            {"id": 5, "at": [-0.6, 0.82, 0.0], "shape": {"type": "box", "half": [0.12, 0.04, 0.06]}},
+            {"id": 6, "at": [0.0, 0.0, 0.3], "shape": {"type": "box", "half": [1.1, 0.6, 0.05], "negative": true}},
+            {"id": 7, "at": [1.0, 0.45, -0.3], "shape": {"type": "cylinder", "radius": 0.14, "half_height": 0.06}}
+        ]},
+        {"op": "subtract", "primitives": [
+            {"id": 8, "at": [-1.4, 0.55, 0.0], "shape": {"type": "cylinder", "radius": 0.09, "half_height": 0.5}}
+        ]},
+        {"op": "none", "primitives": [
+            {"id": 9, "at": [0.6, -0.35, -0.3], "shape": {"type": "sphere", "radius": 0.25}}
+        ]},
+        {"op": "add", "incorporated": [2], "primitives": [
+            {"id": 10, "at": [0.6, -0.35, -0.45], "shape": {"type": "density_sphere", "density": 1.3, "reducing": 6.0}}
+        ]}
+    ]})
+}
+
+fn create(name: &str, dsm: Value) -> Value {
+    json!({"type": "create_part", "spec": {"name": name, "shape": {"kind": "dsm", "dsm": dsm}}})
+}
+
+/// A frame's origin, step, positions, normals and triangles.
+type Geometry<'a> = (
+    &'a [f32; 3],
+    f32,
+    &'a [[u16; 3]],
+    &'a [[i16; 3]],
+    &'a [[u32; 3]],
+);
+
+/// The frame's geometry (everything but the design, part, revision and flags).
+fn geometry(m: &MeshFrame) -> Geometry<'_> {
+    (&m.origin, m.step, &m.positions, &m.normals, &m.triangles)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn edits_through_the_websocket_mesh_as_a_fresh_part_of_the_final_doc() {
+    let data = data_dir("dsm-incremental");
+    let server = TestServer::start(data.clone()).await;
+    let d = server.demo().clone();
+    let (addr, design) = (server.addr, d.id);
+    let mut ed = Client::connect(addr, design, &d.editor, "ann").await;
+    let mut viewer = Client::connect(addr, design, &d.viewer, "bob").await;
+
+    let r = ed.request(create("edited", handset(64))).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let part = r["part"].as_u64().unwrap();
+    let mut last = viewer.mesh_of_after(part, 0).await;
+    assert!(
+        last.triangles.len() > 500,
+        "{} triangles",
+        last.triangles.len()
+    );
+
+    let edits = [
+        json!({"op": "move_primitive", "id": 5, "at": [-0.55, 0.82, 0.0]}),
+        json!({"op": "move_primitive", "id": 5, "at": [-0.5, 0.82, 0.02]}),
+        json!({"op": "resize_primitive", "id": 4, "shape": {"type": "sphere", "radius": 0.16, "negative": true}}),
+        json!({"op": "move_primitive", "id": 7, "at": [1.05, 0.42, -0.3]}),
+        json!({"op": "set_density", "id": 10, "density": 1.6, "reducing": 6.0}),
+        json!({"op": "add_primitive", "group": 0, "primitive": {"id": 11, "at": [-0.3, 0.3, -0.3],
+            "shape": {"type": "box", "half": [0.15, 0.12, 0.1], "negative": true}}}),
+        json!({"op": "add_primitive", "group": 0, "primitive": {"id": 12, "at": [0.2, -0.85, 0.0],
+            "shape": {"type": "sphere", "radius": 0.16}}}),
+        json!({"op": "remove_primitive", "id": 11}),
+        json!({"op": "move_primitive", "id": 8, "at": [-1.36, 0.5, 0.0]}),
+        json!({"op": "change_group", "id": 12, "group": 1}),
+        json!({"op": "move_primitive", "id": 9, "at": [0.62, -0.33, -0.3]}),
+    ];
+    for edit in edits {
+        ed.ok(json!({"type": "dsm_edit", "part": part, "edit": edit.clone()}))
+            .await;
+        let m = viewer.mesh_of_after(part, last.revision).await;
+        // Every edit shows in the mesh (so a stale region would show too).
+        assert!(geometry(&m) != geometry(&last), "{edit} changed nothing");
+        last = m;
+    }
+
+    // A fresh part of the final document.
+    let doc = get(addr, &format!("/api/designs/{design}"), Some(&d.editor))
+        .await
+        .json()["design"]
+        .clone();
+    let dsm = doc["parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["id"] == part)
+        .unwrap()["body"]["dsm"]
+        .clone();
+    assert_eq!(dsm["groups"][1]["primitives"][1]["id"], 12);
+    let r = ed.request(create("fresh", dsm)).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let fresh = r["part"].as_u64().unwrap();
+    let m = viewer.mesh_of_after(fresh, 0).await;
+    assert_eq!(m.positions.len(), last.positions.len());
+    assert!(
+        geometry(&m) == geometry(&last),
+        "the edited part's mesh differs from a fresh part's"
+    );
+
+    drop(ed);
+    drop(viewer);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
+}
