@@ -17,6 +17,7 @@ pub mod edit;
 pub mod engine;
 pub mod error;
 pub mod exchange;
+pub mod ffd_binding;
 pub mod hub;
 pub mod legacy;
 pub mod model;
