@@ -566,6 +566,22 @@ fn a_local_lattice_edit_recomputes_only_the_dsm_vertices_in_its_support() {
         }
     }
     assert!(moved > 50 && kept > 50, "{moved} moved, {kept} kept");
+    // The normals (recomputed only around what moved) are the area-weighted
+    // normals of the deformed triangles everywhere.
+    let mesh = m.dsm_mesh(2).unwrap();
+    let mut want = vec![DVec3::ZERO; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        for i in t {
+            want[*i as usize] += (b - a).cross(c - a);
+        }
+    }
+    for (k, (n, w)) in mesh.normals.iter().zip(&want).enumerate() {
+        assert!(
+            (*n - w.normalize()).length() < 1e-12,
+            "normal {k}: {n} vs {w}"
+        );
+    }
 }
 
 #[test]

@@ -264,6 +264,11 @@ struct DsmFfd {
     ffd: Ffd,
     emb: Embedding,
     mesh: Mesh,
+    /// The triangles around each vertex (CSR: `around[start[v]..start[v + 1]]`).
+    start: Vec<u32>,
+    around: Vec<u32>,
+    /// The positions before the last update (to find what moved).
+    previous: Vec<DVec3>,
 }
 
 impl DsmFfd {
@@ -285,19 +290,41 @@ impl DsmFfd {
         let mut out = mesh.clone();
         ffd.deform_all(&emb, &mut out.positions).map_err(kernel)?;
         renormal(&mut out);
+        let n = out.positions.len();
+        let mut start = vec![0u32; n + 1];
+        for t in &out.triangles {
+            for &v in t {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut around = vec![0u32; 3 * out.triangles.len()];
+        for (k, t) in out.triangles.iter().enumerate() {
+            for &v in t {
+                around[fill[v as usize] as usize] = k as u32;
+                fill[v as usize] += 1;
+            }
+        }
         Ok(Self {
             body,
             rest: rest.clone(),
             data: data.clone(),
             ffd,
             emb,
+            previous: out.positions.clone(),
             mesh: out,
+            start,
+            around,
         })
     }
 
     /// Moves to lattice `current` (same knots as the rest): only the moved
-    /// lattice points' supports are recomputed. Returns how many lattice
-    /// points moved.
+    /// lattice points' supports are recomputed, and the normals of the
+    /// vertices that moved and of their neighbours. Returns how many
+    /// lattice points moved.
     fn update(&mut self, current: &BSplineVolume) -> Result<usize, CommandError> {
         let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
         let moved: Vec<(usize, DVec3)> = current
@@ -314,9 +341,41 @@ impl DsmFfd {
                 .map_err(kernel)?;
         }
         if !moved.is_empty() {
-            renormal(&mut self.mesh);
+            self.renormal_moved();
         }
         Ok(moved.len())
+    }
+}
+
+impl DsmFfd {
+    /// Recomputes the normals of the vertices sharing a triangle with a
+    /// vertex that moved since the last call (the others cannot change).
+    fn renormal_moved(&mut self) {
+        let m = &mut self.mesh;
+        let mut touched: Vec<u32> = Vec::new();
+        for (v, (p, q)) in m.positions.iter().zip(&self.previous).enumerate() {
+            if p != q {
+                let (s, e) = (self.start[v] as usize, self.start[v + 1] as usize);
+                for &t in &self.around[s..e] {
+                    touched.extend_from_slice(&m.triangles[t as usize]);
+                }
+            }
+        }
+        touched.sort_unstable();
+        touched.dedup();
+        for &v in &touched {
+            let (s, e) = (
+                self.start[v as usize] as usize,
+                self.start[v as usize + 1] as usize,
+            );
+            let mut n = DVec3::ZERO;
+            for &t in &self.around[s..e] {
+                let [a, b, c] = m.triangles[t as usize].map(|i| m.positions[i as usize]);
+                n += (b - a).cross(c - a);
+            }
+            m.normals[v as usize] = n.normalize_or_zero();
+            self.previous[v as usize] = m.positions[v as usize];
+        }
     }
 }
 
