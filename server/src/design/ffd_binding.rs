@@ -269,6 +269,9 @@ struct DsmFfd {
     around: Vec<u32>,
     /// The positions before the last update (to find what moved).
     previous: Vec<DVec3>,
+    /// Per vertex, the update that last listed it (`stamp`).
+    mark: Vec<u32>,
+    stamp: u32,
 }
 
 impl DsmFfd {
@@ -315,6 +318,8 @@ impl DsmFfd {
             ffd,
             emb,
             previous: out.positions.clone(),
+            mark: vec![0; n],
+            stamp: 0,
             mesh: out,
             start,
             around,
@@ -352,17 +357,25 @@ impl DsmFfd {
     /// vertex that moved since the last call (the others cannot change).
     fn renormal_moved(&mut self) {
         let m = &mut self.mesh;
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.mark.fill(0);
+            self.stamp = 1;
+        }
         let mut touched: Vec<u32> = Vec::new();
         for (v, (p, q)) in m.positions.iter().zip(&self.previous).enumerate() {
             if p != q {
                 let (s, e) = (self.start[v] as usize, self.start[v + 1] as usize);
                 for &t in &self.around[s..e] {
-                    touched.extend_from_slice(&m.triangles[t as usize]);
+                    for &w in &m.triangles[t as usize] {
+                        if self.mark[w as usize] != self.stamp {
+                            self.mark[w as usize] = self.stamp;
+                            touched.push(w);
+                        }
+                    }
                 }
             }
         }
-        touched.sort_unstable();
-        touched.dedup();
         for &v in &touched {
             let (s, e) = (
                 self.start[v as usize] as usize,
