@@ -108,14 +108,14 @@ fn bench(c: &mut Criterion) {
     g.bench_function("dsm_sync", |b| {
         b.iter(|| {
             k += 1;
-            let d = if k % 2 == 0 { &doc } else { &moved };
+            let d = if k.is_multiple_of(2) { &doc } else { &moved };
             black_box(ffds.sync(d, &dsm).unwrap())
         })
     });
     g.bench_function("dsm_sync_and_frame", |b| {
         b.iter(|| {
             k += 1;
-            let d = if k % 2 == 0 { &doc } else { &moved };
+            let d = if k.is_multiple_of(2) { &doc } else { &moved };
             ffds.sync(d, &dsm).unwrap();
             black_box(ffds.frame(1, 2, k, true).unwrap().len())
         })
@@ -125,7 +125,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("body_edit", |b| {
         b.iter(|| {
             k += 1;
-            let s = if k % 2 == 0 { 1.0 } else { -1.0 };
+            let s = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
             let (_, parts) = m
                 .apply(Edit::Part {
                     part: 1,
