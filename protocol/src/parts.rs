@@ -218,6 +218,18 @@ pub enum RelationSpec {
         #[serde(default)]
         reversed: bool,
     },
+    /// Free-form deformation (paper 002): a surface, curve or DSM part
+    /// embedded in a body part follows the body's lattice. Refused when
+    /// any control point (DSM: mesh vertex) lies outside the body. A
+    /// B-spline part's control points are moved (an approximation of the
+    /// deformed surface); a DSM part's mesh vertices are mapped exactly.
+    /// Removing the relation (or the body) unbinds.
+    Ffd {
+        /// The body part (it deforms).
+        body: u64,
+        /// The bound part (it follows).
+        part: u64,
+    },
 }
 
 /// A parameter line of a surface part.

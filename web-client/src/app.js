@@ -236,6 +236,7 @@ const partsPanel = new PartsPanel({
   relations: $('relations'),
   joinForm: $('join'),
   bindForm: $('bind'),
+  ffdForm: $('ffd'),
   onSelect: (id) => selectPart(id),
   onVisible: (id, visible) => setVisible(id, visible),
   onLock: (id, locked) => send({ type: 'set_part', part: id, locked }),
@@ -244,6 +245,7 @@ const partsPanel = new PartsPanel({
   onDelete: (id) => send({ type: 'delete_part', part: id }),
   onJoin: (relation) => send({ type: 'relate', relation }),
   onBind: (relation) => send({ type: 'relate', relation }),
+  onFfd: (relation) => send({ type: 'relate', relation }),
   onUnrelate: (id) => send({ type: 'unrelate', relation: id }),
 });
 

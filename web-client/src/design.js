@@ -275,5 +275,6 @@ export class Design {
 export function relationParts(r) {
   if (r.kind === 'join') return [r.a.part, r.b.part];
   if (r.kind === 'binding') return [r.curve, r.surface];
+  if (r.kind === 'ffd') return [r.body, r.part];
   return [];
 }

@@ -2,7 +2,8 @@
 // shown or hidden, locked or not) where a part is selected, shown or hidden,
 // locked, renamed, recoloured and deleted; the joins and bindings between
 // parts, each with a button to undo it; the join tool (two edges, G0 or G1)
-// and the binding tool (a surface's parameter line follows a curve part). It
+// the binding tool (a surface's parameter line follows a curve part) and the
+// FFD tool (the selected surface, curve or DSM part follows a body). It
 // draws from the design model and says what the person asked through
 // callbacks; app.js turns those into protocol messages. Every control is a
 // real button, input or select, so the keyboard reaches all of them; the
@@ -22,6 +23,7 @@ export class PartsPanel {
    * @param {HTMLElement} o.relations the <ul> of joins and bindings
    * @param {HTMLFormElement} o.joinForm the join tool's form
    * @param {HTMLFormElement} o.bindForm the binding tool's form
+   * @param {HTMLFormElement} o.ffdForm the FFD tool's form (bind the selected part to a body)
    * @param {(id: number) => void} o.onSelect
    * @param {(id: number, visible: boolean) => void} o.onVisible
    * @param {(id: number, locked: boolean) => void} o.onLock
@@ -30,6 +32,7 @@ export class PartsPanel {
    * @param {(id: number) => void} o.onDelete
    * @param {(relation: object) => void} o.onJoin
    * @param {(relation: object) => void} o.onBind
+   * @param {(relation: object) => void} o.onFfd
    * @param {(id: number) => void} o.onUnrelate
    */
   constructor(o) {
@@ -91,6 +94,17 @@ export class PartsPanel {
         reversed: f['bind-reversed'].checked,
       });
     });
+    this.ffdForm.addEventListener('submit', (e) => {
+      e.preventDefault();
+      const selected = this.last && this.last.selected;
+      const body = Number(this.ffdForm.elements['ffd-body'].value);
+      if (selected == null || !body) return;
+      this.onFfd({ kind: 'ffd', body, part: selected });
+    });
+    this.ffdForm.elements['ffd-unbind'].addEventListener('click', () => {
+      const r = this.ffdOf(this.last && this.last.selected);
+      if (r) this.onUnrelate(r.id);
+    });
     for (const name of ['join-a-edge', 'join-b-edge']) {
       this.joinForm.elements[name].innerHTML = EDGES.map((e) => `<option value="${e}">${e.replace('_', ' ')}</option>`).join('');
     }
@@ -119,6 +133,12 @@ export class PartsPanel {
         input.select();
       }
     }
+  }
+
+  /** The FFD relation binding part `id` to a body, if any. */
+  ffdOf(id) {
+    if (id == null || !this.last) return null;
+    return [...this.last.design.relations.values()].find((r) => r.kind === 'ffd' && r.part === id) || null;
   }
 
   /** Whether part `part` is drawn on this page. */
@@ -184,8 +204,11 @@ export class PartsPanel {
         const what =
           r.kind === 'join'
             ? `join ${nameOf(r.a.part)} ${r.a.edge} ↔ ${nameOf(r.b.part)} ${r.b.edge} (${String(r.continuity).toUpperCase()}${r.reversed ? ', reversed' : ''})`
-            : `binding: ${nameOf(r.surface)} along ${r.line ? Object.entries(r.line).map(([k, x]) => `${k} = ${x}`).join('') : 'a line'} follows ${nameOf(r.curve)}${r.reversed ? ' (reversed)' : ''}`;
-        return `<li data-relation="${r.id}">${what} <button class="edit" data-unrelate="${r.id}"${off}>remove</button></li>`;
+            : r.kind === 'ffd'
+              ? `ffd: ${nameOf(r.part)} follows body ${nameOf(r.body)}`
+              : `binding: ${nameOf(r.surface)} along ${r.line ? Object.entries(r.line).map(([k, x]) => `${k} = ${x}`).join('') : 'a line'} follows ${nameOf(r.curve)}${r.reversed ? ' (reversed)' : ''}`;
+        const act = r.kind === 'ffd' ? 'unbind' : 'remove';
+        return `<li data-relation="${r.id}">${what} <button class="edit" data-unrelate="${r.id}"${off}>${act}</button></li>`;
       })
       .join('');
     // The join tool offers the surface parts; the binding tool surfaces and curves.
@@ -197,11 +220,23 @@ export class PartsPanel {
       [this.bindForm.elements['bind-surface'], surfaces, 0],
       [this.bindForm.elements['bind-curve'], curves, 0],
     ];
+    const bodies = parts.filter((p) => p.kind === 'body');
+    choices.push([this.ffdForm.elements['ffd-body'], bodies, 0]);
     for (const [sel, list, name] of choices) {
       const keep = sel.value;
       sel.innerHTML = list.map((p) => `<option value="${p.id}">${escape(p.name)}</option>`).join('');
       if (list.some((p) => String(p.id) === keep)) sel.value = keep;
       else if (list[name]) sel.value = String(list[name].id);
     }
+    // The FFD tool acts on the selected part: bind it (a surface, curve or
+    // DSM part not bound yet) or unbind it.
+    const f = this.ffdForm.elements;
+    const chosen = selected != null ? design.parts.get(selected) : null;
+    const bound = this.ffdOf(selected);
+    const bindable = chosen && ['surface', 'curve', 'dsm'].includes(chosen.kind) && !bound;
+    f['ffd-part'].value = chosen ? chosen.name : 'the selected part';
+    f['ffd-bind'].disabled = !online || !bindable || !bodies.length;
+    f['ffd-unbind'].hidden = !bound;
+    f['ffd-unbind'].disabled = !online;
   }
 }

@@ -3,7 +3,9 @@
 // whose morph target is the spool), both pages draw it from body frames;
 // dragging a lattice handle with the mouse moves that lattice point for a
 // second page (a viewer) — its handle, and its boundary's corner, are where
-// the stored document says; the time slider shows the viewer the morph.
+// the stored document says; the time slider shows the viewer the morph; a
+// plate bound to a body from the parts panel (FFD) follows a lattice point
+// moved through the protocol, and is unbound from the panel.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -103,6 +105,85 @@ test('a lattice point dragged in one page moves for a viewer; the morph slider r
   assert.equal(await viewer.evaluate(() => document.getElementById('body-morph-value').textContent), 't = 0.50');
   assert.deepEqual(editor.errors, []);
   assert.deepEqual(viewer.errors, []);
+  await editor.close();
+  await viewer.close();
+});
+
+test('a plate bound to a body from the parts panel follows a lattice point moved through the protocol; unbinding from the panel', async () => {
+  const d = await createDesign(server, dataDir, { name: 'ffd', nu: 6, nv: 6 });
+  const editor = await openClient(browser, `${server.base}/?design=${d.id}&token=${d.tokens.editor}`);
+  const viewer = await openClient(browser, `${server.base}/?design=${d.id}&token=${d.tokens.viewer}`);
+  const docOf = async () => (await (await fetch(`${server.base}/api/designs/${d.id}?token=${d.tokens.editor}`)).json()).design;
+  const plate = (await docOf()).parts[0];
+  const pts = plate.body.surface.points;
+  // A degree-2 box body around the plate (Greville points: the map is affine, the plate well inside).
+  const lo = [0, 1, 2].map((a) => Math.min(...pts.map((p) => p[a])));
+  const hi = [0, 1, 2].map((a) => Math.max(...pts.map((p) => p[a])));
+  const size = Math.max(...hi.map((h, a) => h - lo[a]));
+  const box = [0, 1, 2].map((a) => [lo[a] - 0.1 * size, hi[a] + 0.1 * size]);
+  const points = [];
+  for (const i of [0, 0.5, 1]) for (const j of [0, 0.5, 1]) for (const k of [0, 0.5, 1]) {
+    points.push([i, j, k].map((s, a) => box[a][0] + s * (box[a][1] - box[a][0])));
+  }
+  const kv = { degree: 2, knots: [0, 0, 0, 1, 1, 1] };
+  await editor.evaluate((lattice) => window.vsculpt.send({ type: 'create_part', spec: { name: 'cage', shape: { kind: 'body', body: { lattice: { u: lattice.kv, v: lattice.kv, w: lattice.kv, points: lattice.points } } } } }), { kv, points });
+  const bodyId = await (await editor.waitForFunction(() => [...window.vsculpt.bodyView.bodies.keys()][0] ?? null, null, { timeout: 15000 })).jsonValue();
+  await waitBody(viewer, bodyId);
+
+  // Bind from the panel: select the plate, choose the body, press bind.
+  await editor.click(`#parts [data-part="${plate.id}"] button[data-act="select"]`);
+  await editor.click('#ffd-tool summary');
+  await editor.waitForFunction((id) => !document.querySelector('#ffd button[name="ffd-bind"]').disabled && document.querySelector('select[name="ffd-body"]').value === String(id), bodyId, { timeout: 15000 });
+  await editor.click('#ffd button[name="ffd-bind"]');
+  await viewer.waitForFunction(() => [...window.vsculpt.design.relations.values()].some((r) => r.kind === 'ffd'), null, { timeout: 15000 });
+  const relation = await viewer.evaluate(() => [...window.vsculpt.design.relations.values()].find((r) => r.kind === 'ffd'));
+  assert.deepEqual([relation.body, relation.part], [bodyId, plate.id]);
+  assert.match(await viewer.textContent('#relations'), /ffd: .* follows body cage/);
+  assert.equal(await editor.isDisabled('#ffd button[name="ffd-bind"]'), true);
+  assert.equal(await editor.isVisible('#ffd button[name="ffd-unbind"]'), true);
+
+  // The drawing as the viewer holds it: the plate's frame points and its drawn mesh's bounds.
+  const drawn = (page, id) =>
+    page.evaluate((id) => {
+      const { design, partsView } = window.vsculpt;
+      const g = partsView.drawings.get(id).mesh.geometry;
+      g.computeBoundingBox();
+      return { points: Array.from(design.parts.get(id).geometry.points), min: g.boundingBox.min.toArray(), max: g.boundingBox.max.toArray(), revision: design.parts.get(id).geometry.revision ?? null };
+    }, id);
+  const before = await drawn(viewer, plate.id);
+  // The centre lattice point up by a fifth of the plate's size, through the protocol.
+  const dz = 0.2 * size;
+  await editor.evaluate(([part, dz]) => window.vsculpt.send({ type: 'body_edit', part, edit: { select: { point: [1, 1, 1] }, delta: [0, 0, dz] } }), [bodyId, dz]);
+  await viewer.waitForFunction(
+    ([id, first]) => {
+      const g = window.vsculpt.design.parts.get(id).geometry;
+      return g && Array.from(g.points).some((x, i) => x !== first[i]);
+    },
+    [plate.id, before.points],
+    { timeout: 15000 },
+  );
+  await viewer.waitForFunction(
+    ([id, top]) => {
+      const g = window.vsculpt.partsView.drawings.get(id).mesh.geometry;
+      g.computeBoundingBox();
+      return g.boundingBox.max.z > top;
+    },
+    [plate.id, before.max[2] + 0.02 * dz],
+    { timeout: 15000 },
+  );
+  const after = await drawn(viewer, plate.id);
+  // The page shows what the server stored: the control points moved up (by at most dz · N₁(½)³ = dz / 8), none down.
+  const stored = (await docOf()).parts.find((p) => p.id === plate.id).body.surface.points.flat();
+  stored.forEach((x, i) => assert.ok(Math.abs(after.points[i] - x) <= 1e-5 * (1 + Math.abs(x)), `point ${i}: ${after.points[i]} vs ${x}`));
+  const lift = stored.filter((_, i) => i % 3 === 2).map((z, k) => z - pts[k][2]);
+  assert.ok(Math.max(...lift) > 0.05 * dz && Math.max(...lift) <= dz / 8 + 1e-9 * size && Math.min(...lift) >= -1e-9 * size, `lifts ${Math.min(...lift)}…${Math.max(...lift)}`);
+  assert.ok(after.max[2] > before.max[2] + 0.02 * dz, `drawn top ${before.max[2]} → ${after.max[2]}`);
+
+  // Unbind from the panel: the relation goes, the plate keeps its shape.
+  await editor.click('#ffd button[name="ffd-unbind"]');
+  await viewer.waitForFunction(() => ![...window.vsculpt.design.relations.values()].some((r) => r.kind === 'ffd'), null, { timeout: 15000 });
+  assert.deepEqual((await docOf()).parts.find((p) => p.id === plate.id).body.surface.points.flat(), stored);
+  assert.deepEqual([...editor.errors, ...viewer.errors], []);
   await editor.close();
   await viewer.close();
 });

@@ -74,6 +74,9 @@ pub struct Embedding {
     cell_points: Vec<u32>,
     cells: [usize; 3],
     outside: usize,
+    /// Per point, added to its deformed position (empty: none); see
+    /// [`Embedding::carry_residual`].
+    offsets: Vec<DVec3>,
 }
 
 impl Embedding {
@@ -95,6 +98,23 @@ impl Embedding {
     /// The parameters (u, v, w) of point `i` in the lattice (NaN outside).
     pub fn params(&self, i: usize) -> [f64; 3] {
         self.params[i]
+    }
+
+    /// Makes the rest lattice of `ffd` give back the embedded points (to
+    /// rounding, not only to the inversion's tolerance): each inside point
+    /// carries its inversion residual x − B_rest(u, v, w), added to its
+    /// deformed position from then on. The map stays exactly as local and
+    /// affine moves stay affine; a point is then B(u, v, w) plus a constant
+    /// residual (zero for an affine-box lattice, ≤ the inversion tolerance
+    /// otherwise).
+    pub fn carry_residual(&mut self, ffd: &Ffd) -> Result<(), BodyError> {
+        self.offsets.clear();
+        let mut at_rest = ffd.clone();
+        at_rest.current = ffd.rest.clone();
+        let mut out = vec![DVec3::ZERO; self.len()];
+        at_rest.deform_all(self, &mut out)?;
+        self.offsets = self.rest.iter().zip(&out).map(|(x, b)| *x - *b).collect();
+        Ok(())
     }
 }
 
@@ -239,6 +259,7 @@ impl Ffd {
             cell_points,
             cells,
             outside,
+            offsets: Vec::new(),
         })
     }
 
@@ -282,7 +303,10 @@ impl Ffd {
             }
         }
         let _ = n;
-        acc
+        match emb.offsets.get(i) {
+            Some(o) => acc + *o,
+            None => acc,
+        }
     }
 
     /// Deformed positions of all embedded points into `out` (the baseline:

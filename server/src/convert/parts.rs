@@ -283,6 +283,11 @@ pub fn relation_from_wire(r: &wire::RelationSpec) -> RelationKind {
             },
             reversed: *reversed,
         },
+        wire::RelationSpec::Ffd { body, part } => RelationKind::Ffd {
+            body: *body,
+            part: *part,
+            rest: None,
+        },
     }
 }
 
@@ -325,6 +330,10 @@ pub fn relation_to_wire(r: &RelationDoc) -> wire::Relation {
                 IsoLineDoc::V(x) => wire::IsoLine::V(*x),
             },
             reversed: *reversed,
+        },
+        RelationKind::Ffd { body, part, .. } => wire::RelationSpec::Ffd {
+            body: *body,
+            part: *part,
         },
     };
     wire::Relation { id: r.id, spec }

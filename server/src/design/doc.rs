@@ -605,6 +605,23 @@ impl DesignDoc {
             {
                 return Err(invalid(format!("relation {} has a bad ratio", r.id)));
             }
+            if let RelationKind::Ffd { body, rest, .. } = &r.kind {
+                let Some(PartBody::Body(b)) = self.part(*body).map(|p| &p.body) else {
+                    return Err(invalid(format!(
+                        "relation {}: part {body} is not a body",
+                        r.id
+                    )));
+                };
+                if let Some(rest) = rest {
+                    rest.volume()?;
+                    if rest.degrees != b.lattice.degrees || rest.knots != b.lattice.knots {
+                        return Err(invalid(format!(
+                            "relation {}: its rest lattice does not fit body {body}",
+                            r.id
+                        )));
+                    }
+                }
+            }
         }
         Ok(())
     }

@@ -323,7 +323,9 @@ pub fn apply<'q>(
                         ),
                     ));
                 };
+                let before = b.lattice.clone();
                 b.move_points(*select, *delta)?;
+                super::ffd_binding::follow_body(&mut doc, *part, &before)?;
                 return Ok((doc, created));
             }
             let q = query(*part).ok_or_else(|| unknown_part(*part))?;
@@ -447,6 +449,9 @@ pub fn apply<'q>(
                             ));
                         }
                     }
+                }
+                RelationKind::Ffd { body, part, .. } => {
+                    super::ffd_binding::check_bind(&doc, *body, *part)?;
                 }
             }
             let id = doc.next_relation;

@@ -18,6 +18,7 @@ pub mod engine;
 pub mod error;
 pub mod exchange;
 pub mod fairing_job;
+pub mod ffd_binding;
 pub mod hub;
 pub mod legacy;
 pub mod model;

@@ -11,8 +11,9 @@ pub use super::doc::{AnchorDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
 pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
 use super::engine::Engine;
 use super::error::{CommandError, ErrorKind};
+use super::ffd_binding::DsmFfds;
 use super::network_engine::{NetworkEngine, NetworkEngines};
-use super::part::{PartBody, SurfacePart};
+use super::part::{PartBody, RelationKind, SurfacePart};
 use super::product_engine::ProductEngine;
 use crate::cad::IgesSurface;
 use glam::DVec3;
@@ -61,6 +62,8 @@ pub struct DesignModel {
     networks: NetworkEngines,
     /// The body parts' volumes and displayed shapes (paper 002).
     bodies: BodyEngines,
+    /// The deformed meshes of DSM parts bound to bodies (`ffd_binding`).
+    ffds: DsmFfds,
     /// The solve warning of the last edit (see [`Self::edit_warning`]).
     warning: Option<String>,
 }
@@ -79,11 +82,14 @@ impl DesignModel {
         let networks = network_engines(doc)?;
         let mut bodies = BodyEngines::default();
         bodies.sync(doc)?;
+        let mut ffds = DsmFfds::default();
+        ffds.sync(doc, engine.dsm())?;
         let mut m = Self {
             doc: doc.clone(),
             engine,
             networks,
             bodies,
+            ffds,
             warning: None,
         };
         m.sync();
@@ -195,7 +201,18 @@ impl DesignModel {
                 }
                 Edit::Part { part, .. } | Edit::Dsm { part, .. } => {
                     let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
-                    next.rebuild_part(*part, &p.body)?
+                    let mut moved = next.rebuild_part(*part, &p.body)?;
+                    // A body's lattice moved the parts bound to it (their
+                    // new shapes are in `doc`): rebuilt and solved.
+                    if let PartBody::Body(_) = p.body {
+                        for id in super::ffd_binding::bound_bspline_parts(&doc, *part) {
+                            let q = doc.part(id).ok_or_else(|| unknown_part(id))?;
+                            moved.extend(next.rebuild_part(id, &q.body)?);
+                        }
+                        moved.sort_unstable();
+                        moved.dedup();
+                    }
+                    moved
                 }
                 Edit::CreatePart { .. } => {
                     let id = created.part.unwrap_or_default();
@@ -205,6 +222,23 @@ impl DesignModel {
                 }
                 Edit::DeletePart { part } => next.remove_part(*part)?,
                 Edit::SetPart { .. } => Vec::new(),
+                Edit::Relate(RelationKind::Ffd { body, part, .. }) => {
+                    let id = created.relation.unwrap_or_default();
+                    let rest = super::ffd_binding::dsm_rest(&doc, next.dsm(), *body, *part)?;
+                    if let Some(r) = doc.relations.iter_mut().find(|r| r.id == id)
+                        && let RelationKind::Ffd { rest: stored, .. } = &mut r.kind
+                    {
+                        *stored = rest;
+                    }
+                    Vec::new()
+                }
+                Edit::Unrelate { relation }
+                    if current.relations.iter().any(|r| {
+                        r.id == *relation && matches!(r.kind, RelationKind::Ffd { .. })
+                    }) =>
+                {
+                    Vec::new()
+                }
                 Edit::Relate(_) => {
                     let id = created.relation.unwrap_or_default();
                     let r = doc
@@ -223,6 +257,14 @@ impl DesignModel {
         })();
         self.warning = None;
         let outcome = outcome.and_then(|m| self.bodies.sync(&doc).map(|()| m));
+        let ffds = &mut self.ffds;
+        let dsm = self.engine.dsm();
+        let outcome = outcome.and_then(|mut m| {
+            m.extend(ffds.sync(&doc, dsm)?);
+            m.sort_unstable();
+            m.dedup();
+            Ok(m)
+        });
         let moved = match outcome {
             Ok(m) => m,
             Err(e) => {
@@ -230,6 +272,7 @@ impl DesignModel {
                 self.engine = ProductEngine::build_unsolved(&current)?;
                 self.networks = network_engines(&current)?;
                 self.bodies.sync(&current)?;
+                self.ffds.sync(&current, self.engine.dsm())?;
                 return Err(e);
             }
         };
@@ -341,6 +384,14 @@ impl DesignModel {
         }
     }
 
+    /// The mesh DSM part `part` shows: deformed by the body it is bound to
+    /// (`ffd_binding`), else its own.
+    pub fn dsm_mesh(&self, part: u64) -> Option<&vsculpt_kernel::dsm::Mesh> {
+        self.ffds
+            .mesh(part)
+            .or_else(|| self.engine.dsm().mesh(part))
+    }
+
     /// The volume body part `part` shows (its morph at the current time).
     pub fn body_volume(&self, part: u64) -> Option<&vsculpt_kernel::body::BSplineVolume> {
         self.bodies.get(part).map(|e| e.shown())
@@ -357,7 +408,11 @@ impl DesignModel {
                 stream: None,
             });
         }
-        if let Some(frame) = self.engine.dsm().frame(design, part, rev, drag) {
+        if let Some(frame) = self
+            .ffds
+            .frame(design, part, rev, drag)
+            .or_else(|| self.engine.dsm().frame(design, part, rev, drag))
+        {
             return Some(Geometry {
                 rev,
                 frame,

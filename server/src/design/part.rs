@@ -366,6 +366,20 @@ pub enum RelationKind {
         /// The curve runs against the line.
         reversed: bool,
     },
+    /// A part embedded in a body part follows its lattice (free-form
+    /// deformation, paper 002; see `ffd_binding`).
+    Ffd {
+        /// The body part.
+        body: u64,
+        /// The bound surface, curve or DSM part.
+        part: u64,
+        /// A DSM part's rest lattice: the body's lattice when it was bound
+        /// (its mesh, derived from its DSM data, is deformed from this
+        /// state). Absent for a surface or curve part, whose stored
+        /// control points are moved at each lattice change.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rest: Option<super::body_part::LatticeDoc>,
+    },
 }
 
 /// A parameter line of a surface.
@@ -384,6 +398,7 @@ impl RelationKind {
         match self {
             RelationKind::Join { a, b, .. } => [*a, *b],
             RelationKind::Binding { curve, surface, .. } => [*curve, *surface],
+            RelationKind::Ffd { body, part, .. } => [*body, *part],
         }
     }
 }

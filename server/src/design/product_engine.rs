@@ -99,7 +99,7 @@ fn join_spec(kind: &RelationKind, ratio: Option<f64>) -> Option<JoinSpec> {
             },
             ratio,
         }),
-        RelationKind::Binding { .. } => None,
+        RelationKind::Binding { .. } | RelationKind::Ffd { .. } => None,
     }
 }
 
@@ -119,7 +119,7 @@ fn binding_spec(kind: &RelationKind) -> Option<BindingSpec> {
             },
             reversed: *reversed,
         }),
-        RelationKind::Join { .. } => None,
+        RelationKind::Join { .. } | RelationKind::Ffd { .. } => None,
     }
 }
 

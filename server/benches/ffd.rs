@@ -1,0 +1,146 @@
+//! FFD of a bound DSM part's mesh on the server path (issue 13): a DSM
+//! sphere meshed to ≥ 100 000 vertices, bound to a tricubic 8³ body (the
+//! kernel bench's lattice, `kernel/benches/body.rs`), one lattice point
+//! moving each iteration:
+//!
+//! * `ffd_server/dsm_sync` — what the design model does for the DSM part
+//!   after a lattice edit (`DsmFfds::sync`): find the moved lattice point,
+//!   recompute only the vertices of its support (`Ffd::move_point`), then
+//!   the normals of the deformed mesh;
+//! * `ffd_server/dsm_sync_and_frame` — the same plus the mesh frame (kind 3)
+//!   every viewer receives (quantised and encoded);
+//! * `ffd_server/body_edit` — the whole `body_edit` in the design model:
+//!   the edit validated (the body proved injective), the body's display
+//!   re-evaluated, the bound mesh deformed, the document synchronised, and
+//!   the DSM part's frame encoded.
+//!
+//! Run: `cargo bench -p vsculpt-server --bench ffd`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use glam::DVec3;
+use std::hint::black_box;
+use vsculpt_kernel::body::BSplineVolume;
+use vsculpt_protocol::dsm::{DsmData, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
+use vsculpt_server::design::body_part::{BodyPart, LatticeDoc, LatticeSelect};
+use vsculpt_server::design::doc::DesignDoc;
+use vsculpt_server::design::dsm_engine::{DsmEngine, DsmPart};
+use vsculpt_server::design::edit::{Edit, PartEdit};
+use vsculpt_server::design::ffd_binding::DsmFfds;
+use vsculpt_server::design::model::DesignModel;
+use vsculpt_server::design::part::{PartBody, RelationKind};
+
+/// Cells of the DSM sphere's mesh (≈ 100 000 vertices).
+const CELLS: u32 = 146;
+
+fn sphere() -> DsmPart {
+    DsmPart::new(DsmData {
+        de: 1.0,
+        cells: CELLS,
+        groups: vec![DsmGroup {
+            op: DsmOp::Add,
+            incorporated: Vec::new(),
+            primitives: vec![DsmPrimitive {
+                id: 1,
+                at: [0.5, 0.5, 0.5],
+                axis: None,
+                shape: DsmPrimitiveShape::Sphere {
+                    radius: 0.45,
+                    negative: false,
+                },
+            }],
+        }],
+    })
+}
+
+fn lattice() -> LatticeDoc {
+    let v =
+        BSplineVolume::affine(DVec3::ZERO, [DVec3::X, DVec3::Y, DVec3::Z], [3; 3], [8; 3]).unwrap();
+    LatticeDoc::from_volume(&v)
+}
+
+/// Body part 1, DSM part 2, bound.
+fn model() -> DesignModel {
+    let body = PartBody::Body(BodyPart {
+        lattice: lattice(),
+        morph_target: None,
+        icons: Vec::new(),
+    });
+    let mut m = DesignModel::load(&DesignDoc::single("ffd bench", "cage", body)).unwrap();
+    m.apply(Edit::CreatePart {
+        name: "blob".into(),
+        body: Box::new(PartBody::Dsm(sphere())),
+        colour: None,
+    })
+    .unwrap();
+    m.apply(Edit::Relate(RelationKind::Ffd {
+        body: 1,
+        part: 2,
+        rest: None,
+    }))
+    .unwrap();
+    m
+}
+
+/// The lattice point moved: (6, 4, 4), on the sphere's side (as the kernel bench).
+const IJK: [usize; 3] = [6, 4, 4];
+
+fn bench(c: &mut Criterion) {
+    let mut m = model();
+    let n = m.dsm_mesh(2).unwrap().positions.len();
+    println!("dsm mesh: {n} vertices");
+    assert!(n >= 100_000, "{n} vertices");
+    let mut g = c.benchmark_group("ffd_server");
+
+    // Two documents whose body differs in the one point: sync alternates.
+    let doc = m.doc().clone();
+    let mut moved = doc.clone();
+    if let Some(p) = moved.part_mut(1)
+        && let PartBody::Body(b) = &mut p.body
+    {
+        b.move_points(LatticeSelect::Point(IJK), [0.05, 0.02, 0.0])
+            .unwrap();
+    }
+    let mut dsm = DsmEngine::default();
+    dsm.insert(2, &sphere()).unwrap();
+    let mut ffds = DsmFfds::default();
+    ffds.sync(&doc, &dsm).unwrap();
+    let mut k = 0u64;
+    g.bench_function("dsm_sync", |b| {
+        b.iter(|| {
+            k += 1;
+            let d = if k.is_multiple_of(2) { &doc } else { &moved };
+            black_box(ffds.sync(d, &dsm).unwrap())
+        })
+    });
+    g.bench_function("dsm_sync_and_frame", |b| {
+        b.iter(|| {
+            k += 1;
+            let d = if k.is_multiple_of(2) { &doc } else { &moved };
+            ffds.sync(d, &dsm).unwrap();
+            black_box(ffds.frame(1, 2, k, true).unwrap().len())
+        })
+    });
+    // The whole edit is slow (the body's injectivity proof): few samples.
+    g.sample_size(10);
+    g.bench_function("body_edit", |b| {
+        b.iter(|| {
+            k += 1;
+            let s = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
+            let (_, parts) = m
+                .apply(Edit::Part {
+                    part: 1,
+                    edit: PartEdit::MoveLattice {
+                        select: LatticeSelect::Point(IJK),
+                        delta: [0.05 * s, 0.02 * s, 0.0],
+                    },
+                })
+                .unwrap();
+            assert!(parts.contains(&2));
+            black_box(m.geometry(1, 2, k, true).unwrap().frame.len())
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

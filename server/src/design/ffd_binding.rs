@@ -1,0 +1,511 @@
+//! Free-form deformation of other parts by a body part (paper 002,
+//! issue 13): the `ffd` relation ties a surface, curve or DSM part to a
+//! body part, which then deforms it.
+//!
+//! Choices made here (protocol/README.md, `relate`):
+//! * **Binding** embeds the part: every control point (a DSM part: every
+//!   vertex of its mesh) is inverted into the body's parameter space
+//!   (`kernel::body::invert`, or the closed form for an affine box). A point
+//!   outside the body refuses the binding, naming the first such point and
+//!   where it is; nothing changes.
+//! * **Surface and curve parts** are deformed by moving their control
+//!   points, stored in the document: at every change of the body's lattice
+//!   (`body_edit`; undo and redo give back stored documents) each control
+//!   point x is embedded in the lattice *before* the change, p = B_old⁻¹(x),
+//!   and moved to x + B_new(p) − B_old(p). This composes (B_new ∘ B_old⁻¹
+//!   after B_old ∘ B_rest⁻¹ is B_new ∘ B_rest⁻¹), so a part reshaped by its
+//!   own icons between two lattice edits follows from where it is. The
+//!   identity lattice moves nothing (exactly), an affine lattice move is
+//!   affine on the points (to the inversion's residual: rounding for an
+//!   affine box), and a point outside the moved lattice point's support
+//!   does not move at all (B-spline locality).
+//!   Moving control points is an *approximation* of the deformed surface
+//!   φ∘S (a polynomial of much higher degree): no refit is done; the
+//!   deviation is measured in `server/tests/body_ffd.rs` against the
+//!   second-order bound ½·sup‖D²φ‖·Σᵢ Nᵢ(s)‖Pᵢ − S(s)‖². A control point
+//!   that the part's own edits moved outside the body keeps its position
+//!   (Sederberg–Parry's convention).
+//! * **Icons of a bound surface or curve**: the FFD moves the part's shape
+//!   (its rest shape for the solver) and the targets of its position and
+//!   load icons with the same map; derivative and normal targets are kept.
+//!   The part is then rebuilt and solved with its icons and relations.
+//! * **DSM parts** are derived from their DSM data, so the deformation is
+//!   applied to the mesh, from the body's lattice when the part was bound
+//!   (stored in the relation as `rest`): each vertex x maps to
+//!   B(u, v, w) + (x − B_rest(u, v, w)), which is B(u, v, w) up to the
+//!   inversion residual (zero for an affine box), exactly x for the
+//!   identity lattice. A change of one lattice point recomputes only the
+//!   vertices in its support ([`Ffd::move_point`]); the normals are
+//!   recomputed from the deformed triangles. A DSM edit re-meshes and
+//!   re-embeds; vertices outside the rest body then keep their positions.
+//! * **Morph playback** does not deform bound parts: they follow the body's
+//!   lattice, not the frames of its metamorphosis.
+//! * **Unbinding** (`unrelate`, or deleting the body, which unbinds): a
+//!   surface or curve keeps its deformed shape; a DSM mesh shows its own
+//!   shape again. A part follows one body at most.
+
+use super::body_part::LatticeDoc;
+use super::doc::{DesignDoc, IconRoleDoc};
+use super::dsm_engine::DsmEngine;
+use super::error::{CommandError, ErrorKind};
+use super::part::{PartBody, RelationKind};
+use glam::DVec3;
+use std::collections::BTreeMap;
+use vsculpt_kernel::body::{BSplineVolume, Embedding, Ffd, Inverter};
+use vsculpt_kernel::dsm::Mesh;
+use vsculpt_protocol::dsm::DsmData;
+use vsculpt_protocol::mesh_frame::MeshFrame;
+
+/// How far from the body a point may be after inversion and still count as
+/// inside, relative to the diagonal of the lattice's bounding box.
+pub const INSIDE_TOLERANCE: f64 = 1e-9;
+
+fn out_of_range(msg: String) -> CommandError {
+    CommandError::new(ErrorKind::InvalidValue, msg)
+}
+
+/// The absolute inside tolerance of `vol`.
+fn tolerance(vol: &BSplineVolume) -> f64 {
+    let (lo, hi) = vol
+        .points()
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), p| {
+            (l.min(*p), h.max(*p))
+        });
+    INSIDE_TOLERANCE * (hi - lo).length().max(1e-300)
+}
+
+/// `points` embedded in `vol`; refused (naming the first point outside, as
+/// `what` calls it, and how far from the body it is) unless all are inside.
+pub fn embed_all(
+    vol: &BSplineVolume,
+    points: &[DVec3],
+    what: &str,
+) -> Result<(Ffd, Embedding), CommandError> {
+    let ffd = Ffd::new(vol.clone());
+    let emb = ffd
+        .embed(points, tolerance(vol))
+        .map_err(|e| out_of_range(format!("ffd: {e}")))?;
+    if emb.outside() > 0 {
+        let i = (0..emb.len())
+            .find(|&i| emb.params(i)[0].is_nan())
+            .unwrap_or(0);
+        let x = points[i];
+        let off = Inverter::new(vol)
+            .invert(x, tolerance(vol) * 1e-3)
+            .map(|r| r.distance)
+            .unwrap_or(f64::NAN);
+        return Err(out_of_range(format!(
+            "{what} {i} at ({:.4}, {:.4}, {:.4}) lies outside the body ({off:.4} from it; {} of {} outside): only geometry inside a body can be bound to it",
+            x.x,
+            x.y,
+            x.z,
+            emb.outside(),
+            emb.len()
+        )));
+    }
+    Ok((ffd, emb))
+}
+
+/// Moves `points` by the change of lattice `old` → `new` (same knots):
+/// x + B_new(p) − B_old(p) with p the parameters of x in `old`. Points
+/// outside `old` keep their positions.
+pub fn follow(
+    old: &BSplineVolume,
+    new: &BSplineVolume,
+    points: &mut [DVec3],
+) -> Result<(), CommandError> {
+    let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
+    let before = Ffd::new(old.clone());
+    let emb = before.embed(points, tolerance(old)).map_err(kernel)?;
+    let mut after = before.clone();
+    after.set_lattice(new.points().to_vec()).map_err(kernel)?;
+    let mut a = vec![DVec3::ZERO; points.len()];
+    let mut b = vec![DVec3::ZERO; points.len()];
+    before.deform_all(&emb, &mut a).map_err(kernel)?;
+    after.deform_all(&emb, &mut b).map_err(kernel)?;
+    for ((x, a), b) in points.iter_mut().zip(&a).zip(&b) {
+        *x += *b - *a;
+    }
+    Ok(())
+}
+
+/// The part bound to body `body` by relation kinds in `doc`, with the
+/// relation's rest lattice.
+fn bound_to(doc: &DesignDoc, body: u64) -> Vec<(u64, Option<&LatticeDoc>)> {
+    doc.relations
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RelationKind::Ffd {
+                body: b,
+                part,
+                rest,
+            } if *b == body => Some((*part, rest.as_ref())),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The surface and curve parts bound to body `body` in `doc`.
+pub fn bound_bspline_parts(doc: &DesignDoc, body: u64) -> Vec<u64> {
+    bound_to(doc, body)
+        .into_iter()
+        .filter(|(p, _)| {
+            matches!(
+                doc.part(*p).map(|p| &p.body),
+                Some(PartBody::Surface(_) | PartBody::Curve(_))
+            )
+        })
+        .map(|(p, _)| p)
+        .collect()
+}
+
+/// After body `body`'s lattice changed from `old` to what `doc` holds:
+/// moves the control points (and position and load icon targets) of the
+/// surface and curve parts bound to it. Returns their ids.
+pub fn follow_body(
+    doc: &mut DesignDoc,
+    body: u64,
+    old: &LatticeDoc,
+) -> Result<Vec<u64>, CommandError> {
+    let parts = bound_bspline_parts(doc, body);
+    if parts.is_empty() {
+        return Ok(parts);
+    }
+    let new = match doc.part(body).map(|p| &p.body) {
+        Some(PartBody::Body(b)) => b.lattice.volume()?,
+        _ => return Ok(Vec::new()),
+    };
+    let old = old.volume()?;
+    for id in &parts {
+        let Some(p) = doc.part_mut(*id) else { continue };
+        let (points, icons) = match &mut p.body {
+            PartBody::Surface(s) => (&mut s.surface.points, &mut s.icons),
+            PartBody::Curve(c) => (&mut c.curve.points, &mut c.icons),
+            _ => continue,
+        };
+        let mut xs: Vec<DVec3> = points.iter().map(|p| DVec3::from(*p)).collect();
+        let moves = |r: IconRoleDoc| matches!(r, IconRoleDoc::Position | IconRoleDoc::Load);
+        xs.extend(
+            icons
+                .iter()
+                .filter(|i| moves(i.role))
+                .map(|i| DVec3::from(i.target)),
+        );
+        follow(&old, &new, &mut xs)?;
+        let n = points.len();
+        for (p, x) in points.iter_mut().zip(&xs) {
+            *p = x.to_array();
+        }
+        for (i, x) in icons.iter_mut().filter(|i| moves(i.role)).zip(&xs[n..]) {
+            i.target = x.to_array();
+        }
+    }
+    Ok(parts)
+}
+
+/// Checks a new `ffd` relation of `part` to `body` in `doc` (kinds, one
+/// body per part, lock) and, for a surface or curve, that its control
+/// points lie inside the body.
+pub fn check_bind(doc: &DesignDoc, body: u64, part: u64) -> Result<(), CommandError> {
+    let incompatible = |m: String| CommandError::new(ErrorKind::Incompatible, m);
+    let unknown = |id: u64| CommandError::new(ErrorKind::UnknownPart, format!("no part {id}"));
+    let b = doc.part(body).ok_or_else(|| unknown(body))?;
+    let PartBody::Body(bp) = &b.body else {
+        return Err(incompatible(format!(
+            "part {body} is a {}: an ffd relation's `body` must be a body part",
+            b.body.kind()
+        )));
+    };
+    let p = doc.part(part).ok_or_else(|| unknown(part))?;
+    if p.locked {
+        return Err(CommandError::new(
+            ErrorKind::Locked,
+            format!("part {} ({}) is locked: unlock it first", p.id, p.name),
+        ));
+    }
+    let points: Vec<DVec3> = match &p.body {
+        PartBody::Surface(s) => s.surface.points.iter().map(|p| DVec3::from(*p)).collect(),
+        PartBody::Curve(c) => c.curve.points.iter().map(|p| DVec3::from(*p)).collect(),
+        // Its mesh is checked by the model, which holds it.
+        PartBody::Dsm(_) => Vec::new(),
+        other => {
+            return Err(incompatible(format!(
+                "part {part} is a {}: only a surface, curve or dsm part can be bound to a body",
+                other.kind()
+            )));
+        }
+    };
+    if let Some(r) = doc
+        .relations
+        .iter()
+        .find(|r| matches!(r.kind, RelationKind::Ffd { part: q, .. } if q == part))
+    {
+        return Err(CommandError::new(
+            ErrorKind::Conflict,
+            format!(
+                "part {part} is bound to a body already (relation {}): unbind it first",
+                r.id
+            ),
+        ));
+    }
+    if !points.is_empty() {
+        embed_all(&bp.lattice.volume()?, &points, "control point")?;
+    }
+    Ok(())
+}
+
+/// One bound DSM part's deformed mesh.
+struct DsmFfd {
+    body: u64,
+    rest: LatticeDoc,
+    /// The DSM data its mesh was made from.
+    data: DsmData,
+    ffd: Ffd,
+    emb: Embedding,
+    mesh: Mesh,
+    /// The triangles around each vertex (CSR: `around[start[v]..start[v + 1]]`).
+    start: Vec<u32>,
+    around: Vec<u32>,
+    /// The positions before the last update (to find what moved).
+    previous: Vec<DVec3>,
+    /// Per vertex, the update that last listed it (`stamp`).
+    mark: Vec<u32>,
+    stamp: u32,
+}
+
+impl DsmFfd {
+    fn build(
+        body: u64,
+        rest: &LatticeDoc,
+        current: &BSplineVolume,
+        data: &DsmData,
+        mesh: &Mesh,
+    ) -> Result<Self, CommandError> {
+        let vol = rest.volume()?;
+        let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
+        let mut ffd = Ffd::new(vol.clone());
+        let mut emb = ffd
+            .embed(&mesh.positions, tolerance(&vol))
+            .map_err(kernel)?;
+        emb.carry_residual(&ffd).map_err(kernel)?;
+        ffd.set_lattice(current.points().to_vec()).map_err(kernel)?;
+        let mut out = mesh.clone();
+        ffd.deform_all(&emb, &mut out.positions).map_err(kernel)?;
+        renormal(&mut out);
+        let n = out.positions.len();
+        let mut start = vec![0u32; n + 1];
+        for t in &out.triangles {
+            for &v in t {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut around = vec![0u32; 3 * out.triangles.len()];
+        for (k, t) in out.triangles.iter().enumerate() {
+            for &v in t {
+                around[fill[v as usize] as usize] = k as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Ok(Self {
+            body,
+            rest: rest.clone(),
+            data: data.clone(),
+            ffd,
+            emb,
+            previous: out.positions.clone(),
+            mark: vec![0; n],
+            stamp: 0,
+            mesh: out,
+            start,
+            around,
+        })
+    }
+
+    /// Moves to lattice `current` (same knots as the rest): only the moved
+    /// lattice points' supports are recomputed, and the normals of the
+    /// vertices that moved and of their neighbours. Returns how many
+    /// lattice points moved.
+    fn update(&mut self, current: &BSplineVolume) -> Result<usize, CommandError> {
+        let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
+        let moved: Vec<(usize, DVec3)> = current
+            .points()
+            .iter()
+            .zip(self.ffd.lattice().points())
+            .enumerate()
+            .filter(|(_, (a, b))| a != b)
+            .map(|(i, (a, _))| (i, *a))
+            .collect();
+        for &(i, p) in &moved {
+            self.ffd
+                .move_point(i, p, &self.emb, &mut self.mesh.positions)
+                .map_err(kernel)?;
+        }
+        if !moved.is_empty() {
+            self.renormal_moved();
+        }
+        Ok(moved.len())
+    }
+}
+
+impl DsmFfd {
+    /// Recomputes the normals of the vertices sharing a triangle with a
+    /// vertex that moved since the last call (the others cannot change).
+    fn renormal_moved(&mut self) {
+        let m = &mut self.mesh;
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.mark.fill(0);
+            self.stamp = 1;
+        }
+        let mut touched: Vec<u32> = Vec::new();
+        for (v, (p, q)) in m.positions.iter().zip(&self.previous).enumerate() {
+            if p != q {
+                let (s, e) = (self.start[v] as usize, self.start[v + 1] as usize);
+                for &t in &self.around[s..e] {
+                    for &w in &m.triangles[t as usize] {
+                        if self.mark[w as usize] != self.stamp {
+                            self.mark[w as usize] = self.stamp;
+                            touched.push(w);
+                        }
+                    }
+                }
+            }
+        }
+        for &v in &touched {
+            let (s, e) = (
+                self.start[v as usize] as usize,
+                self.start[v as usize + 1] as usize,
+            );
+            let mut n = DVec3::ZERO;
+            for &t in &self.around[s..e] {
+                let [a, b, c] = m.triangles[t as usize].map(|i| m.positions[i as usize]);
+                n += (b - a).cross(c - a);
+            }
+            m.normals[v as usize] = n.normalize_or_zero();
+            self.previous[v as usize] = m.positions[v as usize];
+        }
+    }
+}
+
+/// Area-weighted vertex normals of `m`'s triangles.
+fn renormal(m: &mut Mesh) {
+    let mut n = vec![DVec3::ZERO; m.positions.len()];
+    for t in &m.triangles {
+        let [a, b, c] = t.map(|i| m.positions[i as usize]);
+        let f = (b - a).cross(c - a);
+        for i in t {
+            n[*i as usize] += f;
+        }
+    }
+    for (out, v) in m.normals.iter_mut().zip(n) {
+        *out = v.normalize_or_zero();
+    }
+}
+
+/// The deformed meshes of a design's bound DSM parts.
+#[derive(Default)]
+pub struct DsmFfds {
+    parts: BTreeMap<u64, DsmFfd>,
+}
+
+impl DsmFfds {
+    /// Brings the deformed meshes in step with `doc` (its `ffd` relations
+    /// of DSM parts, its bodies' lattices) and `dsm` (the meshes). Returns
+    /// the DSM parts whose mesh as shown changed. On an error nothing
+    /// changes.
+    pub fn sync(&mut self, doc: &DesignDoc, dsm: &DsmEngine) -> Result<Vec<u64>, CommandError> {
+        let mut next = BTreeMap::new();
+        let mut changed = Vec::new();
+        let mut old = std::mem::take(&mut self.parts);
+        let result = (|| {
+            for r in &doc.relations {
+                let RelationKind::Ffd {
+                    body,
+                    part,
+                    rest: Some(rest),
+                } = &r.kind
+                else {
+                    continue;
+                };
+                let (Some(PartBody::Dsm(d)), Some(PartBody::Body(b)), Some(mesh)) = (
+                    doc.part(*part).map(|p| &p.body),
+                    doc.part(*body).map(|p| &p.body),
+                    dsm.mesh(*part),
+                ) else {
+                    continue;
+                };
+                let current = b.lattice.volume()?;
+                let e = match old.remove(part) {
+                    Some(mut e) if e.body == *body && e.rest == *rest && e.data == d.dsm => {
+                        if e.update(&current)? > 0 {
+                            changed.push(*part);
+                        }
+                        e
+                    }
+                    _ => {
+                        changed.push(*part);
+                        DsmFfd::build(*body, rest, &current, &d.dsm, mesh)?
+                    }
+                };
+                next.insert(*part, e);
+            }
+            Ok::<(), CommandError>(())
+        })();
+        if let Err(e) = result {
+            // Entries already updated may differ from before: rebuild them
+            // from scratch at the next sync rather than keep a half state.
+            self.parts.clear();
+            return Err(e);
+        }
+        changed.extend(old.into_keys().filter(|k| doc.part(*k).is_some()));
+        self.parts = next;
+        Ok(changed)
+    }
+
+    /// Part `id`'s deformed mesh, if it is a bound DSM part.
+    pub fn mesh(&self, id: u64) -> Option<&Mesh> {
+        self.parts.get(&id).map(|e| &e.mesh)
+    }
+
+    /// Part `id`'s deformed mesh frame (kind 3) at revision `rev`.
+    pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
+        let m = self.mesh(id)?;
+        let positions: Vec<[f64; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
+        let normals: Vec<[f64; 3]> = m.normals.iter().map(|n| n.to_array()).collect();
+        let flags = if drag {
+            vsculpt_protocol::frame::FLAG_DRAG
+        } else {
+            0
+        };
+        let frame =
+            MeshFrame::quantise((design, id, rev), flags, &positions, &normals, &m.triangles)
+                .ok()?;
+        frame.encode().ok().map(axum::body::Bytes::from)
+    }
+}
+
+/// The rest lattice a new `ffd` relation of DSM part `part` to `body`
+/// stores (the body's lattice now), after checking that every vertex of
+/// the part's mesh lies inside the body; `None` for other parts.
+pub fn dsm_rest(
+    doc: &DesignDoc,
+    dsm: &DsmEngine,
+    body: u64,
+    part: u64,
+) -> Result<Option<LatticeDoc>, CommandError> {
+    let (Some(PartBody::Dsm(_)), Some(PartBody::Body(b))) = (
+        doc.part(part).map(|p| &p.body),
+        doc.part(body).map(|p| &p.body),
+    ) else {
+        return Ok(None);
+    };
+    if let Some(m) = dsm.mesh(part) {
+        embed_all(&b.lattice.volume()?, &m.positions, "mesh vertex")?;
+    }
+    Ok(Some(b.lattice.clone()))
+}
