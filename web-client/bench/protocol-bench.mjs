@@ -16,6 +16,10 @@
 //          frame reported) and bytes per viewer are counted
 //   soak   300 designs; rounds of 500 clients joining (10 at a time) a random
 //          design and leaving; per round the server's RSS and join p50/p99
+//   commits the dragging editor's own frame (as in own) while a second editor
+//          of the same 81 × 159 design commits over and over (commit, wait
+//          for its ack, pause BENCH_COMMIT_PAUSE_MS, again); also commit →
+//          ack p50/p99
 //
 // Node's WebSocket (undici) acks like a browser: no early ACKs, Nagle on.
 //
@@ -23,7 +27,8 @@
 //   cargo build --release -p vsculpt-server
 //   node --experimental-websocket web-client/bench/protocol-bench.mjs target/release/vsculpt-server
 // Optional: BENCH_SOAK_ROUNDS (default 6), BENCH_JOINS (200), BENCH_DRAGS (300),
-// BENCH_VIEWERS (50), BENCH_FANOUT_SECONDS (5).
+// BENCH_VIEWERS (50), BENCH_FANOUT_SECONDS (5), BENCH_COMMIT_PAUSE_MS (50),
+// BENCH_ONLY (a comma list of join, own, fanout, soak, commits; default all).
 
 import { spawn } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
@@ -38,6 +43,9 @@ const DRAGS = env('BENCH_DRAGS', 300);
 const VIEWERS = env('BENCH_VIEWERS', 50);
 const FANOUT_SECONDS = env('BENCH_FANOUT_SECONDS', 5);
 const SOAK_ROUNDS = env('BENCH_SOAK_ROUNDS', 6);
+const COMMIT_PAUSE_MS = env('BENCH_COMMIT_PAUSE_MS', 50);
+const ONLY = (process.env.BENCH_ONLY ?? 'join,own,fanout,soak,commits').split(',');
+const runs = (name) => ONLY.includes(name);
 const SOAK_DESIGNS = 300;
 const SOAK_CLIENTS = 500;
 const PROTOCOL = 2;
@@ -251,6 +259,13 @@ async function editorWithIcon(srv, design) {
 
 async function benchOwnFrame(srv, design) {
   const { ed, part, icon } = await editorWithIcon(srv, design);
+  const times = await ownFrames(ed, part, icon);
+  ed.close();
+  return times;
+}
+
+/** DRAGS drags at 60 Hz by `ed`, each timed to its own geometry frame. */
+async function ownFrames(ed, part, icon) {
   let last = 0;
   const times = [];
   for (let k = 0; k < DRAGS; k++) {
@@ -268,8 +283,40 @@ async function benchOwnFrame(srv, design) {
     times.push((await frame) - t0);
     await sleep(1000 / 60);
   }
-  ed.close();
   return times;
+}
+
+/**
+ * The editor's own frame while a second editor commits over and over: a
+ * commit, its ack, a pause of COMMIT_PAUSE_MS, the next commit, until the
+ * drags are done. Returns the drag times and commit → ack times.
+ */
+async function benchOwnFrameWhileCommitting(srv, design) {
+  const { ed, part, icon } = await editorWithIcon(srv, design);
+  const committer = new Client(srv.addr);
+  await committer.join(design.id, design.tokens.editor, 'bench-committer');
+  let done = false;
+  const commits = [];
+  let req = 1;
+  const committing = (async () => {
+    while (!done) {
+      const r = req++;
+      const ack = committer.waitText((m) => m.req === r);
+      const t0 = performance.now();
+      committer.send({ type: 'commit', req: r, message: `bench ${r}` });
+      const [m, t1] = await ack;
+      if (m.type !== 'ack' || typeof m.version !== 'number') throw new Error(`commit: ${JSON.stringify(m)}`);
+      commits.push(t1 - t0);
+      await sleep(COMMIT_PAUSE_MS);
+    }
+  })();
+  await sleep(200); // the first commit is under way
+  const drags = await ownFrames(ed, part, icon);
+  done = true;
+  await committing;
+  committer.close();
+  ed.close();
+  return { drags, commits };
 }
 
 async function benchFanout(srv, design, stream = false) {
@@ -370,11 +417,24 @@ const srv = await startServer();
 try {
   console.log(`server ${bin} on ${srv.addr}, pid ${srv.child.pid}`);
   const big = await createDesign(srv, 'bench 81x159', 81, 159);
-  const join = await benchJoin(srv, big, big.tokens.viewer);
-  console.log(`join 81x159 (hello → snapshot), ${join.length} joins: p50 ${fmt(pct(join, 50))} ms, p99 ${fmt(pct(join, 99))} ms`);
-  const own = await benchOwnFrame(srv, big);
-  console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
-  for (const stream of [false, true]) {
+  if (runs('join')) {
+    const join = await benchJoin(srv, big, big.tokens.viewer);
+    console.log(`join 81x159 (hello → snapshot), ${join.length} joins: p50 ${fmt(pct(join, 50))} ms, p99 ${fmt(pct(join, 99))} ms`);
+  }
+  if (runs('own')) {
+    const own = await benchOwnFrame(srv, big);
+    console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
+  }
+  if (runs('commits')) {
+    const fresh = await createDesign(srv, 'bench 81x159 commits', 81, 159);
+    const { drags, commits } = await benchOwnFrameWhileCommitting(srv, fresh);
+    console.log(
+      `editor's own drag frame 81x159 while another editor commits (pause ${COMMIT_PAUSE_MS} ms), ${drags.length} drags at 60 Hz: ` +
+        `p50 ${fmt(pct(drags, 50))} ms, p99 ${fmt(pct(drags, 99))} ms, max ${fmt(Math.max(...drags))} ms; ` +
+        `${commits.length} commits, commit → ack p50 ${fmt(pct(commits, 50))} ms, p99 ${fmt(pct(commits, 99))} ms`,
+    );
+  }
+  for (const stream of runs('fanout') ? [false, true] : []) {
     // Each fanout on a fresh 81 × 159 design: the same starting point.
     const fresh = await createDesign(srv, `bench 81x159 ${stream ? 'stream' : 'full'}`, 81, 159);
     const f = await benchFanout(srv, fresh, stream);
@@ -385,7 +445,7 @@ try {
         (stream ? `; client R + ρ·d per frame p50 ${fmt(pct(f.applyMs, 50))} ms, p99 ${fmt(pct(f.applyMs, 99))} ms` : ''),
     );
   }
-  if (SOAK_ROUNDS > 0) {
+  if (runs('soak') && SOAK_ROUNDS > 0) {
     const rss0 = rssMiB(srv.child.pid);
     const rounds = await benchSoak(srv);
     console.log(`soak: ${SOAK_DESIGNS} designs, ${SOAK_CLIENTS} clients joining and leaving per round; RSS before ${fmt(rss0)} MiB`);

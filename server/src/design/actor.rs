@@ -3,7 +3,9 @@
 //! frames, keeps undo/redo, tracks presence, persists the working state at
 //! most `persist_delay` after a change — on the blocking pool, while it goes
 //! on serving drags (one write in flight at a time, settled before any other
-//! write of this design so the store sees them in order) — and publishes
+//! write of this design so the store sees them in order), writes commits
+//! on the blocking pool too, answering them once durable
+//! ([`super::commit_write`]) — and publishes
 //!
 //! * geometry on a `watch` channel — latest wins, a slow client skips frames;
 //! * ordered events on a bounded `broadcast` channel — never dropped
@@ -448,6 +450,8 @@ enum Wake {
     PersistDue,
     /// The working-state write in flight landed.
     Written(Result<Result<(), String>, tokio::task::JoinError>),
+    /// The commit in flight landed.
+    Committed(super::commit_write::Landed),
 }
 
 /// The actor's state.
@@ -475,6 +479,9 @@ struct Actor {
     /// requests while it runs (a write with its fsync takes tens of
     /// milliseconds, which a drag must not wait for).
     persisting: Option<tokio::task::JoinHandle<Result<(), String>>>,
+    /// Commits asked and not yet durable (see [`super::commit_write`]):
+    /// written one at a time, in order, while the actor goes on.
+    commits: super::commit_write::CommitWrites,
     /// The (part, icon) each client is dragging.
     dragging: BTreeMap<u64, (u64, u64)>,
     /// Whether the geometry published last came from a drag.
@@ -508,6 +515,7 @@ pub fn spawn(
         retired: retired.clone(),
         id,
         model,
+        commits: super::commit_write::CommitWrites::new(store.clone(), id),
         store,
         metrics: metrics.clone(),
         persist_delay,
@@ -537,7 +545,7 @@ impl Actor {
         let mut batch: Vec<Request> = Vec::with_capacity(64);
         loop {
             // The next write is due only once the one in flight has landed.
-            let persist_at = self.persist_at.filter(|_| self.persisting.is_none());
+            let persist_at = self.persist_at.filter(|_| !self.writing());
             let sleep = async move {
                 match persist_at {
                     Some(t) => tokio::time::sleep_until(t.into()).await,
@@ -545,6 +553,7 @@ impl Actor {
                 }
             };
             let writing = self.persisting.as_mut();
+            let committing = self.commits.landed();
             let wake = tokio::select! {
                 n = rx.recv_many(&mut batch, 256) => Wake::Requests(n),
                 _ = sleep => Wake::PersistDue,
@@ -554,6 +563,7 @@ impl Actor {
                         None => std::future::pending().await,
                     }
                 } => Wake::Written(r),
+                landed = committing => Wake::Committed(landed),
             };
             match wake {
                 Wake::Requests(0) => break,
@@ -566,6 +576,11 @@ impl Actor {
                 Wake::Written(r) => {
                     self.persisting = None;
                     self.written(r);
+                    self.start_commit();
+                }
+                Wake::Committed(landed) => {
+                    self.commit_landed(landed);
+                    self.start_commit();
                 }
             }
         }
@@ -683,6 +698,11 @@ impl Actor {
                 }
                 Request::Command {
                     client,
+                    command: Command::Commit { message },
+                    reply,
+                } => self.ask_commit(client, message, reply),
+                Request::Command {
+                    client,
                     command,
                     reply,
                 } => {
@@ -751,8 +771,9 @@ impl Actor {
                     let _ = reply.send(out);
                 }
                 Request::Delete => {
-                    // No working-state write may land after the deletion.
-                    self.settle_persist().await;
+                    // No write may land after the deletion; commits asked
+                    // before it are answered first.
+                    self.settle_writes().await;
                     self.retired
                         .store(true, std::sync::atomic::Ordering::SeqCst);
                     let _ = self.events.send(DesignEvent::Deleted(self.id));
@@ -987,7 +1008,7 @@ impl Actor {
     /// due and none is in flight (the run loop starts the next one when the
     /// one in flight lands).
     fn start_persist(&mut self) {
-        if self.persisting.is_some() || self.persist_at.take().is_none() {
+        if self.writing() || self.persist_at.take().is_none() {
             return;
         }
         let bytes = self.model.to_doc().to_bytes();
@@ -1009,11 +1030,121 @@ impl Actor {
     }
 
     /// Writes the working state now if a write is due (stop, shutdown),
-    /// after the one in flight.
+    /// after every write in flight or queued (commits asked before the stop
+    /// are written and answered: nothing acked is lost).
     async fn persist(&mut self) {
-        self.settle_persist().await;
+        self.settle_writes().await;
         self.start_persist();
         self.settle_persist().await;
+    }
+
+    /// Whether a write of this design (working state or commit) is in
+    /// flight: the store gets one at a time, in order.
+    fn writing(&self) -> bool {
+        self.persisting.is_some() || self.commits.in_flight()
+    }
+
+    /// Starts the oldest queued commit if no write is in flight. Commits go
+    /// before a due working-state write: they write the working state too.
+    fn start_commit(&mut self) {
+        if !self.writing() {
+            self.commits.start();
+        }
+    }
+
+    /// A client asks for a commit. The snapshot is the design as it is now:
+    /// edits that arrive while the commit is written belong to the next
+    /// version. The reply, the `committed` event and the version in the
+    /// list wait until the write is durable ([`Actor::commit_landed`]);
+    /// meanwhile the actor serves everyone as usual.
+    fn ask_commit(
+        &mut self,
+        client: u64,
+        message: String,
+        reply: Option<super::commit_write::Reply>,
+    ) {
+        let command = Command::Commit { message };
+        if let Err(e) = self.authorize(client, &command) {
+            if let Some(reply) = reply {
+                let _ = reply.send(Err(e));
+            }
+            return;
+        }
+        let Command::Commit { message } = command else {
+            return;
+        };
+        let author = self
+            .clients
+            .get(&client)
+            .map(|p| p.client.name.clone())
+            .unwrap_or_else(|| "rest".into());
+        self.commits.ask(super::commit_write::Asked {
+            doc: self.model.to_doc(),
+            author,
+            message,
+            reply,
+            // The commit writes this state as the working state too.
+            persist_due: self.persist_at.take(),
+        });
+        self.start_commit();
+    }
+
+    /// A commit's write ended: once durable, the version joins the list,
+    /// every client hears `committed` and the asker gets the number; a
+    /// failed write changes nothing (the asker gets why) and the working
+    /// state it would have written is due again.
+    fn commit_landed(&mut self, landed: super::commit_write::Landed) {
+        let super::commit_write::Landed {
+            outcome,
+            reply,
+            persist_due,
+        } = landed;
+        let out = match outcome {
+            Ok(info) => {
+                if self.persist_retry.take().is_some() {
+                    tracing::info!(
+                        design = self.id,
+                        "working state saved again (with a commit)"
+                    );
+                }
+                let number = info.number;
+                let mut versions = (*self.versions).clone();
+                versions.push(info.clone());
+                self.versions = Arc::new(versions);
+                let _ = self.events.send(DesignEvent::Committed(info));
+                Ok(Ack {
+                    version: Some(number),
+                    ..Ack::default()
+                })
+            }
+            Err(e) => {
+                tracing::warn!(design = self.id, "commit not stored: {e}");
+                if let Some(due) = persist_due {
+                    self.persist_at = Some(self.persist_at.map_or(due, |t| t.min(due)));
+                }
+                Err(e)
+            }
+        };
+        if let Some(reply) = reply {
+            let _ = reply.send(out);
+        }
+    }
+
+    /// Waits until no write of this design is in flight or queued,
+    /// answering each commit as it lands (before a revert, a restore, a
+    /// deletion, a stop).
+    async fn settle_writes(&mut self) {
+        loop {
+            if self.persisting.is_some() {
+                self.settle_persist().await;
+            } else if self.commits.in_flight() {
+                let landed = self.commits.landed().await;
+                self.commit_landed(landed);
+            } else if !self.commits.pending() {
+                return;
+            }
+            self.start_commit();
+        }
     }
 
     /// Records how a working-state write ended. A failed write (disk full,
@@ -1066,12 +1197,8 @@ impl Actor {
         }
     }
 
-    async fn command(
-        &mut self,
-        client: u64,
-        command: Command,
-        geometry_dirty: &mut Dirty,
-    ) -> Result<Ack, CommandError> {
+    /// Whether `client`'s role allows `command`.
+    fn authorize(&self, client: u64, command: &Command) -> Result<(), CommandError> {
         // REST callers (client 0) were checked by the HTTP layer.
         let role = if client == 0 {
             Role::Editor
@@ -1105,6 +1232,16 @@ impl Actor {
                 format!("a {} may not do this", format!("{role:?}").to_lowercase()),
             ));
         }
+        Ok(())
+    }
+
+    async fn command(
+        &mut self,
+        client: u64,
+        command: Command,
+        geometry_dirty: &mut Dirty,
+    ) -> Result<Ack, CommandError> {
+        self.authorize(client, &command)?;
         match command {
             Command::Edit(edit) => {
                 if let super::model::Edit::Part {
@@ -1272,43 +1409,16 @@ impl Actor {
                 geometry_dirty.all = true;
                 Ok(Ack::default())
             }
-            Command::Commit { message } => {
-                let author = self
-                    .clients
-                    .get(&client)
-                    .map(|p| p.client.name.clone())
-                    .unwrap_or_else(|| "rest".into());
-                // A working-state write in flight lands first: the commit's
-                // working state is the newer one.
-                self.settle_persist().await;
-                let bytes = self.model.to_doc().to_bytes();
-                let store = self.store.clone();
-                let id = self.id;
-                let info = tokio::task::spawn_blocking(move || {
-                    store.commit(id, &author, &message, &bytes)
-                })
-                .await
-                .map_err(|e| CommandError::new(ErrorKind::Storage, e.to_string()))?
-                .map_err(|e| CommandError::new(ErrorKind::Storage, e.to_string()))?;
-                // The commit also wrote the working state.
-                self.persist_at = None;
-                if self.persist_retry.take().is_some() {
-                    tracing::info!(
-                        design = self.id,
-                        "working state saved again (with a commit)"
-                    );
-                }
-                let number = info.number;
-                let mut versions = (*self.versions).clone();
-                versions.push(info.clone());
-                self.versions = Arc::new(versions);
-                let _ = self.events.send(DesignEvent::Committed(info));
-                Ok(Ack {
-                    version: Some(number),
-                    ..Ack::default()
-                })
-            }
+            // A commit's reply waits for its write: `handle_batch` queues it
+            // with `ask_commit` and never passes it here.
+            Command::Commit { .. } => Err(CommandError::new(
+                ErrorKind::Unavailable,
+                "a commit is answered once it is written",
+            )),
             Command::Revert | Command::Restore { .. } => {
+                // Commits asked before land first: the version they name
+                // (or the latest) may be one of them.
+                self.settle_writes().await;
                 let store = self.store.clone();
                 let id = self.id;
                 let wanted = match command {

@@ -81,6 +81,9 @@ pub struct Store {
     /// only by the test-only `hold_checkpoints`.
     #[cfg_attr(not(feature = "fault-injection"), allow(dead_code))]
     checkpointer: checkpoint::Checkpointer,
+    /// Test-only: store calls waiting for the connection (see `waiting`).
+    #[cfg(feature = "fault-injection")]
+    waiting: std::sync::atomic::AtomicUsize,
 }
 
 /// Milliseconds since the Unix epoch.
@@ -132,13 +135,22 @@ impl Store {
         Ok(Self {
             conn: Mutex::new(conn),
             checkpointer,
+            #[cfg(feature = "fault-injection")]
+            waiting: Default::default(),
         })
     }
 
     fn conn(&self) -> std::sync::MutexGuard<'_, Connection> {
         // A panic while holding the lock cannot leave SQLite inconsistent
         // (transactions roll back), so a poisoned lock is still usable.
-        self.conn.lock().unwrap_or_else(|p| p.into_inner())
+        #[cfg(feature = "fault-injection")]
+        self.waiting
+            .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let conn = self.conn.lock().unwrap_or_else(|p| p.into_inner());
+        #[cfg(feature = "fault-injection")]
+        self.waiting
+            .fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+        conn
     }
 
     /// Creates a design with fresh tokens and its initial working state.
@@ -379,6 +391,13 @@ impl Store {
         });
         let _ = wait_taken.recv();
         release
+    }
+
+    /// Test-only: how many store calls wait for the connection (behind a
+    /// [`Store::stall`]), so a test can tell that a write has started.
+    #[cfg(feature = "fault-injection")]
+    pub fn waiting(&self) -> usize {
+        self.waiting.load(std::sync::atomic::Ordering::SeqCst)
     }
 
     /// Test-only: holds the WAL checkpoints back (`true`) or lets them run,
