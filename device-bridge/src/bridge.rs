@@ -28,6 +28,19 @@ const REPLAY_WAIT: Duration = Duration::from_secs(10);
 /// Silence after which a VRPN server counts as hung (it is pinged every 200 ms).
 pub const VRPN_SILENCE: Duration = Duration::from_millis(800);
 
+/// The runtime the bridge runs on: one thread (named `bridge-rt`), driven by
+/// the caller's `block_on`. Every device reads in its own thread; the runtime
+/// only hands their samples to the interaction and talks to the server, which
+/// one thread does without the wake-ups of two workers handing each other
+/// tasks (a device's samples woke one worker, which woke the other for the
+/// link). Blocking work goes to `spawn_blocking`.
+pub fn runtime() -> std::io::Result<tokio::runtime::Runtime> {
+    tokio::runtime::Builder::new_current_thread()
+        .thread_name("bridge-rt")
+        .enable_all()
+        .build()
+}
+
 /// What the devices (or a replay) hand to the interaction.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Input {
@@ -315,11 +328,17 @@ pub async fn run_live(
     }
     drop(tx);
     let driven = drive(&config, wire, rx, shutdown).await;
-    for mut r in runners {
-        tokio::task::block_in_place(|| r.stop());
-    }
-    if let Some(r) = recorder {
-        let n = tokio::task::block_in_place(|| r.finish())?;
+    // Joining the device threads and the recorder blocks: off the runtime's
+    // thread (works on the one-thread runtime of [`runtime`] as on any other).
+    let finished = tokio::task::spawn_blocking(move || {
+        for mut r in runners {
+            r.stop();
+        }
+        recorder.map(Recorder::finish).transpose()
+    })
+    .await
+    .map_err(|e| RecordingError::Format(format!("stopping the devices failed: {e}")))?;
+    if let Some(n) = finished? {
         tracing::info!(events = n, "recording written");
     }
     driven.map_err(BridgeError::Rejected)

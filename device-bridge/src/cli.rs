@@ -192,11 +192,7 @@ fn run(args: Args, wire: Arc<dyn Wire>) -> ExitCode {
         );
         return ExitCode::SUCCESS;
     }
-    let rt = match tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-    {
+    let rt = match crate::bridge::runtime() {
         Ok(rt) => rt,
         Err(e) => {
             say(&format!("cannot start the runtime: {e}"));

@@ -262,6 +262,9 @@ struct Hold {
     sent_at: Option<Timestamp>,
     /// A newer drag than the last one sent is waiting for its slot.
     pending: bool,
+    /// The target of the last drag queued: a drag to the same target is not
+    /// sent again (a still hand or a 3D mouse at rest sends nothing).
+    last_target: Option<DVec3>,
 }
 
 impl Hold {
@@ -280,9 +283,16 @@ impl Hold {
                 .find(|c| matches!(c, Command::Drag { icon: i, .. } if *i == icon))
             {
                 *queued = self.drag();
+                self.last_target = Some(self.target());
                 self.pending = false;
                 return;
             }
+        }
+        if self.last_target == Some(self.target()) {
+            // Nothing new for the server: no drag, nothing waiting, and the
+            // next change leaves at once if its slot is due.
+            self.pending = false;
+            return;
         }
         let due = self
             .sent_at
@@ -290,6 +300,7 @@ impl Hold {
         if due {
             self.sent_at = Some(time);
             self.pending = false;
+            self.last_target = Some(self.target());
             out.push(self.drag());
         } else {
             self.pending = true;
@@ -300,21 +311,26 @@ impl Hold {
     fn flush(&mut self, out: &mut Vec<Command>) {
         if self.pending {
             self.pending = false;
+            self.last_target = Some(self.target());
             out.push(self.drag());
         }
     }
 
     fn drag(&self) -> Command {
-        let target = match (&self.spring, self.direction) {
+        Command::Drag {
+            icon: self.icon,
+            target: self.target(),
+        }
+    }
+
+    /// Where the drag pulls the icon now.
+    fn target(&self) -> DVec3 {
+        match (&self.spring, self.direction) {
             (Some(s), _) => s.pull_point(self.icon_origin, self.offset),
             // The server reads a direction icon's drag as the point its direction
             // points to from the icon (pointer − icon).
             (None, Some(d)) => self.icon_origin + self.turn * d + self.offset,
             (None, None) => self.icon_origin + self.offset,
-        };
-        Command::Drag {
-            icon: self.icon,
-            target,
         }
     }
 
@@ -576,6 +592,7 @@ impl Interaction {
             reference: orientation,
             sent_at: None,
             pending: false,
+            last_target: None,
         }
     }
 
@@ -1087,6 +1104,45 @@ mod tests {
         i.flush_due(Timestamp(26_800), &mut out);
         assert_eq!(out, vec![drag(20e-4)]);
         assert!(!i.drag_waiting());
+    }
+
+    #[test]
+    fn a_still_hand_sends_no_drags_and_its_next_move_leaves_at_once() {
+        let mut i = Interaction::new(&config());
+        i.set_icons([icon(1, DVec3::ZERO, IconRole::Constraint)]);
+        let at = |us: u64, x: f64| {
+            let mut s = pose(DVec3::X * x);
+            s.time = Timestamp(us);
+            s
+        };
+        let drags = |out: &[Command]| -> Vec<f64> {
+            out.iter()
+                .filter_map(|c| match c {
+                    Command::Drag { target, .. } => Some(target.x),
+                    _ => None,
+                })
+                .collect()
+        };
+        run(&mut i, &[at(0, 0.0), hand(1.0, 1.0)]);
+        assert_eq!(drags(&run(&mut i, &[at(1_000, 1e-3)])), vec![1e-3]);
+        // the hand holds still for 100 ms of 1 kHz records: the server has that
+        // target already, so nothing leaves and nothing waits (no flush tick)
+        for k in 2..=101u64 {
+            assert!(
+                drags(&run(&mut i, &[at(k * 1000, 1e-3)])).is_empty(),
+                "record {k}"
+            );
+            assert!(!i.drag_waiting(), "record {k}");
+        }
+        // it moves: the drag leaves with that record, its slot long due
+        assert_eq!(drags(&run(&mut i, &[at(102_000, 2e-3)])), vec![2e-3]);
+        // a move inside the slot and back again leaves nothing behind
+        run(&mut i, &[at(103_000, 3e-3)]);
+        assert!(i.drag_waiting());
+        run(&mut i, &[at(104_000, 2e-3)]);
+        assert!(!i.drag_waiting());
+        // and the release is not preceded by a repeated drag
+        assert_eq!(run(&mut i, &[hand(0.0, 0.0)]), vec![release(1)]);
     }
 
     #[test]

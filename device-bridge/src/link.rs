@@ -457,12 +457,19 @@ async fn session(
             }
             _ = notify.notified(), if accepted => {
                 let cmds = outbox.lock().unwrap_or_else(|e| e.into_inner()).drain();
+                // Every message of the batch is queued, then one flush: one
+                // write to the socket per batch rather than one per message.
+                let mut sent = 0;
                 for (c, ordered) in &cmds {
                     for text in wire.encode(c, *ordered) {
                         tracing::trace!(%text, "to server");
-                        tx.send(Message::text(text)).await.map_err(|e| End::Failed(e.to_string()))?;
-                        stats.send_modify(|s| s.sent += 1);
+                        tx.feed(Message::text(text)).await.map_err(|e| End::Failed(e.to_string()))?;
+                        sent += 1;
                     }
+                }
+                if sent > 0 {
+                    tx.flush().await.map_err(|e| End::Failed(e.to_string()))?;
+                    stats.send_modify(|s| s.sent += sent);
                 }
             }
         }

@@ -191,19 +191,23 @@ fn main() {
     config.server.url = device_url;
     config.validate().unwrap();
 
-    let bridge_rt = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .thread_name("bridge-rt")
-        .enable_all()
-        .build()
-        .unwrap();
+    // the bridge on the runtime the binary uses (`bridge::runtime`: one thread,
+    // here a thread named like its blocking pool so both are counted)
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    let bridge = bridge_rt.spawn(async move {
-        vsculpt_bridge::bridge::run_live(config, Arc::new(ProtocolWire::default()), None, async {
-            let _ = stopped.await;
+    let bridge = std::thread::Builder::new()
+        .name("bridge-rt".into())
+        .spawn(move || {
+            let rt = vsculpt_bridge::bridge::runtime().unwrap();
+            rt.block_on(vsculpt_bridge::bridge::run_live(
+                config,
+                Arc::new(ProtocolWire::default()),
+                None,
+                async {
+                    let _ = stopped.await;
+                },
+            ))
         })
-        .await
-    });
+        .unwrap();
     std::thread::sleep(Duration::from_secs(2));
     glove.device().values = glove_shape(22, 1.0, 1.0);
     std::thread::sleep(Duration::from_millis(500));
@@ -261,7 +265,7 @@ fn main() {
     mover_stop.store(true, std::sync::atomic::Ordering::Relaxed);
     let tracker = mover.join().unwrap();
     let _ = stop.send(());
-    let _ = bridge_rt.block_on(bridge);
+    let _ = bridge.join();
     shutdown.trigger();
     drop(tracker);
     drop(glove);
