@@ -24,6 +24,7 @@ import { deviation, sameDomain, versionSurface } from './compare.js';
 import { DsmView } from './dsm-view.js';
 import { DsmPanel } from './dsm-panel.js';
 import { Follow } from './follow.js';
+import { Measure } from './measure.js';
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -215,6 +216,9 @@ function keepSelection() {
     $('pending').textContent = '';
   }
 }
+
+// The measure tool (distance, curvature at a point), for viewers too.
+const measure = new Measure({ view, button: $('measure'), output: $('measure-out') });
 
 // Following another person's view; this page's own camera goes out in its presence.
 const follow = new Follow({
@@ -623,6 +627,13 @@ view.renderer.domElement.addEventListener('pointerup', (e) => {
   const rect = view.renderer.domElement.getBoundingClientRect();
   pointer.set(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1);
   raycaster.setFromCamera(pointer, view.camera);
+  if (measure.active) {
+    // Measuring reads the surface; it selects and creates nothing.
+    const hit = raycaster.intersectObjects(partsView.pickables(), false)[0];
+    const at = hit && partsView.hitParams(hit);
+    if (at && at.kind === 'surface') measure.add(at.part, design.parts.get(at.part).geometry, at.u, at.v);
+    return;
+  }
   const hitIcon = raycaster.intersectObjects(icons.handles(), false)[0];
   if (hitIcon) {
     select(hitIcon.object.userData.iconId);
@@ -1014,7 +1025,7 @@ const SHORTCUTS = [
   ['Ctrl+Z', 'undo', true],
   ['Ctrl+Shift+Z, Ctrl+Y', 'redo', true],
   ['Delete', 'delete the selected icon', true],
-  ['Esc', 'cancel the curve or region being picked, else deselect', false],
+  ['Esc', 'end measuring; else cancel the curve or region being picked, else deselect', false],
   ['F', 'frame the selected icon (or the whole design)', false],
   ['[ and ]', 'select the previous or next part', false],
   ['H', 'hide or show the selected part', false],
@@ -1061,6 +1072,7 @@ document.addEventListener('keydown', (e) => {
   if (action === 'undo') send({ type: 'undo' });
   else if (action === 'redo') send({ type: 'redo' });
   else if (action === 'delete' && state.selected != null) send({ type: 'delete_icon', icon: state.selected });
+  else if (action === 'cancel' && measure.active) measure.setActive(false);
   else if (action === 'cancel') cancel();
   else if (action === 'frame') frameSelection();
   else if (action === 'help') $('help').hidden = !$('help').hidden;
@@ -1153,4 +1165,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, follow, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, follow, measure, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
