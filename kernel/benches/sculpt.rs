@@ -12,6 +12,8 @@
 //!   target, so both directions move the shape (a full, refined solve);
 //! * `add_icon` — a position icon added at a new place and solved (its
 //!   column is a new sparse solve), then removed outside the timing;
+//! * `first_frame_after_add` — the first frame of a grab just after an icon
+//!   was added (the drag response recomputed, the pending column solved);
 //! * `refactor` — a material change: numeric refactorisation + solve;
 //! * `tessellate` — the client tessellation at the paper's polygon count;
 //! * `full_frame` — drag frame + tessellation with normals and curvature.
@@ -197,6 +199,38 @@ fn benches(c: &mut Criterion) {
                         .unwrap();
                     black_box(sc.design.solve().unwrap());
                     spent += start.elapsed();
+                    sc.design.remove_icon(icon).unwrap();
+                    sc.design.solve().unwrap();
+                }
+                spent
+            })
+        });
+        // The first frame of a grab right after the icon set changed (an
+        // icon added and solved, outside the timing): the drag's response
+        // is recomputed and the new icon's pending column solved.
+        group.bench_function(BenchmarkId::new("first_frame_after_add", &id), |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for _ in 0..iters {
+                    fresh += 1;
+                    let u = 0.2 + 0.6 * ((fresh as f64 * 0.618_033_988_75) % 1.0);
+                    let v = 0.4 + 0.2 * ((fresh as f64 * 0.414_213_562_37) % 1.0);
+                    let icon = sc
+                        .design
+                        .add_icon(IconSpec {
+                            anchor: Anchor::Point { u, v },
+                            role: Role::Position,
+                            state: IconState::Passive,
+                            target: None,
+                        })
+                        .unwrap();
+                    sc.design.solve().unwrap();
+                    let at = sc.design.icon(sc.load).unwrap().xyz;
+                    let start = std::time::Instant::now();
+                    sc.design.drag_start(sc.load).unwrap();
+                    black_box(sc.design.drag(sc.load, at + DVec3::Z * 0.001).unwrap());
+                    spent += start.elapsed();
+                    sc.design.release(sc.load).unwrap();
                     sc.design.remove_icon(icon).unwrap();
                     sc.design.solve().unwrap();
                 }
