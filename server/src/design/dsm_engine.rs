@@ -454,21 +454,31 @@ impl DsmEngine {
 
     /// Part `id`'s mesh frame (kind 3) at revision `rev` of `design`.
     pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
-        let m = self.mesh(id)?;
-        let positions: Vec<[f64; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
-        let normals: Vec<[f64; 3]> = m.normals.iter().map(|n| n.to_array()).collect();
-        let flags = if drag {
-            vsculpt_protocol::frame::FLAG_DRAG
-        } else {
-            0
-        };
-        // The kernel's mesh is finite and in range: quantising cannot fail;
-        // if it ever did, the part would send no frame rather than a bad one.
-        let frame =
-            MeshFrame::quantise((design, id, rev), flags, &positions, &normals, &m.triangles)
-                .ok()?;
-        frame.encode().ok().map(axum::body::Bytes::from)
+        mesh_frame(self.mesh(id)?, design, id, rev, drag)
     }
+}
+
+/// `m` as the mesh frame (kind 3) of part `id` at revision `rev` of
+/// `design` (flagged as a drag frame if `drag`). The kernel's meshes are
+/// finite and in range, so quantising cannot fail; if it ever did, the part
+/// would send no frame rather than a bad one.
+pub fn mesh_frame(
+    m: &Mesh,
+    design: u64,
+    id: u64,
+    rev: u64,
+    drag: bool,
+) -> Option<axum::body::Bytes> {
+    let positions: Vec<[f64; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
+    let normals: Vec<[f64; 3]> = m.normals.iter().map(|n| n.to_array()).collect();
+    let flags = if drag {
+        vsculpt_protocol::frame::FLAG_DRAG
+    } else {
+        0
+    };
+    let frame =
+        MeshFrame::quantise((design, id, rev), flags, &positions, &normals, &m.triangles).ok()?;
+    frame.encode().ok().map(axum::body::Bytes::from)
 }
 
 #[cfg(test)]

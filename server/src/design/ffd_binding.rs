@@ -54,7 +54,6 @@ use std::collections::BTreeMap;
 use vsculpt_kernel::body::{BSplineVolume, Embedding, Ffd, Inverter};
 use vsculpt_kernel::dsm::Mesh;
 use vsculpt_protocol::dsm::DsmData;
-use vsculpt_protocol::mesh_frame::MeshFrame;
 
 /// How far from the body a point may be after inversion and still count as
 /// inside, relative to the diagonal of the lattice's bounding box.
@@ -474,18 +473,7 @@ impl DsmFfds {
 
     /// Part `id`'s deformed mesh frame (kind 3) at revision `rev`.
     pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
-        let m = self.mesh(id)?;
-        let positions: Vec<[f64; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
-        let normals: Vec<[f64; 3]> = m.normals.iter().map(|n| n.to_array()).collect();
-        let flags = if drag {
-            vsculpt_protocol::frame::FLAG_DRAG
-        } else {
-            0
-        };
-        let frame =
-            MeshFrame::quantise((design, id, rev), flags, &positions, &normals, &m.triangles)
-                .ok()?;
-        frame.encode().ok().map(axum::body::Bytes::from)
+        super::dsm_engine::mesh_frame(self.mesh(id)?, design, id, rev, drag)
     }
 }
 
