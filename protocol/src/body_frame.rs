@@ -9,8 +9,7 @@
 //! copying. protocol/README.md gives the layout byte by byte.
 
 use crate::error::{ErrorCode, ProtocolError};
-use crate::frame::MAGIC;
-use crate::version::PROTOCOL_VERSION;
+use crate::frame::{check_triangles, write_header};
 
 /// Frame kind: a Coons body.
 pub const KIND_BODY: u8 = 4;
@@ -121,29 +120,19 @@ impl BodyFrame {
             ));
         }
         let v = self.positions.len();
-        if let Some(t) = self
-            .triangles
-            .iter()
-            .find(|t| t.iter().any(|&i| i as usize >= v))
-        {
-            return Err(bad(format!(
-                "triangle {t:?} names a vertex beyond the {v} sent"
-            )));
-        }
-        Ok(())
+        check_triangles(&self.triangles, v)
     }
 
     /// The frame as bytes (after [`check`](Self::check)).
     pub fn encode(&self) -> Result<Vec<u8>, ProtocolError> {
         self.check()?;
         let mut out = Vec::with_capacity(self.byte_len());
-        out.extend_from_slice(&MAGIC);
-        out.push(KIND_BODY);
-        out.push(PROTOCOL_VERSION as u8);
-        out.extend_from_slice(&self.flags.to_le_bytes());
-        out.extend_from_slice(&self.design.to_le_bytes());
-        out.extend_from_slice(&self.part.to_le_bytes());
-        out.extend_from_slice(&self.revision.to_le_bytes());
+        write_header(
+            &mut out,
+            KIND_BODY,
+            self.flags,
+            (self.design, self.part, self.revision),
+        );
         out.extend_from_slice(&self.t.to_le_bytes());
         for c in self.counts {
             out.extend_from_slice(&c.to_le_bytes());

@@ -120,6 +120,36 @@ pub(crate) fn check_header(
     Ok(())
 }
 
+/// Writes the 32-byte header every geometry frame with a revision shares:
+/// magic, `kind`, version, flags, design, part, revision (little-endian).
+pub(crate) fn write_header(
+    out: &mut Vec<u8>,
+    kind: u8,
+    flags: u16,
+    (design, part, revision): (u64, u64, u64),
+) {
+    out.extend_from_slice(&MAGIC);
+    out.push(kind);
+    out.push(PROTOCOL_VERSION as u8);
+    out.extend_from_slice(&flags.to_le_bytes());
+    out.extend_from_slice(&design.to_le_bytes());
+    out.extend_from_slice(&part.to_le_bytes());
+    out.extend_from_slice(&revision.to_le_bytes());
+}
+
+/// Every triangle names one of the `v` vertices sent.
+pub(crate) fn check_triangles(triangles: &[[u32; 3]], v: usize) -> Result<(), ProtocolError> {
+    match triangles
+        .iter()
+        .find(|t| t.iter().any(|&i| i as usize >= v))
+    {
+        Some(t) => Err(bad(format!(
+            "triangle {t:?} names a vertex beyond the {v} sent"
+        ))),
+        None => Ok(()),
+    }
+}
+
 fn pad8(n: usize) -> usize {
     n.div_ceil(8) * 8
 }
@@ -234,13 +264,12 @@ impl GeometryFrame {
         self.check()?;
         let layout = self.layout()?;
         let mut out = Vec::with_capacity(layout.total);
-        out.extend_from_slice(&MAGIC);
-        out.push(self.kind);
-        out.push(PROTOCOL_VERSION as u8);
-        out.extend_from_slice(&self.flags.to_le_bytes());
-        out.extend_from_slice(&self.design.to_le_bytes());
-        out.extend_from_slice(&self.part.to_le_bytes());
-        out.extend_from_slice(&self.revision.to_le_bytes());
+        write_header(
+            &mut out,
+            self.kind,
+            self.flags,
+            (self.design, self.part, self.revision),
+        );
         out.extend_from_slice(&self.nu.to_le_bytes());
         out.extend_from_slice(&self.nv.to_le_bytes());
         out.push(self.degree_u);

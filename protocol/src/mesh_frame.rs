@@ -10,8 +10,7 @@
 //! protocol/README.md gives the layout byte by byte.
 
 use crate::error::{ErrorCode, ProtocolError};
-use crate::frame::MAGIC;
-use crate::version::PROTOCOL_VERSION;
+use crate::frame::{check_triangles, write_header};
 
 /// Frame kind: an indexed, quantised triangle mesh.
 pub const KIND_MESH: u8 = 3;
@@ -161,16 +160,7 @@ impl MeshFrame {
         if self.step < 0.0 {
             return Err(bad("mesh frame step is negative"));
         }
-        if let Some(t) = self
-            .triangles
-            .iter()
-            .find(|t| t.iter().any(|&i| i as usize >= v))
-        {
-            return Err(bad(format!(
-                "triangle {t:?} names a vertex beyond the {v} sent"
-            )));
-        }
-        Ok(())
+        check_triangles(&self.triangles, v)
     }
 
     /// The frame as bytes (after [`check`](Self::check)).
@@ -179,13 +169,12 @@ impl MeshFrame {
         let v = self.positions.len();
         let ib = index_bytes(v);
         let mut out = Vec::with_capacity(self.byte_len());
-        out.extend_from_slice(&MAGIC);
-        out.push(KIND_MESH);
-        out.push(PROTOCOL_VERSION as u8);
-        out.extend_from_slice(&self.flags.to_le_bytes());
-        out.extend_from_slice(&self.design.to_le_bytes());
-        out.extend_from_slice(&self.part.to_le_bytes());
-        out.extend_from_slice(&self.revision.to_le_bytes());
+        write_header(
+            &mut out,
+            KIND_MESH,
+            self.flags,
+            (self.design, self.part, self.revision),
+        );
         out.extend_from_slice(&(v as u32).to_le_bytes());
         out.extend_from_slice(&(self.triangles.len() as u32).to_le_bytes());
         for c in self.origin {
