@@ -75,6 +75,11 @@ export class Measure {
   }
 
   render() {
+    // The markers and line of the last reading go, with their GPU buffers.
+    for (const o of this.group.children) {
+      o.geometry.dispose();
+      o.material.dispose();
+    }
     this.group.clear();
     const box = this.view.bounds();
     const size = box && !box.isEmpty() ? box.getSize(new THREE.Vector3()).length() : 1;
