@@ -17,18 +17,14 @@ mod common;
 
 use common::http::get;
 use common::parts::{self, SHELL, load_icon};
+use common::store_server::StoreServer;
 use common::ws::{Client, Got};
 use futures_util::{FutureExt, StreamExt};
 use serde_json::{Value, json};
 use std::path::Path;
-use std::sync::Arc;
 use std::time::Duration;
 use tokio_tungstenite::tungstenite::Message;
-use vsculpt_server::config::Config;
 use vsculpt_server::design::DesignDoc;
-use vsculpt_server::server::{Server, ServerError};
-use vsculpt_server::shutdown::Shutdown;
-use vsculpt_server::store::{DesignRecord, Store};
 
 /// How long a drag may go unanswered before the test calls it held up by
 /// the commit: a failure guard, not a latency bound (the frames of the drags
@@ -36,78 +32,41 @@ use vsculpt_server::store::{DesignRecord, Store};
 /// any message, so the failure says what it is.
 const ANSWER_WITHIN: Duration = Duration::from_secs(8);
 
-/// A running server.
-struct Running {
-    addr: std::net::SocketAddr,
-    store: Arc<Store>,
-    design: DesignRecord,
-    shutdown: Shutdown,
-    serving: tokio::task::JoinHandle<Result<(), ServerError>>,
+/// The server of these tests. No working-state write becomes due during a
+/// test (a long `persist_delay`), so the only store write a test waits for
+/// is its commit; stopping the server still writes it.
+async fn start(data: &Path) -> StoreServer {
+    StoreServer::start(data, Duration::from_secs(600)).await
 }
 
-impl Running {
-    /// Starts the server on `data`. No working-state write becomes due
-    /// during a test (a long `persist_delay`), so the only store write a
-    /// test waits for is its commit; stopping the server still writes it.
-    async fn start(data: &Path) -> Self {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let mut config = Config::new(data.to_path_buf(), data.join("no-web-client"));
-        config.persist_delay = Duration::from_secs(600);
-        let shutdown = Shutdown::new();
-        let server = Server::start(listener, config, shutdown.clone())
-            .await
-            .unwrap();
-        let addr = server.local_addr();
-        let store = server.hub().store().clone();
-        let design = server.designs().unwrap()[0].clone();
-        let serving = tokio::spawn(server.run());
-        Self {
-            addr,
-            store,
-            design,
-            shutdown,
-            serving,
+/// The design as the actor holds it now (REST: asks the store for the
+/// token, so not while the store is stalled).
+async fn in_memory(s: &StoreServer) -> Value {
+    get(
+        s.addr,
+        &format!("/api/designs/{}", s.design.id),
+        Some(&s.design.tokens.editor),
+    )
+    .await
+    .json()["design"]
+        .clone()
+}
+
+/// Waits until a store call waits behind the stall: the commit's write has
+/// started.
+async fn write_started(s: &StoreServer) {
+    for _ in 0..2000 {
+        if s.store.waiting() > 0 {
+            return;
         }
+        tokio::time::sleep(Duration::from_millis(5)).await;
     }
-
-    async fn connect(&self, name: &str) -> Client {
-        Client::connect(self.addr, self.design.id, &self.design.tokens.editor, name).await
-    }
-
-    /// The design as the actor holds it now (REST: asks the store for the
-    /// token, so not while the store is stalled).
-    async fn in_memory(&self) -> Value {
-        get(
-            self.addr,
-            &format!("/api/designs/{}", self.design.id),
-            Some(&self.design.tokens.editor),
-        )
-        .await
-        .json()["design"]
-            .clone()
-    }
-
-    /// Waits until a store call waits behind the stall: the commit's write
-    /// has started.
-    async fn write_started(&self) {
-        for _ in 0..2000 {
-            if self.store.waiting() > 0 {
-                return;
-            }
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
-        panic!("the commit never reached the store");
-    }
-
-    async fn stop(self) {
-        self.shutdown.trigger();
-        self.serving.await.unwrap().unwrap();
-    }
+    panic!("the commit never reached the store");
 }
 
 /// What a restarted server has committed: (number, message, document).
 async fn committed_after_restart(data: &Path) -> (Vec<(u64, String, Value)>, Value) {
-    let s = Running::start(data).await;
+    let s = start(data).await;
     let id = s.design.id;
     let versions = s
         .store
@@ -120,7 +79,7 @@ async fn committed_after_restart(data: &Path) -> (Vec<(u64, String, Value)>, Val
             (v.number, v.message, doc)
         })
         .collect();
-    let working = s.in_memory().await;
+    let working = in_memory(&s).await;
     s.stop().await;
     (versions, working)
 }
@@ -176,13 +135,13 @@ async fn committed(c: &mut Client) -> Value {
 async fn a_commit_being_written_holds_up_no_drag_and_is_answered_once_durable() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let s = Running::start(&data).await;
+    let s = start(&data).await;
     let mut ann = s.connect("ann").await;
     let mut bob = s.connect("bob").await;
     let (icon, p) = load_icon(&bob.snapshot);
     bob.ok(json!({"type": "drag_start", "part": SHELL, "icon": icon}))
         .await;
-    let asked = s.in_memory().await;
+    let asked = in_memory(&s).await;
 
     // The disk stalls; ann commits; her commit's write starts and waits.
     let release = s.store.stall();
@@ -192,7 +151,7 @@ async fn a_commit_being_written_holds_up_no_drag_and_is_answered_once_durable() 
         json!({"type": "commit", "message": "shoulder"}),
     )
     .await;
-    s.write_started().await;
+    write_started(&s).await;
 
     // Meanwhile bob drags and gets the frame of every drag.
     let mut order: Vec<String> = Vec::new();
@@ -232,7 +191,7 @@ async fn a_commit_being_written_holds_up_no_drag_and_is_answered_once_durable() 
     assert_eq!(seen["version"]["message"], "shoulder", "{seen}");
     bob.ok(json!({"type": "drag_end", "part": SHELL, "icon": icon}))
         .await;
-    let dragged_state = s.in_memory().await;
+    let dragged_state = in_memory(&s).await;
     assert_ne!(
         parts::icons(&dragged_state, SHELL),
         parts::icons(&asked, SHELL)
@@ -254,7 +213,7 @@ async fn a_commit_being_written_holds_up_no_drag_and_is_answered_once_durable() 
 async fn a_commit_whose_write_fails_changes_nothing_and_the_next_one_is_stored() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let s = Running::start(&data).await;
+    let s = start(&data).await;
     let mut ann = s.connect("ann").await;
     let mut bob = s.connect("bob").await;
     let (icon, p) = load_icon(&bob.snapshot);
@@ -265,7 +224,7 @@ async fn a_commit_whose_write_fails_changes_nothing_and_the_next_one_is_stored()
     s.store.read_only(true).unwrap();
     let release = s.store.stall();
     ask(&mut ann, 1, json!({"type": "commit", "message": "refused"})).await;
-    s.write_started().await;
+    write_started(&s).await;
     let mut rev = 0;
     for k in 1..=3 {
         rev = dragged(&mut bob, icon, p, k as f64, rev).await;
@@ -295,7 +254,7 @@ async fn a_commit_whose_write_fails_changes_nothing_and_the_next_one_is_stored()
 
     // The disk takes writes again: the next commit is stored, with the work.
     s.store.read_only(false).unwrap();
-    let kept = s.in_memory().await;
+    let kept = in_memory(&s).await;
     let r = ann
         .request(json!({"type": "commit", "message": "disk is back"}))
         .await;
@@ -313,20 +272,20 @@ async fn a_commit_whose_write_fails_changes_nothing_and_the_next_one_is_stored()
 async fn two_commits_asked_together_give_consecutive_versions_in_order() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let s = Running::start(&data).await;
+    let s = start(&data).await;
     let mut ann = s.connect("ann").await;
     let mut cy = s.connect("cy").await;
     let mut bob = s.connect("bob").await;
     let (icon, p) = load_icon(&bob.snapshot);
     bob.ok(json!({"type": "drag_start", "part": SHELL, "icon": icon}))
         .await;
-    let first_state = s.in_memory().await;
+    let first_state = in_memory(&s).await;
 
     // Ann's commit is being written (stalled); bob drags; then cy commits:
     // her commit queues behind ann's, with bob's drag in it.
     let release = s.store.stall();
     ask(&mut ann, 1, json!({"type": "commit", "message": "first"})).await;
-    s.write_started().await;
+    write_started(&s).await;
     let rev = dragged(&mut bob, icon, p, 4.0, 0).await;
     ask(&mut cy, 1, json!({"type": "commit", "message": "second"})).await;
     dragged(&mut bob, icon, p, 5.0, rev).await;

@@ -12,26 +12,16 @@ mod common;
 use common::parts::{self, load_icon};
 
 use common::http::get;
+use common::store_server::StoreServer;
 use common::ws::Client;
 use serde_json::{Value, json};
 use std::path::Path;
 use std::time::Duration;
-use tokio::task::JoinHandle;
-use vsculpt_server::config::Config;
 use vsculpt_server::design::DesignDoc;
-use vsculpt_server::server::{Server, ServerError};
-use vsculpt_server::shutdown::Shutdown;
 use vsculpt_server::store::{DesignRecord, Store};
 
-async fn start(data: &std::path::Path) -> (Server, Shutdown) {
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let mut config = Config::new(data.to_path_buf(), data.join("no-web-client"));
-    config.persist_delay = Duration::from_millis(100);
-    let shutdown = Shutdown::new();
-    let server = Server::start(listener, config, shutdown.clone())
-        .await
-        .unwrap();
-    (server, shutdown)
+async fn start(data: &Path) -> StoreServer {
+    StoreServer::start(data, Duration::from_millis(100)).await
 }
 
 async fn drag(c: &mut Client, icon: u64, to: [f64; 3]) {
@@ -61,8 +51,7 @@ async fn work_is_only_in_memory(store: &Store, d: &DesignRecord, in_memory: &Val
 
 /// A running server on `data`, its editor `ann` and what it has acked so far.
 struct Session {
-    shutdown: Shutdown,
-    serving: JoinHandle<Result<(), ServerError>>,
+    server: StoreServer,
     ann: Client,
     acked: Vec<String>,
 }
@@ -72,8 +61,7 @@ struct Session {
 /// version (and nothing refused) and the in-memory design are there.
 async fn recovers(data: &Path, store: &Store, d: &DesignRecord, s: Session, in_memory: &Value) {
     let Session {
-        shutdown,
-        serving,
+        server,
         mut ann,
         mut acked,
     } = s;
@@ -93,12 +81,10 @@ async fn recovers(data: &Path, store: &Store, d: &DesignRecord, s: Session, in_m
         .await;
     acked.push("disk is back".into());
     drop(ann);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
+    server.stop().await;
 
-    let (server, shutdown) = start(data).await;
-    let addr = server.local_addr();
-    let serving = tokio::spawn(server.run());
+    let server = start(data).await;
+    let addr = server.addr;
     let v = get(addr, "/api/designs/1/versions", Some(&d.tokens.viewer))
         .await
         .json();
@@ -113,21 +99,16 @@ async fn recovers(data: &Path, store: &Store, d: &DesignRecord, s: Session, in_m
         .await
         .json();
     assert_eq!(now["design"]["parts"], in_memory["design"]["parts"]);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
+    server.stop().await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let (server, shutdown) = start(&data).await;
-    let addr = server.local_addr();
-    let hub = server.hub();
-    let store = hub.store().clone();
-    let admin = server.admin_token().to_string();
-    let d = server.designs().unwrap()[0].clone();
-    let serving = tokio::spawn(server.run());
+    let server = start(&data).await;
+    let (addr, store, d) = (server.addr, server.store.clone(), server.design.clone());
+    let admin = server.admin.clone();
     let mut ann = Client::connect(addr, d.id, &d.tokens.editor, "ann").await;
     let (icon, p) = load_icon(&ann.snapshot);
 
@@ -176,12 +157,7 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
 
     // Space comes back.
     store.limit_pages(None).unwrap();
-    let session = Session {
-        shutdown,
-        serving,
-        ann,
-        acked,
-    };
+    let session = Session { server, ann, acked };
     recovers(&data, &store, &d, session, &in_memory).await;
 }
 
@@ -189,11 +165,8 @@ async fn a_full_disk_refuses_commits_keeps_the_work_and_recovers() {
 async fn a_read_only_disk_refuses_every_write_keeps_the_work_and_recovers() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let (server, shutdown) = start(&data).await;
-    let addr = server.local_addr();
-    let store = server.hub().store().clone();
-    let d = server.designs().unwrap()[0].clone();
-    let serving = tokio::spawn(server.run());
+    let server = start(&data).await;
+    let (addr, store, d) = (server.addr, server.store.clone(), server.design.clone());
     let mut ann = Client::connect(addr, d.id, &d.tokens.editor, "ann").await;
     let (icon, p) = load_icon(&ann.snapshot);
     ann.ok(json!({"type": "commit", "message": "before"})).await;
@@ -235,8 +208,7 @@ async fn a_read_only_disk_refuses_every_write_keeps_the_work_and_recovers() {
     // The disk is writable again.
     store.read_only(false).unwrap();
     let session = Session {
-        shutdown,
-        serving,
+        server,
         ann,
         acked: vec!["created".into(), "before".into()],
     };

@@ -10,13 +10,11 @@
 mod common;
 
 use common::parts::load_icon;
+use common::store_server::StoreServer;
 use common::ws::Client;
 use serde_json::{Value, json};
 use std::time::Duration;
-use vsculpt_server::config::Config;
 use vsculpt_server::design::DesignDoc;
-use vsculpt_server::server::Server;
-use vsculpt_server::shutdown::Shutdown;
 
 /// Long enough that a drag waiting on the stalled store fails the test,
 /// short of the test harness's own limits.
@@ -26,18 +24,8 @@ const ANSWER_WITHIN: Duration = Duration::from_secs(10);
 async fn drags_are_answered_while_the_working_state_is_written() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let mut config = Config::new(data.clone(), data.join("no-web-client"));
-    config.persist_delay = Duration::from_millis(50);
-    let shutdown = Shutdown::new();
-    let server = Server::start(listener, config, shutdown.clone())
-        .await
-        .unwrap();
-    let addr = server.local_addr();
-    let store = server.hub().store().clone();
-    let d = server.designs().unwrap()[0].clone();
-    let serving = tokio::spawn(server.run());
-    // Joining looks the token up in the store: join before the stall.
+    let server = StoreServer::start(&data, Duration::from_millis(50)).await;
+    let (addr, store, d) = (server.addr, server.store.clone(), server.design.clone());
     let mut ann = Client::connect(addr, d.id, &d.tokens.editor, "ann").await;
     let (icon, p) = load_icon(&ann.snapshot);
     let stored_doc = || {
@@ -87,6 +75,5 @@ async fn drags_are_answered_while_the_working_state_is_written() {
     // It is the dragged state, not the design as it started.
     assert_ne!(stored["parts"], before["parts"]);
     drop(ann);
-    shutdown.trigger();
-    serving.await.unwrap().unwrap();
+    server.stop().await;
 }

@@ -5,6 +5,7 @@
 
 pub mod http;
 pub mod parts;
+pub mod store_server;
 pub mod ws;
 
 use std::net::SocketAddr;
