@@ -25,6 +25,8 @@
 //! * [`body_frame`] — the binary body frame (kind 4, [`BodyFrame`]).
 //! * [`drag_frame`] — the drag stream: a part's drag basis (kind 5) and
 //!   its drag frames (kind 6), for clients that ask for it (`/ws?drag_stream=1`).
+//! * [`deflated`] — any binary message byte-shuffled and DEFLATE-compressed
+//!   (kind 7), for clients that ask for it (`/ws?deflate=1`).
 //!
 //! `protocol/README.md` documents the sequence of a connection, an example
 //! of every message and the frame layout byte by byte.
@@ -32,6 +34,7 @@
 pub mod body;
 pub mod body_frame;
 pub mod client;
+pub mod deflated;
 pub mod drag_frame;
 pub mod dsm;
 pub mod error;

@@ -17,6 +17,7 @@ use serde_json::{Value, json};
 use std::collections::BTreeMap;
 use tokio_tungstenite::tungstenite::Message;
 use vsculpt_protocol::GeometryFrame;
+use vsculpt_protocol::deflated::{self, KIND_DEFLATED};
 use vsculpt_protocol::drag_frame::{DragBasis, DragFrame, KIND_DRAG_BASIS, KIND_DRAG_FRAME};
 
 type Stream =
@@ -32,12 +33,21 @@ struct StreamViewer {
     shown: BTreeMap<u64, (u64, Vec<[f64; 3]>, bool)>,
     drag_frames: usize,
     bases: usize,
+    /// Bytes received, as they crossed the link.
     bytes: usize,
+    /// Deflated messages received (kind 7).
+    deflated: usize,
 }
 
 impl StreamViewer {
-    async fn connect(addr: std::net::SocketAddr, design: u64, token: &str) -> Self {
-        let mut ws = tokio_tungstenite::connect_async(format!("ws://{addr}/ws?drag_stream=1"))
+    /// Joins; `deflate`: asks for deflated messages (kind 7) as well.
+    async fn connect(addr: std::net::SocketAddr, design: u64, token: &str, deflate: bool) -> Self {
+        let query = if deflate {
+            "drag_stream=1&deflate=1"
+        } else {
+            "drag_stream=1"
+        };
+        let mut ws = tokio_tungstenite::connect_async(format!("ws://{addr}/ws?{query}"))
             .await
             .unwrap()
             .0;
@@ -52,6 +62,7 @@ impl StreamViewer {
             drag_frames: 0,
             bases: 0,
             bytes: 0,
+            deflated: 0,
         };
         // Up to the snapshot, then the first frame of the part.
         loop {
@@ -76,6 +87,12 @@ impl StreamViewer {
             Message::Text(t) => serde_json::from_str(t.as_str()).unwrap(),
             Message::Binary(b) => {
                 self.bytes += b.len();
+                let b = if b[4] == KIND_DEFLATED {
+                    self.deflated += 1;
+                    deflated::inflate(&b).unwrap()
+                } else {
+                    b.to_vec()
+                };
                 match b[4] {
                     1 | 2 => {
                         let f = GeometryFrame::decode(&b).unwrap();
@@ -169,8 +186,14 @@ async fn a_stream_viewer_follows_a_drag_to_1e6_and_ends_on_the_full_frames_bytes
     let mut ed = Client::connect(server.addr, id, &editor_token, "editor").await;
     let part = ed.snapshot["parts"][0]["id"].as_u64().unwrap();
     let first = ed.frame_of(part).await;
-    let mut viewer = StreamViewer::connect(server.addr, id, &viewer_token).await;
-    viewer.until(part, first.revision).await;
+    // Two stream viewers: one asks for deflated messages as well.
+    let mut viewers = [
+        StreamViewer::connect(server.addr, id, &viewer_token, false).await,
+        StreamViewer::connect(server.addr, id, &viewer_token, true).await,
+    ];
+    for viewer in &mut viewers {
+        viewer.until(part, first.revision).await;
+    }
 
     for (role, u, v) in [("load", 0.5, 0.5), ("position", 0.3, 0.7)] {
         let created = ed
@@ -181,33 +204,37 @@ async fn a_stream_viewer_follows_a_drag_to_1e6_and_ends_on_the_full_frames_bytes
         let icon = created["icon"].as_u64().unwrap();
         ed.ok(json!({"type": "drag_start", "part": part, "icon": icon}))
             .await;
-        let start = viewer.drag_frames;
+        let start = viewers.each_ref().map(|v| v.drag_frames);
         let steps = 40;
         for k in 1..=steps {
             let z = 0.02 * k as f64;
             ed.send(json!({"type": "drag", "part": part, "icon": icon, "xyz": [u, v, z]}))
                 .await;
             let truth = editor_frame_of_drag(&mut ed, part).await;
-            viewer.until(part, truth.revision).await;
-            let (rev, net, _) = &viewer.shown[&part];
-            assert_eq!(*rev, truth.revision);
-            let tol = 1e-6 * size(&truth.points);
-            let worst = net
-                .iter()
-                .zip(&truth.points)
-                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c] as f64).abs()))
-                .fold(0.0f64, f64::max);
+            for viewer in &mut viewers {
+                viewer.until(part, truth.revision).await;
+                let (rev, net, _) = &viewer.shown[&part];
+                assert_eq!(*rev, truth.revision);
+                let tol = 1e-6 * size(&truth.points);
+                let worst = net
+                    .iter()
+                    .zip(&truth.points)
+                    .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c] as f64).abs()))
+                    .fold(0.0f64, f64::max);
+                assert!(
+                    worst <= tol,
+                    "{role} drag step {k}: the viewer's net is {worst:e} off (tolerance {tol:e})"
+                );
+            }
+        }
+        let last = viewers[0].shown[&part].0;
+        for (viewer, start) in viewers.iter().zip(start) {
+            let streamed = viewer.drag_frames - start;
             assert!(
-                worst <= tol,
-                "{role} drag step {k}: the viewer's net is {worst:e} off (tolerance {tol:e})"
+                streamed >= steps - 2,
+                "{role}: only {streamed} of {steps} drag frames came as stream frames"
             );
         }
-        let last = viewer.shown[&part].0;
-        let streamed = viewer.drag_frames - start;
-        assert!(
-            streamed >= steps - 2,
-            "{role}: only {streamed} of {steps} drag frames came as stream frames"
-        );
         ed.send(json!({"type": "drag_end", "part": part, "icon": icon}))
             .await;
         // At rest: a full frame, the same bytes at both clients.
@@ -220,24 +247,44 @@ async fn a_stream_viewer_follows_a_drag_to_1e6_and_ends_on_the_full_frames_bytes
                 _ => {}
             }
         };
-        viewer.until(part, rest.revision).await;
-        let (rev, _, from_drag) = &viewer.shown[&part];
-        assert_eq!(*rev, rest.revision);
-        assert!(!from_drag, "the shape at rest came from a drag frame");
-        let (bytes, _) = &viewer.full[&part];
-        assert_eq!(
-            GeometryFrame::decode(bytes).unwrap(),
-            rest,
-            "{role}: the viewer's shape at rest differs from the editor's"
-        );
+        for viewer in &mut viewers {
+            viewer.until(part, rest.revision).await;
+            let (rev, _, from_drag) = &viewer.shown[&part];
+            assert_eq!(*rev, rest.revision);
+            assert!(!from_drag, "the shape at rest came from a drag frame");
+            let (bytes, _) = &viewer.full[&part];
+            assert_eq!(
+                GeometryFrame::decode(bytes).unwrap(),
+                rest,
+                "{role}: the viewer's shape at rest differs from the editor's"
+            );
+        }
     }
-    assert!(viewer.bases >= 2, "one basis per grab at least");
     // 80 drag frames cost far less than one full frame each.
     let full = first.encode().unwrap().len();
+    for viewer in &viewers {
+        assert!(viewer.bases >= 2, "one basis per grab at least");
+        assert!(
+            viewer.bytes < 12 * full,
+            "the viewer received {} bytes (a full frame is {full})",
+            viewer.bytes
+        );
+    }
+    // The same messages, deflated: full frames and bases as kind 7, the
+    // whole session in well under half the bytes.
+    let [plain, small] = &viewers;
+    assert_eq!(plain.deflated, 0);
+    assert!(small.deflated >= 4, "{} deflated messages", small.deflated);
+    assert_eq!(plain.drag_frames, small.drag_frames);
+    eprintln!(
+        "drag session: {} bytes plain, {} bytes deflated",
+        plain.bytes, small.bytes
+    );
     assert!(
-        viewer.bytes < 12 * full,
-        "the viewer received {} bytes (a full frame is {full})",
-        viewer.bytes
+        small.bytes * 2 < plain.bytes,
+        "deflated {} bytes against {} plain",
+        small.bytes,
+        plain.bytes
     );
     drop(ed);
     server.stop().await;

@@ -5,6 +5,7 @@
 
 import { decodeFrame, PROTOCOL_VERSION } from './frame.js';
 import { DragStream } from './drag-stream.js';
+import { isDeflated, inflateMessage } from './deflated.js';
 
 /** Why the server refused to let this page join, said so a person knows what to do; the link then stays closed. */
 export const REFUSALS = {
@@ -33,8 +34,9 @@ export class Link {
 
   connect() {
     const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
-    // drag_stream=1: a drag comes as ρ once and d per frame (protocol/README.md, "Drag stream").
-    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1`);
+    // drag_stream=1: a drag comes as ρ once and d per frame (protocol/README.md, "Drag stream");
+    // deflate=1: large binary messages come deflated (kind 7, "Deflated message").
+    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1&deflate=1`);
     const stream = new DragStream();
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
@@ -51,33 +53,59 @@ export class Link {
         geometry_first: true,
       }));
     };
-    ws.onmessage = (ev) => {
-      if (typeof ev.data === 'string') {
-        let msg;
-        try {
-          msg = JSON.parse(ev.data);
-        } catch (e) {
-          this.onStatus('error', `unreadable message from the server: ${e}`);
-          return;
-        }
-        if (msg.type === 'welcome') {
-          this.backoff = 250;
-          this.onStatus('connected', `connected as ${msg.access}`);
-        }
-        if (msg.type === 'error' && REFUSALS[msg.code] && !this.welcomed) {
-          this.closedByServer = true;
-          this.refusal = msg.code;
-        }
-        if (msg.type === 'welcome') this.welcomed = true;
-        this.onMessage(msg);
-      } else {
-        try {
-          const f = stream.take(decodeFrame(ev.data));
-          if (f) this.onFrame(f);
-        } catch (e) {
-          this.onStatus('error', `bad geometry frame: ${e.message}`);
-        }
+    const text = (data) => {
+      let msg;
+      try {
+        msg = JSON.parse(data);
+      } catch (e) {
+        this.onStatus('error', `unreadable message from the server: ${e}`);
+        return;
       }
+      if (msg.type === 'welcome') {
+        this.backoff = 250;
+        this.onStatus('connected', `connected as ${msg.access}`);
+      }
+      if (msg.type === 'error' && REFUSALS[msg.code] && !this.welcomed) {
+        this.closedByServer = true;
+        this.refusal = msg.code;
+      }
+      if (msg.type === 'welcome') this.welcomed = true;
+      this.onMessage(msg);
+    };
+    const binary = (buf) => {
+      try {
+        const f = stream.take(decodeFrame(buf));
+        if (f) this.onFrame(f);
+      } catch (e) {
+        this.onStatus('error', `bad geometry frame: ${e.message}`);
+      }
+    };
+    // A deflated message (deflate=1) inflates asynchronously: it and every
+    // message after it wait in `inbox`, so all are handled in the order
+    // they came.
+    let inbox = null;
+    const receive = async (data) => {
+      if (typeof data === 'string') return text(data);
+      if (!isDeflated(data)) return binary(data);
+      let inner;
+      try {
+        inner = await inflateMessage(data, PROTOCOL_VERSION);
+      } catch (e) {
+        this.onStatus('error', `bad geometry frame: ${e.message}`);
+        return;
+      }
+      binary(inner);
+    };
+    ws.onmessage = (ev) => {
+      if (!inbox && !isDeflated(ev.data)) {
+        receive(ev.data);
+        return;
+      }
+      const p = (inbox || Promise.resolve()).then(() => receive(ev.data));
+      inbox = p;
+      p.finally(() => {
+        if (inbox === p) inbox = null;
+      });
     };
     ws.onclose = () => {
       if (this.closedByServer) {

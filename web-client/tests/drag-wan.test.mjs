@@ -20,6 +20,7 @@ import { serverBinProblem, createDesign, startServer, stopServer } from './harne
 import { startLink } from './wan.mjs';
 import { decodeFrame, PROTOCOL_VERSION } from '../src/frame.js';
 import { DragStream } from '../src/drag-stream.js';
+import { inflateMessage, isDeflated } from '../src/deflated.js';
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 const pct = (xs, p) => {
@@ -27,28 +28,44 @@ const pct = (xs, p) => {
   return s[Math.min(s.length - 1, Math.max(0, Math.ceil((p / 100) * s.length) - 1))];
 };
 
-/** A protocol client: text and decoded frames (through a DragStream when `stream`). */
-function connect(base, design, token, { stream = false } = {}) {
-  const url = `${base.replace('http', 'ws')}/ws${stream ? '?drag_stream=1' : ''}`;
+/**
+ * A protocol client: text and decoded frames (through a DragStream when
+ * `stream`; deflated messages inflated by the page's deflated.js, in order,
+ * when `deflate`).
+ */
+function connect(base, design, token, { stream = false, deflate = false } = {}) {
+  const query = [stream && 'drag_stream=1', deflate && 'deflate=1'].filter(Boolean).join('&');
+  const url = `${base.replace('http', 'ws')}/ws${query ? `?${query}` : ''}`;
   const ws = new WebSocket(url);
   ws.binaryType = 'arraybuffer';
-  const c = { ws, texts: [], frames: [], onText: () => {}, onFrame: () => {}, drag: stream ? new DragStream() : null, bytes: 0, kinds: {} };
-  ws.onmessage = (ev) => {
-    const now = performance.now();
-    if (typeof ev.data === 'string') {
-      const m = JSON.parse(ev.data);
+  const c = { ws, texts: [], frames: [], onText: () => {}, onFrame: () => {}, drag: stream ? new DragStream() : null, bytes: 0, deflated: 0, kinds: {} };
+  const receive = async (data, arrived) => {
+    if (typeof data === 'string') {
+      const m = JSON.parse(data);
       c.texts.push(m);
-      c.onText(m, now);
+      c.onText(m, arrived);
       return;
     }
-    c.bytes += ev.data.byteLength;
-    const d = decodeFrame(ev.data);
+    c.bytes += data.byteLength;
+    let now = arrived;
+    if (isDeflated(data)) {
+      c.deflated++;
+      data = await inflateMessage(data, PROTOCOL_VERSION);
+      now = performance.now();
+    }
+    const d = decodeFrame(data);
     c.kinds[d.kind] = (c.kinds[d.kind] || 0) + 1;
     const f = c.drag ? c.drag.take(d) : d;
     if (f) {
       c.frames.push(f);
       c.onFrame(f, now, d.kind);
     }
+  };
+  // As net.js: messages wait behind one that is still inflating.
+  let inbox = Promise.resolve();
+  ws.onmessage = (ev) => {
+    const arrived = performance.now();
+    inbox = inbox.then(() => receive(ev.data, arrived));
   };
   c.send = (m) => ws.send(JSON.stringify(m));
   c.waitText = (pred) =>
@@ -102,7 +119,7 @@ if (typeof WebSocket === 'undefined') {
   });
 
   /** A 60 Hz drag of a load icon seen by a stream viewer through a link of `mbit` and 40 ms one way. */
-  async function dragOverLink(mbit, seconds) {
+  async function dragOverLink(mbit, seconds, { deflate = false } = {}) {
     const design = await createDesign(server, dataDir, { name: `wan ${mbit}`, nu: 81, nv: 159 });
     const host = new URL(server.base).host;
     const link = await startLink({ target: host, mbit, delayMs: 40 });
@@ -110,7 +127,7 @@ if (typeof WebSocket === 'undefined') {
     await ed.ready;
     const snap = await ed.waitText((m) => m.type === 'snapshot');
     const part = snap.parts[0].id;
-    const viewer = connect(link.url('http://x').replace(/\/$/, ''), design.id, design.tokens.viewer, { stream: true });
+    const viewer = connect(link.url('http://x').replace(/\/$/, ''), design.id, design.tokens.viewer, { stream: true, deflate });
     try {
       await viewer.ready;
       await viewer.waitText((m) => m.type === 'snapshot');
@@ -165,7 +182,7 @@ if (typeof WebSocket === 'undefined') {
       }
       await until(viewer, part, rest.revision);
       const shown = viewer.frames.filter((f) => f.part === part).pop();
-      return { fps, delays, arrivals, revisionSent, rest, shown, streamed: arrivals.filter((a) => a.kind === 'drag').length, bytes: link.bytes.down, kinds: JSON.stringify(viewer.kinds), editorFrames: ed.frames.filter((f) => f.part === part && f.flags & 1 && f.revision > restRev).map((f) => f.revision), texts: JSON.stringify(viewer.texts.reduce((m, x) => ((m[x.type] = (m[x.type] || 0) + 1), m), {})) };
+      return { fps, delays, arrivals, revisionSent, rest, shown, streamed: arrivals.filter((a) => a.kind === 'drag').length, bytes: link.bytes.down, deflated: viewer.deflated, kinds: JSON.stringify(viewer.kinds), editorFrames: ed.frames.filter((f) => f.part === part && f.flags & 1 && f.revision > restRev).map((f) => f.revision), texts: JSON.stringify(viewer.texts.reduce((m, x) => ((m[x.type] = (m[x.type] || 0) + 1), m), {})) };
     } finally {
       viewer.ws.close();
       ed.ws.close();
@@ -174,19 +191,29 @@ if (typeof WebSocket === 'undefined') {
   }
 
   test('at 2 Mbit/s and 80 ms round trip a viewer sees a 60 Hz drag at ≥ 30 frames/s, ≤ 150 ms added delay, and the editor’s shape at rest', async (t) => {
-    const r = await dragOverLink(2, 6);
-    t.diagnostic(`2 Mbit/s: ${r.fps.toFixed(1)} frames/s, added delay p50 ${pct(r.delays, 50).toFixed(1)} ms p90 ${pct(r.delays, 90).toFixed(1)} ms max ${Math.max(...r.delays).toFixed(1)} ms, ${r.streamed} stream frames, ${r.bytes} bytes down, messages ${r.kinds}, editor drag frames ${r.editorFrames.length}, viewer texts ${r.texts}`);
-    assert.ok(r.streamed > 0, 'no drag frame came as a stream frame');
-    // The server (on a loaded machine) may solve fewer than 60 frames a
-    // second: the link must not cost frames, and ≥ 30 frames/s is asked of
-    // it whenever the server produced ≥ 33.
-    const editorFps = r.editorFrames.length / 6.5;
-    assert.ok(r.fps >= Math.min(30, 0.9 * editorFps), `the viewer saw ${r.fps.toFixed(1)} frames/s, the editor ${editorFps.toFixed(1)}`);
-    const p90 = pct(r.delays, 90);
-    assert.ok(p90 <= 150, `added delay p90 ${p90.toFixed(1)} ms (median ${pct(r.delays, 50).toFixed(1)} ms)`);
-    assert.equal(r.shown.revision, r.rest.revision);
-    assert.deepEqual(r.shown.points, r.rest.points, 'the viewer’s shape at rest is not the editor’s');
-    assert.deepEqual(r.shown.knotsU, r.rest.knotsU);
+    // The page asks for deflated messages; a client that does not gets the same frames plain.
+    const runs = {};
+    for (const deflate of [true, false]) {
+      const r = await dragOverLink(2, 6, { deflate });
+      runs[deflate] = r;
+      const name = deflate ? 'deflated' : 'plain';
+      t.diagnostic(`2 Mbit/s, ${name}: ${r.fps.toFixed(1)} frames/s, added delay p50 ${pct(r.delays, 50).toFixed(1)} ms p90 ${pct(r.delays, 90).toFixed(1)} ms max ${Math.max(...r.delays).toFixed(1)} ms, ${r.streamed} stream frames, ${r.bytes} bytes down, ${r.deflated} deflated messages, messages ${r.kinds}, editor drag frames ${r.editorFrames.length}, viewer texts ${r.texts}`);
+      assert.ok(r.streamed > 0, `${name}: no drag frame came as a stream frame`);
+      // The server (on a loaded machine) may solve fewer than 60 frames a
+      // second: the link must not cost frames, and ≥ 30 frames/s is asked of
+      // it whenever the server produced ≥ 33.
+      const editorFps = r.editorFrames.length / 6.5;
+      assert.ok(r.fps >= Math.min(30, 0.9 * editorFps), `${name}: the viewer saw ${r.fps.toFixed(1)} frames/s, the editor ${editorFps.toFixed(1)}`);
+      const p90 = pct(r.delays, 90);
+      assert.ok(p90 <= 150, `${name}: added delay p90 ${p90.toFixed(1)} ms (median ${pct(r.delays, 50).toFixed(1)} ms)`);
+      assert.equal(r.shown.revision, r.rest.revision);
+      assert.deepEqual(r.shown.points, r.rest.points, `${name}: the viewer’s shape at rest is not the editor’s`);
+      assert.deepEqual(r.shown.knotsU, r.rest.knotsU);
+    }
+    // Deflated: the basis and the full frames came as kind 7, and the link carried fewer bytes.
+    assert.ok(runs.true.deflated >= 2, `${runs.true.deflated} deflated messages`);
+    assert.equal(runs.false.deflated, 0);
+    assert.ok(runs.true.bytes < runs.false.bytes, `deflated ${runs.true.bytes} bytes, plain ${runs.false.bytes}`);
   });
 
   test('at 100 Mbit/s a viewer sees every drag frame', async (t) => {

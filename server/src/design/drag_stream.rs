@@ -40,6 +40,10 @@ pub struct StreamBasis {
     pub reference_frame: Bytes,
     /// The encoded [`DragBasis`].
     pub frame: Bytes,
+    /// `frame` deflated, for the clients that asked (`deflate=1`).
+    pub deflated: super::deflated_frame::DeflatedFrame,
+    /// `reference_frame` deflated, for the clients that asked.
+    pub reference_deflated: super::deflated_frame::DeflatedFrame,
 }
 
 /// One drag frame of one part as the stream carries it.
@@ -226,6 +230,8 @@ impl DragStreams {
                 reference: rev,
                 reference_frame: bytes.clone(),
                 frame: Bytes::from(frame),
+                deflated: Default::default(),
+                reference_deflated: Default::default(),
             }),
             start: start.to_vec(),
             rho: rho.to_vec(),

@@ -10,6 +10,7 @@ pub mod body_part;
 pub mod command;
 pub mod commit_write;
 pub mod curve_engine;
+pub mod deflated_frame;
 pub mod demo;
 pub mod doc;
 pub mod drag_stream;

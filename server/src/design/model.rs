@@ -41,6 +41,28 @@ pub struct Geometry {
     /// The same shape as a drag-stream frame, for the clients that asked
     /// for the stream (see [`super::drag_stream`]).
     pub stream: Option<super::drag_stream::StreamFrame>,
+    /// `frame` deflated, for the clients that asked (`deflate=1`).
+    pub deflated: super::deflated_frame::DeflatedFrame,
+    /// `frame` flagged as a joiner's snapshot shape, deflated (the compact
+    /// join of a client that asked for `deflate=1`).
+    pub snapshot_deflated: super::deflated_frame::DeflatedFrame,
+}
+
+impl Geometry {
+    /// A part's frame at `rev` with its drag-stream form, if any.
+    pub fn new(
+        rev: u64,
+        frame: axum::body::Bytes,
+        stream: Option<super::drag_stream::StreamFrame>,
+    ) -> Self {
+        Self {
+            rev,
+            frame,
+            stream,
+            deflated: Default::default(),
+            snapshot_deflated: Default::default(),
+        }
+    }
 }
 
 /// The newest frame of every part: what the actor publishes (latest wins
@@ -402,22 +424,14 @@ impl DesignModel {
     /// its surface; a body's: a body frame).
     pub fn geometry(&self, design: u64, part: u64, rev: u64, drag: bool) -> Option<Geometry> {
         if let Some(n) = self.networks.get(&part) {
-            return Some(Geometry {
-                rev,
-                frame: n.frame(design, part, rev, drag),
-                stream: None,
-            });
+            return Some(Geometry::new(rev, n.frame(design, part, rev, drag), None));
         }
         if let Some(frame) = self
             .ffds
             .frame(design, part, rev, drag)
             .or_else(|| self.engine.dsm().frame(design, part, rev, drag))
         {
-            return Some(Geometry {
-                rev,
-                frame,
-                stream: None,
-            });
+            return Some(Geometry::new(rev, frame, None));
         }
         if let Some(body) = self.bodies.get(part) {
             let flags = if drag {
@@ -425,19 +439,19 @@ impl DesignModel {
             } else {
                 0
             };
-            return Some(Geometry {
+            return Some(Geometry::new(
                 rev,
-                frame: body.frame(design, part, rev, flags)?.into(),
-                stream: None,
-            });
+                body.frame(design, part, rev, flags)?.into(),
+                None,
+            ));
         }
         let (points, icons) = self.frame_data(part)?;
         let p = self.doc.part(part)?;
-        Some(Geometry {
+        Some(Geometry::new(
             rev,
-            frame: crate::convert::geometry_frame(design, rev, drag, p, points, &icons),
-            stream: None,
-        })
+            crate::convert::geometry_frame(design, rev, drag, p, points, &icons),
+            None,
+        ))
     }
 
     /// The encoded frame of a drag of `part` at revision `rev`, with its

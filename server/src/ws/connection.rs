@@ -205,13 +205,17 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     //    snapshot without points: the picture can be drawn while the rest
     //    is still on its way, and the net crosses the link once.
     let compact = hello.geometry_first;
+    // Binary messages deflated (protocol kind 7) for a client that asked.
+    let deflate = query
+        .get("deflate")
+        .is_some_and(|v| v == "1" || v == "true");
     let welcome = socket
         .send(Message::Text(convert::welcome(client, design, role)))
         .await;
     let mut sent = std::collections::BTreeMap::new();
     let mut shape = Ok(());
     if welcome.is_ok() && compact {
-        for frame in writer::snapshot_frames(&mut joined, &mut sent, &state.metrics) {
+        for frame in writer::snapshot_frames(&mut joined, &mut sent, deflate, &state.metrics) {
             shape = socket.send(Message::Binary(frame)).await;
             if shape.is_err() {
                 break;
@@ -253,6 +257,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
             drag_stream: query
                 .get("drag_stream")
                 .is_some_and(|v| v == "1" || v == "true"),
+            deflate,
         },
     ));
     let mut session = Session {

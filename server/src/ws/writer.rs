@@ -55,6 +55,7 @@ async fn send_geometry(
     joined: &mut Joined,
     sent: &mut BTreeMap<u64, u64>,
     mut held: Option<&mut BTreeMap<u64, Held>>,
+    deflate: bool,
     metrics: &Metrics,
 ) -> Result<(), axum::Error> {
     let set = joined.geometry.borrow_and_update().clone();
@@ -70,25 +71,30 @@ async fn send_geometry(
             (Some(held), Some(s)) => {
                 let h = held.entry(*part).or_default();
                 if h.full != s.basis.reference {
-                    metrics.frame_sent(s.basis.reference_frame.len());
-                    sink.send(Message::Binary(s.basis.reference_frame.clone()))
-                        .await?;
+                    let bytes = s
+                        .basis
+                        .reference_deflated
+                        .pick(&s.basis.reference_frame, deflate);
+                    metrics.frame_sent(bytes.len());
+                    sink.send(Message::Binary(bytes)).await?;
                     *h = Held {
                         full: s.basis.reference,
                         basis: None,
                     };
                 }
                 if h.basis != Some(s.basis.id) {
-                    metrics.frame_sent(s.basis.frame.len());
-                    sink.send(Message::Binary(s.basis.frame.clone())).await?;
+                    let bytes = s.basis.deflated.pick(&s.basis.frame, deflate);
+                    metrics.frame_sent(bytes.len());
+                    sink.send(Message::Binary(bytes)).await?;
                     h.basis = Some(s.basis.id);
                 }
                 metrics.frame_sent(s.frame.len());
                 sink.send(Message::Binary(s.frame.clone())).await?;
             }
             (held, _) => {
-                metrics.frame_sent(g.frame.len());
-                sink.send(Message::Binary(g.frame.clone())).await?;
+                let bytes = g.deflated.pick(&g.frame, deflate);
+                metrics.frame_sent(bytes.len());
+                sink.send(Message::Binary(bytes)).await?;
                 if let Some(held) = held {
                     held.insert(
                         *part,
@@ -118,18 +124,21 @@ async fn ev_send(sink: &mut Sink, ev: &DesignEvent, compact: bool) -> Result<(),
 pub fn snapshot_frames(
     joined: &mut Joined,
     sent: &mut BTreeMap<u64, u64>,
+    deflate: bool,
     metrics: &Metrics,
 ) -> Vec<Bytes> {
     let set = joined.geometry.borrow_and_update().clone();
     set.parts
         .iter()
         .map(|(part, g)| {
-            metrics.frame_sent(g.frame.len());
             sent.insert(*part, g.rev);
-            Bytes::from(vsculpt_protocol::frame::with_flags(
+            let flagged = Bytes::from(vsculpt_protocol::frame::with_flags(
                 &g.frame,
                 vsculpt_protocol::frame::FLAG_SNAPSHOT,
-            ))
+            ));
+            let bytes = g.snapshot_deflated.pick(&flagged, deflate);
+            metrics.frame_sent(bytes.len());
+            bytes
         })
         .collect()
 }
@@ -146,6 +155,8 @@ pub struct Delivery {
     pub sent: BTreeMap<u64, u64>,
     /// The client asked for the drag stream (`drag_stream=1` in the URL).
     pub drag_stream: bool,
+    /// The client asked for deflated messages (`deflate=1` in the URL).
+    pub deflate: bool,
 }
 
 /// A client that fell too far behind its design's events.
@@ -155,6 +166,7 @@ struct Lagged<'a> {
     skipped: u64,
     compact: bool,
     frames: bool,
+    deflate: bool,
 }
 
 /// How a resync ended.
@@ -183,6 +195,7 @@ async fn resync(
         skipped,
         compact,
         frames,
+        deflate,
     } = lagged;
     tracing::info!(
         design = handle.id,
@@ -196,7 +209,7 @@ async fn resync(
     *joined = j;
     if sink.send(Message::Text(snap)).await.is_err()
         || (frames
-            && send_geometry(sink, joined, sent, held, metrics)
+            && send_geometry(sink, joined, sent, held, deflate, metrics)
                 .await
                 .is_err())
     {
@@ -222,6 +235,7 @@ pub async fn run(
         frames,
         mut sent,
         drag_stream,
+        deflate,
     } = delivery;
     // Frames sent before the writer started (the compact join's) are full.
     let mut held: Option<BTreeMap<u64, Held>> = drag_stream.then(|| {
@@ -240,9 +254,16 @@ pub async fn run(
     let mut geometry_live = true;
     let mut deleted = false;
     if frames
-        && send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics)
-            .await
-            .is_err()
+        && send_geometry(
+            &mut sink,
+            &mut joined,
+            &mut sent,
+            held.as_mut(),
+            deflate,
+            &metrics,
+        )
+        .await
+        .is_err()
     {
         return;
     }
@@ -270,7 +291,7 @@ pub async fn run(
                                 }
                                 Err(TryRecvError::Lagged(n)) => {
                                     // As below: too far behind, a fresh snapshot.
-                                    let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames };
+                                    let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, deflate };
                                     match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await {
                                         Resynced::Done => {}
                                         Resynced::DesignGone => geometry_live = false,
@@ -319,7 +340,7 @@ pub async fn run(
                         }
                     }
                     Err(RecvError::Lagged(n)) => {
-                        let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames };
+                        let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, deflate };
                         match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await {
                             Resynced::Done => {}
                             Resynced::DesignGone => geometry_live = false,
@@ -391,7 +412,7 @@ pub async fn run(
                     geometry_live = false;
                     continue;
                 }
-                if send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await.is_err() {
+                if send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), deflate, &metrics).await.is_err() {
                     break;
                 }
             }
