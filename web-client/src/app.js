@@ -1068,7 +1068,7 @@ const SHORTCUTS = [
   ['Ctrl+Z', 'undo', true],
   ['Ctrl+Shift+Z, Ctrl+Y', 'redo', true],
   ['Delete', 'delete the selected icon', true],
-  ['Esc', 'end measuring; else cancel the curve or region being picked, else deselect', false],
+  ['Esc', 'end commenting or measuring; else cancel the curve or region being picked, else deselect', false],
   ['F', 'frame the selected icon (or the whole design)', false],
   ['[ and ]', 'select the previous or next part', false],
   ['H', 'hide or show the selected part', false],
