@@ -314,6 +314,38 @@ pub enum ClientMessage {
         /// The time.
         t: f64,
     },
+    /// Pin a comment to a point of a part (viewers too: the customer's
+    /// feedback). Answered `ack {comment}` and `comment_added` to every
+    /// client. Not an edit: nothing is undone; it is stored at once.
+    AddComment {
+        /// The part it is pinned to.
+        part: u64,
+        /// Where on the part.
+        anchor: crate::comment::CommentAnchor,
+        /// What it says.
+        text: String,
+    },
+    /// Reply to a comment: answered `ack {comment}` (the reply's id) and
+    /// `comment_changed` with the whole thread.
+    ReplyComment {
+        /// The comment replied to.
+        comment: u64,
+        /// What the reply says.
+        text: String,
+    },
+    /// Mark a comment resolved or open again: `comment_changed`.
+    ResolveComment {
+        /// The comment.
+        comment: u64,
+        /// Resolved (true) or open (false).
+        resolved: bool,
+    },
+    /// Delete a comment with its replies (`comment_deleted`), or one reply
+    /// (`comment_changed` with the thread left).
+    DeleteComment {
+        /// The comment's or reply's id.
+        comment: u64,
+    },
 }
 
 /// The `type` tags of every client message, for telling an unknown type
@@ -355,6 +387,10 @@ pub const CLIENT_TYPES: &[&str] = &[
     "cancel_fairing",
     "body_edit",
     "body_morph",
+    "add_comment",
+    "reply_comment",
+    "resolve_comment",
+    "delete_comment",
 ];
 
 /// Parses and validates one text message from a client: `too_large`,

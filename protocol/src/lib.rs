@@ -9,6 +9,7 @@
 //! * [`limits`] — sizes beyond which a message is refused.
 //! * [`types`] — value types shared by messages: surfaces, icons, materials,
 //!   versions, presence.
+//! * [`comment`] — review comments pinned to points of parts, with replies.
 //! * [`parts`] — the parts of a product (one per shape kind) and the
 //!   relations between them (joins, bindings).
 //! * [`client`] — client → server messages ([`ClientMessage`]) and
@@ -34,6 +35,7 @@
 pub mod body;
 pub mod body_frame;
 pub mod client;
+pub mod comment;
 pub mod deflated;
 pub mod drag_frame;
 pub mod dsm;
@@ -52,6 +54,7 @@ pub mod version;
 pub use body::{BodyData, BodyEdit, BodyFace, LatticeData, LatticeSelection};
 pub use body_frame::BodyFrame;
 pub use client::{ClientEnvelope, ClientMessage, parse_client};
+pub use comment::{Comment, CommentAnchor, CommentReply};
 pub use dsm::{DsmData, DsmEdit, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{FrameIcon, GeometryFrame};

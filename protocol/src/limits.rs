@@ -16,6 +16,11 @@ pub const MAX_SENSORS_PER_ICON: usize = 16;
 pub const MAX_GRID: usize = 2048;
 /// Most icons a frame may carry.
 pub const MAX_FRAME_ICONS: usize = 65_536;
+/// Longest comment or reply text, in bytes of UTF-8 (about a page).
+pub const MAX_COMMENT_BYTES: usize = 4096;
+/// Most comments and replies one design may hold (the server may be
+/// configured lower); more are refused with `too_large`.
+pub const MAX_COMMENTS_PER_DESIGN: usize = 2000;
 /// Largest magnitude accepted for a coordinate or material parameter.
 pub const MAX_MAGNITUDE: f64 = 1e9;
 

@@ -4,6 +4,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use crate::comment::Comment;
 use crate::error::ErrorCode;
 use crate::parts::{Part, PartMaterial, Relation};
 use crate::types::{Access, DesignInfo, DesignTokens, Icon, PresenceEntry, Vec3, VersionInfo};
@@ -40,6 +41,10 @@ pub enum ServerMessage {
         /// The relation a `relate` created.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         relation: Option<u64>,
+        /// The comment an `add_comment` or the reply a `reply_comment`
+        /// created.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        comment: Option<u64>,
         /// Set when the edit (an icon created or changed, a material) left
         /// constraints that contradict each other: the shape is their
         /// least-squares compromise, and this says by how much.
@@ -74,6 +79,10 @@ pub enum ServerMessage {
         can_undo: bool,
         /// Whether redo has something to redo.
         can_redo: bool,
+        /// Every review comment of the design, oldest first (empty when
+        /// omitted).
+        #[serde(default)]
+        comments: Vec<Comment>,
     },
     /// An icon was created.
     IconCreated {
@@ -253,5 +262,21 @@ pub enum ServerMessage {
     RelationDeleted {
         /// Its id.
         relation: u64,
+    },
+    /// A comment was pinned (to every client of the design).
+    CommentAdded {
+        /// The new comment.
+        comment: Comment,
+    },
+    /// A comment got a reply, lost one, or was resolved or reopened: the
+    /// whole thread as it is now.
+    CommentChanged {
+        /// The comment.
+        comment: Comment,
+    },
+    /// A comment was deleted with its replies.
+    CommentDeleted {
+        /// Its id.
+        comment: u64,
     },
 }

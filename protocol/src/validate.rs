@@ -322,6 +322,11 @@ impl ClientMessage {
                 c.as_deref().map_or(Ok(()), colour)
             }
             Commit { message } => string("message", message),
+            AddComment { anchor, text, .. } => {
+                anchor.validate()?;
+                crate::comment::validate_text(text)
+            }
+            ReplyComment { text, .. } => crate::comment::validate_text(text),
             Presence { pointer, camera } => {
                 if let Some(p) = pointer {
                     numbers("pointer", p)?;

@@ -68,6 +68,9 @@ fn every_server_example_parses_and_round_trips() {
         "relation_deleted",
         "fairing_progress",
         "fairing_ended",
+        "comment_added",
+        "comment_changed",
+        "comment_deleted",
     ] {
         assert!(seen.contains(t), "README has no example of {t}");
     }

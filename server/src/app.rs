@@ -77,6 +77,7 @@ impl From<crate::design::CommandError> for ApiError {
             | ErrorKind::Unsupported => StatusCode::BAD_REQUEST,
             ErrorKind::NothingToUndo | ErrorKind::Conflict => StatusCode::CONFLICT,
             ErrorKind::Solver => StatusCode::UNPROCESSABLE_ENTITY,
+            ErrorKind::TooLarge => StatusCode::PAYLOAD_TOO_LARGE,
             ErrorKind::Unavailable | ErrorKind::Storage => StatusCode::SERVICE_UNAVAILABLE,
         };
         let w = crate::convert::WireError::from(e);

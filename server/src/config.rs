@@ -94,6 +94,8 @@ pub struct Config {
     pub tcp_nodelay: bool,
     /// Serve over TLS with these files (plain HTTP when `None`).
     pub tls: Option<crate::tls::TlsFiles>,
+    /// Most review comments and replies one design may hold.
+    pub max_comments: usize,
 }
 
 impl Config {
@@ -110,6 +112,7 @@ impl Config {
             allowed_origins: Vec::new(),
             tcp_nodelay: true,
             tls: None,
+            max_comments: vsculpt_protocol::limits::MAX_COMMENTS_PER_DESIGN,
         }
     }
 }

@@ -101,7 +101,8 @@ impl Server {
         );
         let admin_token = read_or_create_admin_token(&config)?;
         let metrics = Arc::new(Metrics::new());
-        let hub = Hub::new(store.clone(), metrics.clone(), config.persist_delay);
+        let hub = Hub::new(store.clone(), metrics.clone(), config.persist_delay)
+            .with_comment_limit(config.max_comments);
         let empty = {
             let s = store.clone();
             tokio::task::spawn_blocking(move || s.designs())

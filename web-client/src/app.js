@@ -25,6 +25,7 @@ import { DsmView } from './dsm-view.js';
 import { DsmPanel } from './dsm-panel.js';
 import { Follow } from './follow.js';
 import { Measure } from './measure.js';
+import { Comments } from './comments.js';
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -201,6 +202,7 @@ function redraw() {
   icons.update(drawnIcons(), geometryOf, state.selected);
   attachGizmo();
   updateCompare();
+  comments.update();
 }
 
 /** The selected part, or undefined. */
@@ -219,6 +221,28 @@ function keepSelection() {
 
 // The measure tool (distance, curvature at a point), for viewers too.
 const measure = new Measure({ view, button: $('measure'), output: $('measure-out') });
+
+// Review comments: pins on the model and the comments panel, for viewers and editors.
+const comments = new Comments({
+  view,
+  button: $('comment-tool'),
+  draft: $('comment-draft'),
+  text: $('comment-text'),
+  where: $('comment-where'),
+  list: $('comments'),
+  count: $('comment-count'),
+  send: (msg) => send(msg),
+  access: () => state.access,
+  geometryOf: (id) => geometryOf(id),
+  partName: (id) => design.parts.get(id)?.name ?? `part ${id}`,
+  // The comment and measure tools take clicks on the model in turn.
+  onActive: (on) => {
+    if (on && measure.active) measure.setActive(false);
+  },
+});
+$('measure').addEventListener('click', () => {
+  if (measure.active && comments.active) comments.setActive(false);
+});
 
 // Following another person's view; this page's own camera goes out in its presence.
 const follow = new Follow({
@@ -284,6 +308,7 @@ function renderPanels() {
       ${editor ? `<button data-restore="${v.version}"${state.online ? '' : ' disabled'}>restore</button>` : ''}</li>`)
     .join('');
   partsPanel.render({ design, selected: state.selectedPart, hidden: state.hidden, editor, online: !!state.online });
+  comments.render();
   dsmPanel.render(selectedPart(), editor && !!state.online);
   const part = selectedPart();
   $('target-part').textContent = part ? `on ${part.name} (${part.kind})${part.locked ? ' · locked' : ''}` : 'no part selected';
@@ -358,7 +383,13 @@ function onMessage(msg) {
       state.revision = msg.revision;
       keepSelection();
       setHistory(msg.can_undo, msg.can_redo);
+      comments.comments = new Map((msg.comments || []).map((c) => [c.id, c]));
       redraw();
+      break;
+    case 'comment_added':
+    case 'comment_changed':
+    case 'comment_deleted':
+      comments.apply(msg);
       break;
     case 'part_created':
     case 'part_deleted':
@@ -518,6 +549,7 @@ function partShown(id, seq, tess, g) {
   if ([...design.relations.values()].some((r) => relationParts(r).includes(id))) partsView.drawSeams(design);
   if (state.compare && state.compare.part === id) updateCompare();
   if (part) icons.move([...part.icons].map((i) => design.icons.get(i)).filter(Boolean).map((i) => ({ id: i.id, xyz: i.xyz })));
+  if ([...comments.comments.values()].some((c) => c.part === id)) comments.update();
 }
 
 // `?worker=0` keeps the same fill on the main thread (compared in bench/browser-fps.mjs).
@@ -627,6 +659,17 @@ view.renderer.domElement.addEventListener('pointerup', (e) => {
   const rect = view.renderer.domElement.getBoundingClientRect();
   pointer.set(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1);
   raycaster.setFromCamera(pointer, view.camera);
+  if (comments.active) {
+    // Commenting pins a point of a part: (u, v) on a surface, the hit point elsewhere.
+    const hit = raycaster.intersectObjects(partsView.pickables(), false)[0];
+    const at = hit && partsView.hitParams(hit);
+    if (at && at.kind === 'surface') comments.place({ part: at.part, u: at.u, v: at.v });
+    else if (at) {
+      const p = view.model.worldToLocal(hit.point.clone());
+      comments.place({ part: at.part, xyz: [p.x, p.y, p.z] });
+    }
+    return;
+  }
   if (measure.active) {
     // Measuring reads the surface; it selects and creates nothing.
     const hit = raycaster.intersectObjects(partsView.pickables(), false)[0];
@@ -1025,7 +1068,7 @@ const SHORTCUTS = [
   ['Ctrl+Z', 'undo', true],
   ['Ctrl+Shift+Z, Ctrl+Y', 'redo', true],
   ['Delete', 'delete the selected icon', true],
-  ['Esc', 'end measuring; else cancel the curve or region being picked, else deselect', false],
+  ['Esc', 'end commenting or measuring; else cancel the curve or region being picked, else deselect', false],
   ['F', 'frame the selected icon (or the whole design)', false],
   ['[ and ]', 'select the previous or next part', false],
   ['H', 'hide or show the selected part', false],
@@ -1072,6 +1115,7 @@ document.addEventListener('keydown', (e) => {
   if (action === 'undo') send({ type: 'undo' });
   else if (action === 'redo') send({ type: 'redo' });
   else if (action === 'delete' && state.selected != null) send({ type: 'delete_icon', icon: state.selected });
+  else if (action === 'cancel' && comments.active) comments.setActive(false);
   else if (action === 'cancel' && measure.active) measure.setActive(false);
   else if (action === 'cancel') cancel();
   else if (action === 'frame') frameSelection();
@@ -1165,4 +1209,4 @@ view.renderer.setAnimationLoop(() => {
   }
 });
 
-window.vsculpt = { state, design, follow, measure, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+window.vsculpt = { state, design, follow, measure, comments, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };

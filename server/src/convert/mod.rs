@@ -4,10 +4,12 @@
 //! Neither the design actor nor the kernel sees a protocol type. Parts and
 //! relations are in [`parts`].
 
+pub mod comments;
 pub mod network;
 pub mod parts;
 
 use crate::design::actor::{Feedback, Presence, SnapshotView};
+use crate::design::comments::CommentOp;
 use crate::design::doc::{
     AnchorDoc, DerivativeDoc, EdgeSideDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc,
     UvCurveDoc,
@@ -97,6 +99,7 @@ impl From<CommandError> for WireError {
             ErrorKind::Solver => ErrorCode::Solver,
             ErrorKind::Unavailable => ErrorCode::Unavailable,
             ErrorKind::Storage => ErrorCode::Storage,
+            ErrorKind::TooLarge => ErrorCode::TooLarge,
         };
         Self::new(code, e.message)
     }
@@ -387,7 +390,7 @@ pub fn icon_to_wire(i: &IconDoc, holder: Option<u64>) -> wire::Icon {
     }
 }
 
-fn access(role: Role) -> wire::Access {
+pub(crate) fn access(role: Role) -> wire::Access {
     match role {
         Role::Editor => wire::Access::Editor,
         Role::Viewer => wire::Access::Viewer,
@@ -517,6 +520,23 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
         }),
         M::Relate { relation } => edit(Edit::Relate(parts::relation_from_wire(&relation))),
         M::Unrelate { relation } => edit(Edit::Unrelate { relation }),
+        M::AddComment { part, anchor, text } => {
+            Inbound::Command(Command::Comment(CommentOp::Add {
+                part,
+                uv: anchor.uv().map(|(u, v)| [u, v]),
+                xyz: anchor.xyz,
+                text,
+            }))
+        }
+        M::ReplyComment { comment, text } => {
+            Inbound::Command(Command::Comment(CommentOp::Reply { comment, text }))
+        }
+        M::ResolveComment { comment, resolved } => {
+            Inbound::Command(Command::Comment(CommentOp::Resolve { comment, resolved }))
+        }
+        M::DeleteComment { comment } => {
+            Inbound::Command(Command::Comment(CommentOp::Delete { comment }))
+        }
         M::DragStart { part, icon } => Inbound::Command(Command::Grab { part, icon }),
         M::Drag { part, icon, xyz } => Inbound::Command(Command::Drag {
             part,
@@ -587,6 +607,7 @@ pub fn ack(req: Option<u64>, ack: &Ack) -> Option<Utf8Bytes> {
             version: ack.version,
             part: ack.created_part,
             relation: ack.created_relation,
+            comment: ack.created_comment,
             warning: ack.warning.clone(),
         })
     })
@@ -672,6 +693,7 @@ pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
         presence: presence_to_wire(&v.presence),
         can_undo: v.can_undo,
         can_redo: v.can_redo,
+        comments: v.comments.iter().map(comments::thread_to_wire).collect(),
     })
 }
 
@@ -725,6 +747,7 @@ pub fn event(e: &DesignEvent, points: bool) -> Option<Utf8Bytes> {
             relation: parts::relation_to_wire(r),
         }),
         DesignEvent::RelationDeleted(id) => text(&ServerMessage::RelationDeleted { relation: *id }),
+        DesignEvent::Comment(c) => text(&comments::change_to_wire(c)),
         DesignEvent::Committed(v) => text(&ServerMessage::Committed {
             version: version_to_wire(v),
         }),

@@ -78,6 +78,8 @@ pub struct SnapshotView {
     pub can_undo: bool,
     /// Redo available.
     pub can_redo: bool,
+    /// The review comments, oldest first.
+    pub comments: Arc<Vec<super::comments::CommentThread>>,
 }
 
 /// Where a dragged icon actually went (the bridge's spring model needs it).
@@ -164,6 +166,9 @@ pub enum DesignEvent {
     RelationCreated(RelationDoc),
     /// A relation was removed.
     RelationDeleted(u64),
+    /// A review comment was added, changed or deleted.
+    Comment(super::comments::CommentChange),
+    /// A version was committed.
     Committed(VersionInfo),
     /// A client joined, or what it holds or points at changed.
     PresenceChanged(Presence),
@@ -471,6 +476,11 @@ struct Actor {
     geometry: watch::Sender<Arc<GeometrySet>>,
     doc: Arc<DesignDoc>,
     versions: Arc<Vec<VersionInfo>>,
+    /// The version last committed, restored or reverted to (0: none), the
+    /// one a comment written now is about.
+    base_version: u64,
+    /// The review comments.
+    comments: super::comments::CommentBook,
     rev: u64,
     persist_at: Option<Instant>,
     /// The back-off of the working-state write while it fails.
@@ -498,6 +508,7 @@ pub fn spawn(
     id: DesignId,
     doc: DesignDoc,
     versions: Vec<VersionInfo>,
+    comments: super::comments::CommentBook,
     store: Arc<Store>,
     metrics: Arc<Metrics>,
     persist_delay: Duration,
@@ -526,7 +537,9 @@ pub fn spawn(
         events,
         geometry,
         doc,
+        base_version: versions.last().map_or(0, |v| v.number),
         versions: Arc::new(versions),
+        comments,
         rev: 0,
         persist_at: None,
         persist_retry: None,
@@ -815,6 +828,7 @@ impl Actor {
             presence: Arc::new(self.clients.values().cloned().collect()),
             can_undo: self.undo.can_undo(),
             can_redo: self.undo.can_redo(),
+            comments: self.comments.view(),
         })
     }
 
@@ -1108,6 +1122,7 @@ impl Actor {
                     );
                 }
                 let number = info.number;
+                self.base_version = number;
                 let mut versions = (*self.versions).clone();
                 versions.push(info.clone());
                 self.versions = Arc::new(versions);
@@ -1183,6 +1198,44 @@ impl Actor {
         }
     }
 
+    /// A comment request: checked against the design, written to the store
+    /// (durable before anyone hears of it; the actor waits for that one
+    /// write, as for a restore), then announced to every client.
+    async fn comment(
+        &mut self,
+        client: u64,
+        op: super::comments::CommentOp,
+    ) -> Result<Ack, CommandError> {
+        let (role, author) = match self.clients.get(&client) {
+            Some(p) => (p.client.role, p.client.name.clone()),
+            None if client == 0 => (Role::Editor, "rest".to_string()),
+            None => return Err(CommandError::new(ErrorKind::Forbidden, "not joined")),
+        };
+        let write = self
+            .comments
+            .check(op, role, &author, self.base_version, &self.model)?;
+        let store = self.store.clone();
+        let id = self.id;
+        let written = tokio::task::spawn_blocking(move || write.run(&store, id))
+            .await
+            .map_err(|e| CommandError::new(ErrorKind::Storage, e.to_string()))?
+            .map_err(|e| match e {
+                crate::store::StoreError::UnknownComment(_, c) => CommandError::new(
+                    ErrorKind::InvalidValue,
+                    format!("no comment {c} in this design"),
+                ),
+                e => CommandError::new(ErrorKind::Storage, e.to_string()),
+            })?;
+        let (created, change) = self.comments.apply(written);
+        if let Some(change) = change {
+            let _ = self.events.send(DesignEvent::Comment(change));
+        }
+        Ok(Ack {
+            created_comment: created,
+            ..Ack::default()
+        })
+    }
+
     fn role(&self, client: u64) -> Option<Role> {
         self.clients.get(&client).map(|p| p.client.role)
     }
@@ -1206,6 +1259,17 @@ impl Actor {
             self.role(client)
                 .ok_or_else(|| CommandError::new(ErrorKind::Forbidden, "not joined"))?
         };
+        // Comments have rights of their own (`comments`): viewers comment
+        // too, devices do not.
+        if let Command::Comment(op) = command {
+            return match (role, op) {
+                (Role::Device, _) => Err(CommandError::new(
+                    ErrorKind::Forbidden,
+                    "a device may not comment",
+                )),
+                _ => Ok(()),
+            };
+        }
         let allowed = match role {
             Role::Editor => true,
             Role::Viewer => false,
@@ -1299,6 +1363,7 @@ impl Actor {
                     created_icon: created.icon,
                     created_part: created.part,
                     created_relation: created.relation,
+                    created_comment: None,
                     version: None,
                     warning: self.model.edit_warning().map(str::to_owned),
                 })
@@ -1368,6 +1433,7 @@ impl Actor {
                 Ok(Ack::default())
             }
             Command::CancelFairing { part, face } => self.jobs.cancel(part, face, client),
+            Command::Comment(op) => self.comment(client, op).await,
             Command::BodyMorph { part, t } => {
                 heavy(|| self.model.set_morph_time(part, t))?;
                 geometry_dirty.parts(vec![part]);
@@ -1439,6 +1505,7 @@ impl Actor {
                 let model = heavy(|| DesignModel::load(&doc))?;
                 self.undo.push(self.model.to_doc());
                 self.model = model;
+                self.base_version = info.number;
                 self.clear_drags();
                 self.changed();
                 self.broadcast_snapshot();

@@ -57,6 +57,9 @@ pub enum Command {
         /// The face.
         face: usize,
     },
+    /// Add, answer, resolve or delete a review comment (not an edit: not
+    /// undone; written to the store before it is answered).
+    Comment(super::comments::CommentOp),
     /// Show a body part at morph time `t` (not stored, not undone).
     BodyMorph {
         /// The body part.
@@ -92,6 +95,8 @@ pub struct Ack {
     pub created_part: Option<u64>,
     /// The id of a relation the command created.
     pub created_relation: Option<u64>,
+    /// The id of a comment or reply the command created.
+    pub created_comment: Option<u64>,
     /// Set when an edit left the constraints contradicting each other: the
     /// shape is their least-squares compromise (the text says by how much).
     pub warning: Option<String>,

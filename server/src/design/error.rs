@@ -40,6 +40,8 @@ pub enum ErrorKind {
     Unavailable,
     /// Storage failed.
     Storage,
+    /// A size or count over its limit (the design's comments).
+    TooLarge,
 }
 
 /// A refused command.

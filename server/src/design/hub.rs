@@ -36,6 +36,8 @@ pub struct Hub {
     store: Arc<Store>,
     metrics: Arc<Metrics>,
     persist_delay: Duration,
+    /// Most comments and replies per design.
+    comment_limit: usize,
     running: Arc<Mutex<HashMap<DesignId, DesignHandle>>>,
     down: Arc<std::sync::Mutex<BTreeSet<DesignId>>>,
     stopping: Arc<AtomicBool>,
@@ -72,12 +74,20 @@ impl Hub {
             store,
             metrics,
             persist_delay,
+            comment_limit: vsculpt_protocol::limits::MAX_COMMENTS_PER_DESIGN,
             running: Arc::new(Mutex::new(HashMap::new())),
             down: Arc::new(std::sync::Mutex::new(BTreeSet::new())),
             stopping: Arc::new(AtomicBool::new(false)),
             #[cfg(feature = "fault-injection")]
             hold_restarts: Arc::new(tokio::sync::watch::channel(false).0),
         }
+    }
+
+    /// The same hub with designs holding at most `limit` comments and
+    /// replies each.
+    pub fn with_comment_limit(mut self, limit: usize) -> Self {
+        self.comment_limit = limit;
+        self
     }
 
     /// The store.
@@ -142,11 +152,12 @@ impl Hub {
             Ok((
                 store.working(id).map_err(storage)?,
                 store.versions(id).map_err(storage)?,
+                store.comments(id).map_err(storage)?,
             ))
         })
         .await
         .map_err(storage)??;
-        let (working, versions) = loaded;
+        let (working, versions, comments) = loaded;
         let bytes = working.ok_or_else(|| {
             CommandError::new(
                 ErrorKind::Storage,
@@ -158,6 +169,7 @@ impl Hub {
             id,
             doc,
             versions,
+            super::comments::CommentBook::new(comments, self.comment_limit),
             self.store.clone(),
             self.metrics.clone(),
             self.persist_delay,

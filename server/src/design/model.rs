@@ -414,6 +414,46 @@ impl DesignModel {
             .or_else(|| self.engine.dsm().mesh(part))
     }
 
+    /// The point S(u, v) of surface part `part` as solved now (mid-drag
+    /// too): `unknown_part`, `unsupported` for a part that is not a
+    /// surface, `out_of_domain` for (u, v) outside its domain.
+    pub fn surface_point(&self, part: u64, u: f64, v: f64) -> Result<DVec3, CommandError> {
+        let p = self.doc.part(part).ok_or_else(|| unknown_part(part))?;
+        let PartBody::Surface(s) = &p.body else {
+            return Err(CommandError::new(
+                ErrorKind::Unsupported,
+                format!(
+                    "part {part} is a {} part: (u, v) is for surface parts; give xyz",
+                    p.body.kind()
+                ),
+            ));
+        };
+        let s = &s.surface;
+        if !s.contains(u, v) {
+            let ((u0, u1), (v0, v1)) = s.domain();
+            return Err(CommandError::new(
+                ErrorKind::OutOfDomain,
+                format!(
+                    "(u, v) = ({u}, {v}) is outside part {part}'s domain [{u0}, {u1}] × [{v0}, {v1}]"
+                ),
+            ));
+        }
+        let geometry = |e: vsculpt_kernel::bspline::GeometryError| {
+            CommandError::new(ErrorKind::InvalidValue, e.to_string())
+        };
+        let points = match self.engine.points(part) {
+            Some(p) => p.to_vec(),
+            None => s.dpoints(),
+        };
+        let ku = vsculpt_kernel::bspline::KnotVector::new(s.u_degree, s.u_knots.clone())
+            .map_err(geometry)?;
+        let kv = vsculpt_kernel::bspline::KnotVector::new(s.v_degree, s.v_knots.clone())
+            .map_err(geometry)?;
+        let surface =
+            vsculpt_kernel::bspline::BSplineSurface::new(ku, kv, points).map_err(geometry)?;
+        Ok(surface.point(u, v))
+    }
+
     /// The volume body part `part` shows (its morph at the current time).
     pub fn body_volume(&self, part: u64) -> Option<&vsculpt_kernel::body::BSplineVolume> {
         self.bodies.get(part).map(|e| e.shown())

@@ -14,10 +14,12 @@
 
 pub mod backup;
 pub mod checkpoint;
+pub mod comments;
 pub mod lock;
 pub mod token_index;
 pub mod tokens;
 
+pub use comments::{CommentRecord, NewComment};
 use rusqlite::{Connection, OptionalExtension, params};
 use serde::Serialize;
 use std::path::Path;
@@ -44,6 +46,21 @@ pub enum StoreError {
     /// No (live) design with this id.
     #[error("design {0} does not exist")]
     UnknownDesign(DesignId),
+    /// No comment with this id in the design (or it is a reply, which
+    /// cannot be replied to).
+    #[error("design {0} has no comment {1}")]
+    UnknownComment(DesignId, u64),
+    /// The database was written by a newer server (its schema version is
+    /// above every migration this one knows): opening it could lose data.
+    #[error(
+        "the database has schema version {found}; this server knows up to {known}: use a newer server"
+    )]
+    NewerSchema {
+        /// The database's `user_version`.
+        found: i64,
+        /// The newest version this server migrates to.
+        known: i64,
+    },
 }
 
 /// One design's row.
@@ -94,6 +111,9 @@ pub fn now_ms() -> i64 {
         .unwrap_or(0)
 }
 
+/// Schema version 1: designs, versions, working states. Databases written
+/// before the schema was versioned (`user_version` 0) have exactly these
+/// tables, hence `IF NOT EXISTS`.
 const SCHEMA: &str = "
 CREATE TABLE IF NOT EXISTS designs (
     id           INTEGER PRIMARY KEY AUTOINCREMENT,
@@ -120,8 +140,32 @@ CREATE TABLE IF NOT EXISTS working (
 );
 ";
 
+/// The schema's migrations, oldest first: entry `k` brings a database from
+/// `PRAGMA user_version` k to k + 1, in one transaction with the version
+/// bump, so a database is always at exactly one version. Append only.
+const MIGRATIONS: &[&str] = &[SCHEMA, comments::SCHEMA];
+
+/// Brings the database to the newest schema version; refuses a database
+/// from a newer server.
+fn migrate(conn: &mut Connection) -> Result<(), StoreError> {
+    let found: i64 = conn.query_row("PRAGMA user_version", [], |r| r.get(0))?;
+    let known = MIGRATIONS.len() as i64;
+    if found > known {
+        return Err(StoreError::NewerSchema { found, known });
+    }
+    for (k, sql) in MIGRATIONS.iter().enumerate().skip(found.max(0) as usize) {
+        let tx = conn.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
+        tx.execute_batch(sql)?;
+        tx.pragma_update(None, "user_version", k as i64 + 1)?;
+        tx.commit()?;
+        tracing::info!(version = k + 1, "store schema migrated");
+    }
+    Ok(())
+}
+
 impl Store {
-    /// Opens (creating when missing) `dir/vsculpt.db`.
+    /// Opens (creating when missing) `dir/vsculpt.db`, migrating its schema
+    /// to the newest version.
     pub fn open(dir: &Path) -> Result<Self, StoreError> {
         std::fs::create_dir_all(dir)?;
         let db = dir.join(backup::DB_FILE);
@@ -130,7 +174,7 @@ impl Store {
         conn.pragma_update(None, "synchronous", "FULL")?;
         conn.pragma_update(None, "foreign_keys", "ON")?;
         conn.busy_timeout(std::time::Duration::from_secs(5))?;
-        conn.execute_batch(SCHEMA)?;
+        migrate(&mut conn)?;
         let checkpointer = checkpoint::Checkpointer::start(&db, &mut conn)?;
         Ok(Self {
             conn: Mutex::new(conn),

@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 pub enum Role {
     /// May change everything: icons, material, commits, versions.
     Editor,
-    /// Sees everything live, changes nothing.
+    /// Sees everything live, changes no geometry; writes review comments
+    /// (`design::comments`).
     Viewer,
     /// A device bridge: drives icons (drag, samples), may not commit.
     Device,

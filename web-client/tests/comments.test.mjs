@@ -1,0 +1,217 @@
+// Review comments, the customer's feedback loop, in real headless Chromium
+// against the real server binary: on the reviewer's (viewer's) page the
+// comment tool is switched on and a real mouse click on the demo's shell
+// places a pin; the comment is typed with the keyboard and posted. The
+// designer's (editor's) page shows it live, with its pin at the surface
+// point of the click — checked against this file's own Cox–de Boor
+// evaluation of the shell's control net, not bspline.js — drawn over the
+// model; the designer resolves it with a real click and the reviewer's page
+// shows it resolved; clicking its entry frames its pin. After the server is
+// restarted on the same data directory, both pages reconnect and still show
+// it (resolved, at the same point), and so does a page opened afresh.
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { serverAndBrowser, openClient, startServer, stopServer } from './harness.mjs';
+
+let server;
+let browser;
+const dataDir = serverAndBrowser('vsculpt-comments-', (s, b) => {
+  server = s;
+  browser = b;
+});
+
+/** N_{i,p}(t) by the Cox–de Boor recursion (0/0 = 0; the last span closed at its right end). */
+function basis(knots, i, p, t) {
+  if (p === 0) {
+    const last = knots[knots.length - 1];
+    if (t === last) return knots[i] < t && knots[i + 1] === last ? 1 : 0;
+    return knots[i] <= t && t < knots[i + 1] ? 1 : 0;
+  }
+  const a = knots[i + p] - knots[i];
+  const b = knots[i + p + 1] - knots[i + 1];
+  return (a > 0 ? ((t - knots[i]) / a) * basis(knots, i, p - 1, t) : 0) + (b > 0 ? ((knots[i + p + 1] - t) / b) * basis(knots, i + 1, p - 1, t) : 0);
+}
+
+/** The surface point at (u, v). */
+function point(s, u, v) {
+  const out = [0, 0, 0];
+  for (let i = 0; i < s.nu; i++) {
+    const bu = basis(s.knotsU, i, s.degreeU, u);
+    if (bu === 0) continue;
+    for (let j = 0; j < s.nv; j++) {
+      const w = bu * basis(s.knotsV, j, s.degreeV, v);
+      for (let x = 0; x < 3; x++) out[x] += w * s.points[3 * (i * s.nv + j) + x];
+    }
+  }
+  return out;
+}
+
+/** Screen position (page pixels) of the tessellation vertex of part `part` nearest (u, v), as the page projects it. */
+function screenAt(page, part, u, v) {
+  return page.evaluate(
+    ([id, uu, vv]) => {
+      const { view, partsView } = window.vsculpt;
+      const t = partsView.drawings.get(id).tess;
+      let best = 0;
+      for (let i = 0; i < t.su * t.sv; i++) {
+        const d = (k) => Math.hypot(t.uvs[2 * k] - uu, t.uvs[2 * k + 1] - vv);
+        if (d(i) < d(best)) best = i;
+      }
+      const p = view.camera.position.clone().set(t.positions[3 * best], t.positions[3 * best + 1], t.positions[3 * best + 2]);
+      view.model.localToWorld(p);
+      p.project(view.camera);
+      const r = view.renderer.domElement.getBoundingClientRect();
+      return { x: r.left + ((p.x + 1) / 2) * r.width, y: r.top + ((1 - p.y) / 2) * r.height };
+    },
+    [part, u, v],
+  );
+}
+
+/** What `page` shows of comment `id`: the comment, its pin (point, head, on screen, drawn over the model), its list entry, and the part's surface. */
+function shown(page, id) {
+  return page.evaluate((cid) => {
+    const { comments, design, view } = window.vsculpt;
+    const c = comments.comments.get(cid);
+    const pin = comments.pins.get(cid);
+    if (!c || !pin) return null;
+    const g = design.parts.get(c.part).geometry;
+    const head = pin.children[1].getWorldPosition(pin.position.clone());
+    const foot = pin.getWorldPosition(pin.position.clone());
+    const q = head.clone().project(view.camera);
+    const li = document.querySelector(`#comments li[data-comment="${cid}"]`);
+    let overModel = true;
+    pin.traverse((m) => {
+      if (m.material && (m.material.depthTest || m.renderOrder < 10)) overModel = false;
+    });
+    return {
+      comment: c,
+      point: pin.userData.point,
+      foot: foot.toArray(),
+      head: head.toArray(),
+      onScreen: Math.abs(q.x) < 1 && Math.abs(q.y) < 1 && q.z < 1,
+      overModel,
+      visible: pin.visible && comments.group.visible,
+      entry: li ? { text: li.textContent.replace(/\s+/g, ' '), cls: li.className } : null,
+      surface: { ...g, knotsU: [...g.knotsU], knotsV: [...g.knotsV], points: [...g.points] },
+    };
+  }, id);
+}
+
+/** The largest extent of a flat control net. */
+function sizeOf(s) {
+  return Math.hypot(...[0, 1, 2].map((x) => Math.max(...s.points.filter((_, k) => k % 3 === x)) - Math.min(...s.points.filter((_, k) => k % 3 === x))));
+}
+
+/** Checks that the pin of `got` stands at S(u, v) of its part, by this file's own evaluation. */
+function assertPinOnSurface(got, label) {
+  const s = got.surface;
+  const size = sizeOf(s);
+  const { u, v } = got.comment.anchor;
+  const want = point(s, u, v);
+  const off = (a) => Math.max(...a.map((x, k) => Math.abs(x - want[k])));
+  assert.ok(off(got.point) <= 1e-9 * size, `${label}: pin point ${got.point} is not S(${u}, ${v}) = ${want}`);
+  // The page's frame points are f32; the server's xyz was evaluated on its f64 net.
+  assert.ok(off(got.comment.anchor.xyz) <= 1e-5 * size, `${label}: stored xyz ${got.comment.anchor.xyz} vs ${want}`);
+  assert.ok(off(got.foot) <= 1e-9 * size, `${label}: the pin's foot ${got.foot} is not at S(u, v)`);
+  const stem = Math.hypot(...got.head.map((x, k) => x - got.foot[k]));
+  assert.ok(stem > 0.01 * size, `${label}: the pin's head stands off the surface (stem ${stem})`);
+  assert.ok(got.onScreen && got.visible && got.overModel, `${label}: the pin is drawn, on screen, over the model`);
+}
+
+test('a reviewer pins a comment with the mouse; the designer sees it live at the surface point and resolves it; it survives a restart', async () => {
+  const editor = await openClient(browser, `${server.editor}&name=Ana`);
+  const viewer = await openClient(browser, `${server.viewer}&name=Ben`);
+  const shell = await viewer.evaluate(() => [...window.vsculpt.design.parts.values()].find((p) => p.kind === 'surface').id);
+  const version = await viewer.evaluate(() => Math.max(0, ...window.vsculpt.state.versions.map((v) => v.version)));
+
+  // The reviewer switches the comment tool on and clicks the shell.
+  await viewer.click('#comment-tool');
+  assert.equal(await viewer.getAttribute('#comment-tool', 'aria-pressed'), 'true');
+  assert.ok(await viewer.isHidden('#comment-draft'));
+  const at = await screenAt(viewer, shell, 0.4, 0.6);
+  await viewer.mouse.click(at.x, at.y);
+  await viewer.waitForSelector('#comment-draft:not([hidden])');
+  const draft = await viewer.evaluate(() => window.vsculpt.comments.pending);
+  assert.equal(draft.part, shell);
+  assert.ok(Math.abs(draft.u - 0.4) < 0.05 && Math.abs(draft.v - 0.6) < 0.05, `the click landed at (${draft.u}, ${draft.v})`);
+  const text = 'The edge feels too sharp here.\nCould it be softer?';
+  await viewer.click('#comment-text');
+  await viewer.keyboard.type('The edge feels too sharp here.');
+  await viewer.keyboard.press('Shift+Enter');
+  await viewer.keyboard.type('Could it be softer?');
+  await viewer.click('#comment-post');
+
+  // The designer's page has it live, pinned where the reviewer clicked.
+  await editor.waitForFunction(() => window.vsculpt.comments.comments.size === 1, null, { timeout: 20000 });
+  const id = await editor.evaluate(() => [...window.vsculpt.comments.comments.keys()][0]);
+  const got = await shown(editor, id);
+  assert.equal(got.comment.text, text);
+  assert.equal(got.comment.part, shell);
+  assert.equal(got.comment.author, 'Ben');
+  assert.equal(got.comment.access, 'viewer');
+  assert.equal(got.comment.version, version);
+  assert.equal(got.comment.resolved, false);
+  // The pin is at the (u, v) of the click, not somewhere near it.
+  assert.equal(got.comment.anchor.u, draft.u);
+  assert.equal(got.comment.anchor.v, draft.v);
+  assertPinOnSurface(got, 'editor');
+  assert.match(got.entry.text, /Ben reviewer · .* · on v\d+ open The edge feels too sharp here\. Could it be softer\?/);
+  assert.match(got.entry.cls, /\bopen\b/);
+  // The reviewer's own page shows it too; its draft is gone.
+  await viewer.waitForFunction((cid) => window.vsculpt.comments.pins.has(cid), id);
+  assert.ok(await viewer.isHidden('#comment-draft'));
+  assert.ok(!(await viewer.evaluate(() => window.vsculpt.comments.pins.has(-1))));
+
+  // The designer resolves it with a click; the reviewer sees that.
+  await editor.click(`#comments li[data-comment="${id}"] button[data-resolve]`);
+  await viewer.waitForFunction((cid) => window.vsculpt.comments.comments.get(cid)?.resolved === true, id, { timeout: 20000 });
+  const resolved = await shown(viewer, id);
+  assert.equal(resolved.comment.resolved_by, 'Ana');
+  assert.match(resolved.entry.cls, /\bresolved\b/);
+  assert.match(resolved.entry.text, /resolved by Ana/);
+  assertPinOnSurface(resolved, 'viewer');
+
+  // Clicking the entry frames its pin on the reviewer's page.
+  await viewer.keyboard.press('Escape');
+  assert.equal(await viewer.getAttribute('#comment-tool', 'aria-pressed'), 'false');
+  await viewer.click(`#comments li[data-comment="${id}"] p`);
+  const target = await viewer.evaluate(() => window.vsculpt.view.controls.target.toArray());
+  const foot = (await shown(viewer, id)).foot;
+  assert.ok(Math.max(...target.map((x, k) => Math.abs(x - foot[k]))) <= 1e-9 * sizeOf(resolved.surface), `framed at ${target}, pin at ${foot}`);
+
+  // Restart the server on the same data directory and address: the pages
+  // reconnect and still show the comment, resolved, at the same point.
+  const address = new URL(server.base).host;
+  // The pages forget the comments: only the restarted server can bring them back.
+  for (const page of [editor, viewer]) await page.evaluate(() => window.vsculpt.comments.setAll([]));
+  await stopServer(server);
+  await editor.waitForFunction(() => !window.vsculpt.state.online, null, { timeout: 20000 });
+  const again = await startServer({ dataDir, listen: address });
+  try {
+    for (const page of [editor, viewer]) {
+      await page.waitForFunction(
+        (cid) => window.vsculpt.state.online && window.vsculpt.comments.comments.get(cid)?.resolved === true && window.vsculpt.comments.pins.has(cid),
+        id,
+        { timeout: 30000 },
+      );
+    }
+    for (const page of [editor, viewer]) assert.deepEqual(page.errors, []);
+    // Two pages drawing continuously load a small machine: the new page joins alone.
+    await editor.close();
+    await viewer.close();
+    const fresh = await openClient(browser, `${again.editor}&name=Ana`, async (page) => page.setDefaultNavigationTimeout(120000));
+    await fresh.waitForFunction((cid) => window.vsculpt.comments.pins.has(cid), id);
+    const back = await shown(fresh, id);
+    assert.equal(back.comment.text, text);
+    assert.equal(back.comment.resolved, true);
+    assert.deepEqual(back.comment.anchor, got.comment.anchor);
+    assertPinOnSurface(back, 'after the restart');
+    assert.deepEqual(fresh.errors, []);
+    await fresh.close();
+  } finally {
+    if (!editor.isClosed()) await editor.close();
+    if (!viewer.isClosed()) await viewer.close();
+    await stopServer(again);
+  }
+});
