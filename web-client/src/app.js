@@ -340,6 +340,8 @@ function onMessage(msg) {
     case 'welcome':
       state.access = msg.access;
       state.clientId = msg.client_id;
+      // The reviewer's page is a studio: the product stands on a ground with its contact shadow.
+      view.groundShadow = msg.access !== 'editor';
       // Jobs are announced again by their next progress.
       networkView.jobs.clear();
       renderFairing();
