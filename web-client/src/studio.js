@@ -33,42 +33,83 @@ const MARGIN = 0.25;
 /** The faint shade under the whole shape reaches this many times the contact darkness's height. */
 const SOFT_REACH = 6;
 
-/** GLSL: the studio's radiance in world direction `d` for a material of roughness `r`. */
-const studioGlsl = /* glsl */ `
+/** The colours of the studio's floor, walls and ceiling (linear). */
+const FLOOR = [0.1, 0.1, 0.11];
+const WALL = [0.42, 0.43, 0.46];
+const CEILING = [0.75, 0.76, 0.78];
+/** The softboxes: angular radius (rad) and brightness. */
+const KEY = { size: 0.45, gain: 1.6 };
+const RIM = { size: 0.3, gain: 0.9 };
+
+/**
+ * A softbox seen by a material of roughness r: its edge (the cosines
+ * between which it fades in, widened by roughness) and its brightness
+ * (spread over the wider disc, so its energy stays about the same).
+ */
+export function softbox({ size, gain }, r) {
+  const w = size + 0.55 * r * r + 0.02;
+  return [Math.cos(size + w), Math.cos(Math.max(size - w, 0)), (gain * 2 * size * size) / (w * w + size * size)];
+}
+
+const vec3 = (c) => `vec3( ${c.map((x) => x.toFixed(3)).join(', ')} )`;
+
+/**
+ * GLSL (vertex shader): the studio's radiance in direction d (view space,
+ * like the studio's axes, which View.render sets each frame). key and rim
+ * are softbox() for the roughness wanted, fl the floor-to-wall edge. The
+ * studio is evaluated per vertex, for both faces (the parts are two-sided):
+ * its light varies slowly over the surface (broad softboxes, blurred by
+ * roughness), so the fragments only pick up the interpolated values — a
+ * software renderer pays for it per vertex, not per pixel.
+ */
+const studioVertexGlsl = /* glsl */ `
 uniform vec3 studioUp;
 uniform vec3 studioKey;
 uniform vec3 studioRim;
 uniform float studioIntensity;
-float studioBox( vec3 d, vec3 axis, float size, float r ) {
-  // A round softbox of angular radius size, its edge widened by roughness, its brightness kept in energy.
-  float w = size + 0.55 * r * r + 0.02;
-  float c = dot( d, axis );
-  float lit = smoothstep( cos( size + w ), cos( max( size - w, 0.0 ) ), c );
-  return lit * ( size * size ) / ( w * w + size * size ) * 2.0;
-}
-vec3 studioRadiance( vec3 d, float r ) {
+uniform vec3 studioKeyS;
+uniform vec3 studioRimS;
+uniform vec2 studioFloorS;
+uniform vec3 studioKeyD;
+uniform vec3 studioRimD;
+uniform vec2 studioFloorD;
+uniform float studioR2;
+varying vec3 vStudioFront;
+varying vec3 vStudioBack;
+varying vec3 vStudioFrontD;
+varying vec3 vStudioBackD;
+vec3 studioRadiance( vec3 d, vec3 key, vec3 rim, vec2 fl ) {
   float h = dot( d, studioUp );
-  float floorToWall = smoothstep( -0.35 - r * 0.3, 0.05 + r * 0.3, h );
-  vec3 base = mix( vec3( 0.10, 0.10, 0.11 ), vec3( 0.42, 0.43, 0.46 ), floorToWall );
-  base = mix( base, vec3( 0.75, 0.76, 0.78 ), smoothstep( 0.4, 1.0, h ) );
-  float key = studioBox( d, studioKey, 0.45, r ) * 1.6;
-  float rim = studioBox( d, studioRim, 0.3, r ) * 0.9;
-  return ( base + vec3( key + rim ) ) * studioIntensity;
+  vec3 base = mix( ${vec3(FLOOR)}, ${vec3(WALL)}, smoothstep( fl.x, fl.y, h ) );
+  base = mix( base, ${vec3(CEILING)}, smoothstep( 0.4, 1.0, h ) );
+  float boxes = smoothstep( key.x, key.y, dot( d, studioKey ) ) * key.z + smoothstep( rim.x, rim.y, dot( d, studioRim ) ) * rim.z;
+  return ( base + vec3( boxes ) ) * studioIntensity;
+}
+vec3 studioReflected( vec3 n, vec3 v ) {
+  return studioRadiance( normalize( mix( reflect( - v, n ), n, studioR2 ) ), studioKeyS, studioRimS, studioFloorS );
+}
+`;
+
+/** GLSL at the end of the vertex shader: the studio's light for both faces. */
+const studioVertexMain = /* glsl */ `
+#include <project_vertex>
+{
+  vec3 sn = normalize( transformedNormal );
+  vec3 sv = normalize( - mvPosition.xyz );
+  vStudioFront = studioReflected( sn, sv );
+  vStudioBack = studioReflected( - sn, sv );
+  vStudioFrontD = ${STUDIO_DIFFUSE.toFixed(3)} * PI * studioRadiance( sn, studioKeyD, studioRimD, studioFloorD );
+  vStudioBackD = ${STUDIO_DIFFUSE.toFixed(3)} * PI * studioRadiance( - sn, studioKeyD, studioRimD, studioFloorD );
 }
 `;
 
 /** GLSL inserted after three's environment-map lighting: the studio's diffuse light and reflection. */
 const studioLighting = /* glsl */ `
 #include <lights_fragment_maps>
-{
-  vec3 studioN = inverseTransformDirection( geometryNormal, viewMatrix );
-  vec3 studioR = inverseTransformDirection( reflect( - geometryViewDir, geometryNormal ), viewMatrix );
-  studioR = normalize( mix( studioR, studioN, material.roughness * material.roughness ) );
-  #if defined( RE_IndirectSpecular )
-    iblIrradiance += PI * ${STUDIO_DIFFUSE.toFixed(3)} * studioRadiance( studioN, 1.0 );
-    radiance += studioRadiance( studioR, material.roughness );
-  #endif
-}
+#if defined( RE_IndirectSpecular )
+  iblIrradiance += gl_FrontFacing ? vStudioFrontD : vStudioBackD;
+  radiance += gl_FrontFacing ? vStudioFront : vStudioBack;
+#endif
 `;
 
 const depthVertex = /* glsl */ `
@@ -111,8 +152,10 @@ void main() {
 /** The studio's environment light, added to materials by `light(material)`. */
 export class StudioEnvironment {
   constructor() {
+    /** The studio's axes in the world (z up on a screen, y up in VR) and, each frame, in the camera's view space. */
+    this.world = { up: new THREE.Vector3(), key: new THREE.Vector3(), rim: new THREE.Vector3() };
     this.uniforms = {
-      studioUp: { value: new THREE.Vector3(0, 0, 1) },
+      studioUp: { value: new THREE.Vector3() },
       studioKey: { value: new THREE.Vector3() },
       studioRim: { value: new THREE.Vector3() },
       studioIntensity: { value: STUDIO_INTENSITY },
@@ -126,18 +169,37 @@ export class StudioEnvironment {
   setUp(up, front) {
     const u = up.clone().normalize();
     const f = front.clone().projectOnPlane(u).normalize();
-    this.uniforms.studioUp.value.copy(u);
+    this.world.up.copy(u);
     // The key softbox high in front of the product, the rim strip low behind it.
-    this.uniforms.studioKey.value.copy(u).multiplyScalar(0.8).addScaledVector(f, 0.5).normalize();
-    this.uniforms.studioRim.value.copy(u).multiplyScalar(0.35).addScaledVector(f, -0.9).normalize();
+    this.world.key.copy(u).multiplyScalar(0.8).addScaledVector(f, 0.5).normalize();
+    this.world.rim.copy(u).multiplyScalar(0.35).addScaledVector(f, -0.9).normalize();
   }
 
-  /** Makes `material` (a MeshStandardMaterial) take the studio's light; returns it. */
+  /** Before a frame seen by `camera`: the studio's axes in its view space. */
+  view(camera) {
+    const m = camera.matrixWorldInverse;
+    this.uniforms.studioUp.value.copy(this.world.up).transformDirection(m);
+    this.uniforms.studioKey.value.copy(this.world.key).transformDirection(m);
+    this.uniforms.studioRim.value.copy(this.world.rim).transformDirection(m);
+  }
+
+  /** Makes `material` (a MeshStandardMaterial; its roughness as when first drawn) take the studio's light; returns it. */
   light(material) {
     material.onBeforeCompile = (shader) => {
-      Object.assign(shader.uniforms, this.uniforms);
+      const r = material.roughness;
+      const v3 = (a) => ({ value: new THREE.Vector3(...a) });
+      Object.assign(shader.uniforms, this.uniforms, {
+        studioKeyS: v3(softbox(KEY, r)),
+        studioRimS: v3(softbox(RIM, r)),
+        studioFloorS: { value: new THREE.Vector2(-0.35 - 0.3 * r, 0.05 + 0.3 * r) },
+        studioKeyD: v3(softbox(KEY, 1)),
+        studioRimD: v3(softbox(RIM, 1)),
+        studioFloorD: { value: new THREE.Vector2(-0.65, 0.35) },
+        studioR2: { value: r * r },
+      });
+      shader.vertexShader = shader.vertexShader.replace('#include <common>', `#include <common>\n${studioVertexGlsl}`).replace('#include <project_vertex>', studioVertexMain);
       shader.fragmentShader = shader.fragmentShader
-        .replace('#include <lights_physical_pars_fragment>', `#include <lights_physical_pars_fragment>\n${studioGlsl}`)
+        .replace('#include <common>', '#include <common>\nvarying vec3 vStudioFront;\nvarying vec3 vStudioBack;\nvarying vec3 vStudioFrontD;\nvarying vec3 vStudioBackD;')
         .replace('#include <lights_fragment_maps>', studioLighting);
     };
     material.customProgramCacheKey = () => 'vsculpt-studio';

@@ -179,7 +179,19 @@ export class View {
 
   render() {
     this.shadow.enabled = this.groundShadow && this.mode === 'shaded';
-    this.shadow.update(this.bounds());
+    this.shadow.update(this.shadow.enabled ? this.bounds() : null);
+    const xr = this.renderer.xr;
+    if (xr.isPresenting) {
+      // The eyes look the same way: the headset's camera orients the studio for both.
+      const c = xr.getCamera();
+      c.updateMatrixWorld(true);
+      c.matrixWorldInverse.copy(c.matrixWorld).invert();
+      this.studio.view(c);
+    } else {
+      this.camera.updateMatrixWorld();
+      this.camera.matrixWorldInverse.copy(this.camera.matrixWorld).invert();
+      this.studio.view(this.camera);
+    }
     this.renderer.render(this.scene, this.camera);
   }
 }
