@@ -1,7 +1,8 @@
 // The studio the product is shown in: a procedural environment light and a
 // ground contact shadow, both cheap enough for a software renderer.
 //
-// Environment: a studio evaluated in the shader, not a cube map — a floor
+// Environment: a studio evaluated in the vertex shader (for both faces),
+// not a cube map — a floor
 // darker than the walls, walls brightening towards a white ceiling, a large
 // key softbox overhead in front, a strip light behind for a rim. The shaded
 // parts' materials add its diffuse light and its reflection (blurred by the
@@ -14,7 +15,7 @@
 //
 // Contact shadow: the model seen from below by an orthographic camera into a
 // small render target, each fragment black with an opacity that fades with
-// its height above the ground, blurred twice, laid on a plane under the
+// its height above the ground, blurred three times, laid on a plane under the
 // model. It is redrawn only when the shape or its bounds change (at most
 // every SHADOW_INTERVAL ms), drawn in the shaded view only.
 
