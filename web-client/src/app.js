@@ -365,6 +365,8 @@ function onMessage(msg) {
     case 'welcome':
       state.access = msg.access;
       state.clientId = msg.client_id;
+      // The reviewer's page is a studio: the product stands on a ground with its contact shadow.
+      view.groundShadow = msg.access !== 'editor';
       // Jobs are announced again by their next progress.
       networkView.jobs.clear();
       renderFairing();
@@ -954,8 +956,16 @@ $('fair-network').addEventListener('click', () => {
 });
 $('add-dsm').addEventListener('click', addDsm);
 $('finish-curve').addEventListener('click', finishCurve);
-$('sel-role').addEventListener('change', (e) => send({ type: 'set_role', icon: state.selected, role: ROLES[e.target.value] }));
-$('sel-state').addEventListener('change', (e) => send({ type: 'set_state', icon: state.selected, state: e.target.value }));
+/** Switches icon `id`'s role to `name` (a key of ROLES): the panel's role list and the VR menu. */
+function setRole(id, name) {
+  send({ type: 'set_role', icon: id, role: ROLES[name] });
+}
+/** Switches icon `id`'s state (passive or sleeping): the panel's state list and the VR menu. */
+function setIconState(id, iconState) {
+  send({ type: 'set_state', icon: id, state: iconState });
+}
+$('sel-role').addEventListener('change', (e) => setRole(state.selected, e.target.value));
+$('sel-state').addEventListener('change', (e) => setIconState(state.selected, e.target.value));
 $('sel-delete').addEventListener('click', () => send({ type: 'delete_icon', icon: state.selected }));
 $('sel-bind').addEventListener('click', () => {
   const sensor = $('sel-sensor').value.trim();
@@ -1173,6 +1183,13 @@ const xr = new XRSculpt({
     if (on) select(id);
   },
   canEdit: () => state.access === 'editor',
+  menu: {
+    // The icon in hand: the one grabbed, else the one selected (a grab selects it).
+    target: () => state.icons.get(xr.grab ? xr.grab.id : state.selected) || null,
+    rolesFor: (icon) => (design.parts.get(icon.part)?.kind === 'curve' ? CURVE_ROLES : new Set(Object.keys(ROLES))),
+    setRole,
+    setState: setIconState,
+  },
 });
 
 $('enter-vr').addEventListener('click', () => {

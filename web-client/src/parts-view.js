@@ -144,7 +144,7 @@ export class PartsView {
     const group = new THREE.Group();
     group.name = `part-${part.id}`;
     group.userData.partId = part.id;
-    const shaded = new THREE.MeshStandardMaterial({ color: part.colour, metalness: 0.1, roughness: 0.45, side: THREE.DoubleSide });
+    const shaded = this.view.studio.light(new THREE.MeshStandardMaterial({ color: part.colour, metalness: 0.1, roughness: 0.45, side: THREE.DoubleSide }));
     const mesh = new THREE.Mesh(new THREE.BufferGeometry(), shaded);
     mesh.name = part.kind === 'curve' ? `tube-${part.id}` : `surface-${part.id}`;
     mesh.userData.partId = part.id;
@@ -257,6 +257,7 @@ export class PartsView {
     }
     geo.attributes.position.needsUpdate = true;
     geo.attributes.normal.needsUpdate = true;
+    this.view.shadow.invalidate();
     const b = tess.box;
     if (!geo.boundingBox) geo.boundingBox = new THREE.Box3();
     if (!geo.boundingSphere) geo.boundingSphere = new THREE.Sphere();

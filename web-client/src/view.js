@@ -1,10 +1,14 @@
 // The 3D view: renderer, lights, orbit camera, the display modes the part
 // drawings use (shaded in each part's colour, mean / Gaussian curvature map,
 // zebra stripes, deviation from a version), framing the design, and placing
-// it on a table in VR. The drawings themselves are parts-view.js's.
+// it on a table in VR. The drawings themselves are parts-view.js's. The
+// shaded view is lit by a studio (studio.js): its environment light on the
+// shaded materials, and on request (the reviewer's page) a contact shadow
+// on the ground.
 
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { ContactShadow, StudioEnvironment } from './studio.js';
 
 const zebraVertex = `
 varying vec3 vNormal;
@@ -67,6 +71,11 @@ export class View {
     this.model = new THREE.Group();
     this.model.name = 'model';
     this.scene.add(this.model);
+    /** The studio's environment light (for the shaded materials: studio.light(material)) and ground shadow. */
+    this.studio = new StudioEnvironment();
+    this.shadow = new ContactShadow(this.renderer, this.model);
+    /** Whether the shaded view shows the contact shadow (the reviewer's page). */
+    this.groundShadow = false;
     this.mode = 'shaded';
     this.range = 1;
     this.fitted = false;
@@ -87,6 +96,7 @@ export class View {
 
   /** The first time something is drawn, the camera frames it. */
   drawn() {
+    this.shadow.invalidate();
     if (!this.fitted && this.boundingSphere()) {
       this.fit();
       this.fitted = true;
@@ -142,6 +152,7 @@ export class View {
       m.position.set(-at.x, tableHeight - at.y, -distance - at.z);
     }
     m.updateMatrixWorld(true);
+    this.studio.setUp(new THREE.Vector3(0, 1, 0), new THREE.Vector3(0, 0, 1));
   }
 
   /** Back to the screen: the model in its own units and axes. */
@@ -150,6 +161,7 @@ export class View {
     this.model.rotation.set(0, 0, 0);
     this.model.scale.setScalar(1);
     this.model.updateMatrixWorld(true);
+    this.studio.setUp(new THREE.Vector3(0, 0, 1), new THREE.Vector3(0, -1, 0));
   }
 
   /** Frames `sphere` (default: everything drawn). */
@@ -166,6 +178,20 @@ export class View {
   }
 
   render() {
+    this.shadow.enabled = this.groundShadow && this.mode === 'shaded';
+    this.shadow.update(this.shadow.enabled ? this.bounds() : null);
+    const xr = this.renderer.xr;
+    if (xr.isPresenting) {
+      // The eyes look the same way: the headset's camera orients the studio for both.
+      const c = xr.getCamera();
+      c.updateMatrixWorld(true);
+      c.matrixWorldInverse.copy(c.matrixWorld).invert();
+      this.studio.view(c);
+    } else {
+      this.camera.updateMatrixWorld();
+      this.camera.matrixWorldInverse.copy(this.camera.matrixWorld).invert();
+      this.studio.view(this.camera);
+    }
     this.renderer.render(this.scene, this.camera);
   }
 }

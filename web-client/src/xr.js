@@ -14,10 +14,15 @@
 // there is no icon grabs the whole model: it follows the hand (move and
 // turn), and squeezing with the other hand as well scales it by the change
 // of the distance between the hands.
+//
+// The left hand carries the menu for the icon's role and state (xr-menu.js,
+// the paper's 3D menu): X opens it; the right hand's ray and trigger, or the
+// left thumbstick, choose in it.
 
 import * as THREE from 'three';
 import { XRControllerModelFactory } from 'three/addons/webxr/XRControllerModelFactory.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { XRMenu } from './xr-menu.js';
 
 /** Where the server serves the input profiles and controller models (server/src/web.rs). */
 export const PROFILES_PATH = '/vendor/webxr-profiles';
@@ -52,9 +57,11 @@ export class XRSculpt {
    * @param {(hit: THREE.Intersection) => void} o.create creates an icon where the trigger's ray hit a part
    * @param {(on: boolean, id: number | null) => void} o.onDragging told when a VR drag starts and ends
    * @param {() => boolean} o.canEdit whether this page may edit
+   * @param {object} o.menu what the role and state menu needs besides canEdit (XRMenu's target, rolesFor, setRole, setState)
    */
   constructor(o) {
     Object.assign(this, o);
+    this.menu = new XRMenu({ ...o.menu, canEdit: o.canEdit });
     this.raycaster = new THREE.Raycaster();
     this.controllers = [];
     /** The current grab: controller index, icon, start positions of hand (model units) and icon. */
@@ -90,11 +97,26 @@ export class XRSculpt {
   /** A controller connected: its model is on the way; the simple body shows until it arrives. */
   connected(i, source) {
     const c = this.controllers[i];
+    c.source = source || null;
+    if (source && source.handedness === 'left') this.menuHand = i;
+    this.controllers[this.menuIndex()].grip.add(this.menu.group);
     c.fallback.visible = !c.model.children.length;
     c.profiles = source && source.profiles ? [...source.profiles] : [];
     if (source && (source.targetRayMode !== 'tracked-pointer' || !source.gamepad || source.hand)) {
       console.warn(`vsculpt: input source ${i} (${c.profiles.join(', ') || 'no profile'}) has no controller model; drawing the simple controller`);
     }
+  }
+
+  /** The controller that holds the menu: the left hand's, else the first. */
+  menuIndex() {
+    return this.menuHand ?? 0;
+  }
+
+  /** The menu button under controller i's ray (i not the menu hand), or null. */
+  menuButtonAt(i) {
+    if (!this.menu.open || i === this.menuIndex()) return null;
+    this.aim(i);
+    return this.menu.buttonAlong(this.raycaster);
   }
 
   /** The factory put a loaded model (`scene`) under one controller's grip: hide that controller's stand-in. */
@@ -116,6 +138,7 @@ export class XRSculpt {
     await this.view.renderer.xr.setSession(session);
     this.view.placeOnTable();
     session.addEventListener('end', () => {
+      this.menu.setOpen(false);
       if (this.grab) this.squeezeEnd(this.grab.index);
       this.modelGrab = null;
       this.view.placeOnScreen();
@@ -228,6 +251,11 @@ export class XRSculpt {
   }
 
   trigger(i) {
+    const button = this.menuButtonAt(i);
+    if (button) {
+      this.menu.choose(button);
+      return;
+    }
     if (!this.canEdit()) return;
     this.aim(i);
     const hit = this.raycaster.intersectObjects(this.pickables(), false)[0];
@@ -236,6 +264,11 @@ export class XRSculpt {
 
   /** Called every frame: moves a held model, or sends the grabbed icon's new position when the hand moved. */
   update() {
+    if (this.view.renderer.xr.isPresenting) {
+      const m = this.menuIndex();
+      const source = this.controllers[m].source;
+      this.menu.update(source && source.gamepad ? source.gamepad : null, this.menuButtonAt(1 - m));
+    }
     if (this.modelGrab) this.moveModel();
     const g = this.grab;
     if (!g) return;
