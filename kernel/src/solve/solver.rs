@@ -48,6 +48,21 @@ use super::factor::Factor;
 use super::{Equation, Group, GroupKey, Problem, ScalarRow, SolveError};
 use crate::energy::Stiffness;
 
+/// How the solver obtained its drag responses so far (see
+/// [`Solver::response_counts`]): what a grab cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ResponseCounts {
+    /// Responses computed from scratch (a first grab, a new group, a
+    /// refactor, or a change the update does not take).
+    pub computed: u64,
+    /// Responses updated from a carried one after equations were added or
+    /// removed on the same factor.
+    pub updated: u64,
+    /// Refinement steps taken by any solve or response (each a projection
+    /// and, when the stationarity residual asks, a batched sparse solve).
+    pub refinement_steps: u64,
+}
+
 /// What a solve achieved.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolveReport {
@@ -178,12 +193,48 @@ fn row_key(r: &ScalarRow) -> RowKey {
     )
 }
 
-/// The cached response of one group to its drag input.
+/// The cached response of one group to its drag input, and what it takes
+/// to carry it over a change of the equations on the same factor (see
+/// `Solver::updated_response`).
 #[derive(Debug)]
 struct Response {
-    group: usize,
+    /// The dragged group's key.
+    key: GroupKey,
+    /// That group when R was computed: its rows, directions and gains are
+    /// what the unit inputs are made of (targets and forces do not matter).
+    group: Group,
+    /// The pins when R was computed: (control point, weight, group key).
+    pins: Vec<(usize, f64, GroupKey)>,
     kind: ResponseKind,
+    /// Per unit input, the multipliers of the current scalar equations:
+    /// K̃ R + Cᵀλ + Σ (released equations' forces) = b per unit input.
+    lambdas: [Vec<f64>; 3],
+    /// Per unit input, the reach of R on Z (see `Solver::residuals`).
+    reaches: [DVec3; 3],
+    /// Equations that left the problem since R was computed, with their
+    /// multipliers (their forces are still in R).
+    released: Vec<Released>,
+    /// Whether R answers the current equations (none added or removed
+    /// since it was computed or updated).
+    current: bool,
+    /// Whether R was computed with nothing dropped (S exactly inverted):
+    /// only then are its multipliers the KKT ones an update starts from.
+    exact: bool,
 }
+
+/// A scalar equation that left the problem after a drag response was
+/// computed: its terms (coordinate, coefficient, column of Z) and its
+/// multiplier per unit input.
+#[derive(Debug)]
+struct Released {
+    terms: Vec<(usize, f64, Column)>,
+    lambda: [f64; 3],
+}
+
+/// Most released scalar-equation terms a drag response is carried over
+/// (see `Solver::carried_response`); past it the response is recomputed.
+/// Each costs one pass over a column of Z when the response is updated.
+const MAX_RELEASED_TERMS: usize = 256;
 
 /// δ(t) − δ(0) = R t. Without projected equations every coordinate answers
 /// alone and alike, so R = ρ ⊗ I with one scalar field ρ: a third of the
@@ -195,6 +246,16 @@ enum ResponseKind {
 }
 
 impl ResponseKind {
+    /// R as three fields of DVec3 (one per unit input).
+    fn expand(&self) -> [Vec<DVec3>; 3] {
+        match self {
+            ResponseKind::Uniform(rho) => {
+                std::array::from_fn(|k| rho.iter().map(|&r| DVec3::AXES[k] * r).collect())
+            }
+            ResponseKind::Coupled(r) => r.clone(),
+        }
+    }
+
     fn new(r: [Vec<DVec3>; 3]) -> Self {
         let scale = r
             .iter()
@@ -321,6 +382,7 @@ pub struct Solver {
     base: Option<Base>,
     response: Option<Response>,
     last: Option<LastSolve>,
+    counts: ResponseCounts,
 }
 
 impl Solver {
@@ -351,6 +413,7 @@ impl Solver {
             base: None,
             response: None,
             last: None,
+            counts: ResponseCounts::default(),
         })
     }
 
@@ -363,6 +426,13 @@ impl Solver {
     /// constraint columns, refinement steps): what a problem change cost.
     pub fn columns_solved(&self) -> u64 {
         self.factor.columns_solved()
+    }
+
+    /// How the drag responses were obtained so far (computed, updated)
+    /// and how many refinement steps every solve took: a diagnostic, as
+    /// [`Self::columns_solved`].
+    pub fn response_counts(&self) -> ResponseCounts {
+        self.counts
     }
 
     /// The stiffness K (the factor holds K with the pinned control points
@@ -632,6 +702,13 @@ impl Solver {
                 .iter()
                 .zip(&z)
                 .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
+        // Otherwise, on the same factor, the response is carried over to
+        // the new equations and updated at the next drag.
+        let response = match self.response.take() {
+            Some(r) if same_structure => Some(r),
+            Some(r) if !refactored => self.carried_response(r, &problem, &rows, &eqs, &pins),
+            _ => None,
+        };
         self.retire(&z);
         self.problem = problem;
         self.rows = rows;
@@ -649,10 +726,68 @@ impl Solver {
         self.pin_points = pin_points;
         self.pin_redundant = pin_redundant;
         self.base = None;
-        if !same_structure {
-            self.response = None;
-        }
+        self.response = response;
         Ok(())
+    }
+
+    /// The drag response `r` carried over to the new equations `eqs` (over
+    /// `rows`, with `pins`) of `problem` on the current factor: the
+    /// multipliers of equations that stay move to their new places, new
+    /// equations start at λ = 0, and equations that leave are kept with
+    /// their multipliers as released forces, so that K̃R + Cᵀλ + Σ released
+    /// = b per unit input still holds. R itself is updated at the next drag
+    /// (`updated_response`). `None` (recompute) when the pins or the dragged
+    /// group's structure changed, a released column is not solved, or too
+    /// many equations were released.
+    fn carried_response(
+        &self,
+        mut r: Response,
+        problem: &Problem,
+        rows: &[ScalarRow],
+        eqs: &[ScalarEq],
+        pins: &[PinEq],
+    ) -> Option<Response> {
+        if !r.exact
+            || r.lambdas.iter().any(|l| l.len() != self.eqs.len())
+            || !pin_signature(pins, problem).eq(r.pins.iter().copied())
+        {
+            return None;
+        }
+        if let Some(g) = problem.groups.iter().find(|g| g.key == r.key)
+            && !same_group(g, &r.group)
+        {
+            return None;
+        }
+        let matched = match_equations(&self.rows, &self.eqs, rows, eqs);
+        for &o in &matched.removed {
+            let lambda: [f64; 3] = std::array::from_fn(|p| r.lambdas[p][o]);
+            if lambda == [0.0; 3] {
+                continue;
+            }
+            let terms = self.eqs[o]
+                .terms
+                .iter()
+                .map(|t| (t.k, t.coef, self.z[t.col].clone()))
+                .collect::<Vec<_>>();
+            if terms.iter().any(|(_, _, c)| c.values.len() != self.dim()) {
+                return None;
+            }
+            r.released.push(Released { terms, lambda });
+        }
+        let released: usize = r.released.iter().map(|e| e.terms.len()).sum();
+        if released > MAX_RELEASED_TERMS {
+            return None;
+        }
+        let lambdas = std::array::from_fn(|p| {
+            let mut l = vec![0.0; eqs.len()];
+            for &(e, o) in &matched.kept {
+                l[e] = r.lambdas[p][o];
+            }
+            l
+        });
+        r.lambdas = lambdas;
+        r.current &= matched.added.is_empty() && matched.removed.is_empty();
+        Some(r)
     }
 
     /// Z = K̃⁻¹[free rows] (cached columns reused, the rest in one batched
@@ -827,45 +962,11 @@ impl Solver {
         if !self.s_exact || m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
             return None;
         }
-        // New column → old column (the same row, the same cached Z column).
-        let old_col: HashMap<RowKey, usize> = self
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(c, r)| (row_key(r), c))
-            .collect();
-        let map: Vec<Option<usize>> = rows
-            .iter()
-            .map(|r| old_col.get(&row_key(r)).copied())
-            .collect();
-        type EqKey = Vec<(usize, u64, usize)>;
-        let mut old_eqs: HashMap<EqKey, Vec<usize>> = HashMap::new();
-        for (e, eq) in self.eqs.iter().enumerate().rev() {
-            let key = eq
-                .terms
-                .iter()
-                .map(|t| (t.k, t.coef.to_bits(), t.col))
-                .collect();
-            old_eqs.entry(key).or_default().push(e);
-        }
-        let mut kept: Vec<(usize, usize)> = Vec::new();
-        let mut added: Vec<usize> = Vec::new();
-        for (e, eq) in eqs.iter().enumerate() {
-            let key: Option<EqKey> = eq
-                .terms
-                .iter()
-                .map(|t| map[t.col].map(|c| (t.k, t.coef.to_bits(), c)))
-                .collect();
-            match key.and_then(|k| old_eqs.get_mut(&k)).and_then(Vec::pop) {
-                Some(old) => kept.push((e, old)),
-                None => added.push(e),
-            }
-        }
-        let mut is_kept = vec![false; m_old];
-        for &(_, o) in &kept {
-            is_kept[o] = true;
-        }
-        let removed: Vec<usize> = (0..m_old).filter(|&o| !is_kept[o]).collect();
+        let EquationMatch {
+            kept,
+            added,
+            removed,
+        } = match_equations(&self.rows, &self.eqs, rows, eqs);
         let (k, a, r) = (kept.len(), added.len(), removed.len());
         if k == 0 || 4 * (a + r) > m_old.max(m) {
             return None;
@@ -947,22 +1048,6 @@ impl Solver {
     /// Whether `problem` has the current problem's structure (see
     /// [`Self::retarget`]) and the caches built for it are whole.
     fn same_structure(&self, problem: &Problem) -> bool {
-        let same_eq = |a: &Equation, b: &Equation| match (a, b) {
-            (Equation::Vector { row: r, .. }, Equation::Vector { row: q, .. }) => r == q,
-            (
-                Equation::Projected {
-                    row: r,
-                    direction: d,
-                    ..
-                },
-                Equation::Projected {
-                    row: q,
-                    direction: e,
-                    ..
-                },
-            ) => r == q && d == e,
-            _ => false,
-        };
         // After a refactor the columns are forgotten until `set_problem`
         // rebuilds them.
         let whole = self.z.len() == self.rows.len()
@@ -978,19 +1063,7 @@ impl Solver {
                 .groups
                 .iter()
                 .zip(&self.problem.groups)
-                .all(|(a, b)| {
-                    a.key == b.key
-                        && a.equations.len() == b.equations.len()
-                        && a.loads.len() == b.loads.len()
-                        && a.equations
-                            .iter()
-                            .zip(&b.equations)
-                            .all(|(x, y)| same_eq(x, y))
-                        && a.loads
-                            .iter()
-                            .zip(&b.loads)
-                            .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
-                })
+                .all(|(a, b)| same_group(a, b))
     }
 
     /// The targets and forces of `problem` (of the current structure, valid)
@@ -1287,19 +1360,24 @@ impl Solver {
                 start,
             });
         }
-        if self.response.as_ref().is_none_or(|r| r.group != group) {
-            let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
-            let mut solved = self
-                // A response is δ per unit of drag input, from a zero
-                // reference: its scale is 1.
-                .refined_deltas(&inputs, &[None, None, None], &[1.0; 3])
-                .into_iter();
-            let mut next = || solved.next().map(|(delta, _)| delta).unwrap_or_default();
-            let r = [next(), next(), next()];
-            self.response = Some(Response {
-                group,
-                kind: ResponseKind::new(r),
-            });
+        let key = self.problem.groups[group].key;
+        if self
+            .response
+            .as_ref()
+            .is_none_or(|r| r.key != key || !r.current)
+        {
+            let stale = self.response.take().filter(|r| r.key == key);
+            let response = match stale.and_then(|r| self.updated_response(r, group)) {
+                Some(r) => {
+                    self.counts.updated += 1;
+                    r
+                }
+                None => {
+                    self.counts.computed += 1;
+                    self.fresh_response(group)
+                }
+            };
+            self.response = Some(response);
         }
         let (Some(base), Some(resp)) = (&self.base, &self.response) else {
             return Err(SolveError::Factor("drag caches missing".into()));
@@ -1318,6 +1396,107 @@ impl Solver {
         }
         let report = self.report(out, Some(group), t);
         self.checked(report, out, Some((group, t)))
+    }
+
+    /// The drag response of group `group` (index) computed from scratch:
+    /// δ per unit of drag input along x, y and z, refined to convergence.
+    fn fresh_response(&mut self, group: usize) -> Response {
+        let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
+        let mut solved = self
+            // A response is δ per unit of drag input, from a zero
+            // reference: its scale is 1.
+            .refined_deltas(&inputs, &[None, None, None], &[1.0; 3])
+            .into_iter();
+        let mut next = || solved.next().unwrap_or_default();
+        let [(r0, l0, q0), (r1, l1, q1), (r2, l2, q2)] = [next(), next(), next()];
+        Response {
+            key: self.problem.groups[group].key,
+            group: self.problem.groups[group].clone(),
+            pins: pin_signature(&self.pins, &self.problem).collect(),
+            kind: ResponseKind::new([r0, r1, r2]),
+            lambdas: [l0, l1, l2],
+            reaches: [q0, q1, q2],
+            released: Vec::new(),
+            current: true,
+            exact: self.rank_deficiency == 0,
+        }
+    }
+
+    /// A carried drag response (see [`Self::carried_response`]) brought up
+    /// to the current equations on the same factor, instead of computed
+    /// again. K is unchanged, so the new response is the old one plus one
+    /// exactly known correction: the released equations' forces give the
+    /// stationarity residual K̃⁻¹Σ a_r λ_r = Σ z_r λ_r (their columns, no
+    /// solve), the new equations the constraint residual σ = t − C R, and
+    /// one projection through the new S⁻¹ meets both (a bordered /
+    /// downdated KKT solve). The refinement loop then checks the result
+    /// with the same criteria as a fresh response (usually without a
+    /// step). `None` (compute it fresh) unless the response was exact, S is
+    /// inverted with nothing dropped, nothing is pending, and the dragged
+    /// group and the pins are as when R was computed.
+    fn updated_response(&mut self, r: Response, group: usize) -> Option<Response> {
+        let m = self.eqs.len();
+        if !r.exact
+            || self.rank_deficiency != 0
+            || !self.pending.is_empty()
+            || r.lambdas.iter().any(|l| l.len() != m)
+            || !same_group(&self.problem.groups[group], &r.group)
+            || !pin_signature(&self.pins, &self.problem).eq(r.pins.iter().copied())
+        {
+            return None;
+        }
+        let n = self.dim();
+        let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
+        let mut deltas = r.kind.expand();
+        let mut lambdas = r.lambdas;
+        let mut reaches = r.reaches;
+        for p in 0..3 {
+            let mut y = vec![DVec3::ZERO; n];
+            for rel in &r.released {
+                for (k, coef, col) in &rel.terms {
+                    let a = coef * rel.lambda[p];
+                    if a == 0.0 {
+                        continue;
+                    }
+                    for (yi, zi) in y.iter_mut().zip(col.values.iter()) {
+                        yi[*k] += a * zi;
+                    }
+                    reaches[p][*k] += a.abs() * col.norm;
+                }
+            }
+            let sigma: Vec<f64> = inputs[p]
+                .targets
+                .iter()
+                .zip(self.c_times(&deltas[p]))
+                .map(|(t, c)| t - c)
+                .collect();
+            let w = self.project(&sigma, &y, &mut deltas[p], &mut lambdas[p]);
+            reaches[p] = w
+                .iter()
+                .zip(&self.z)
+                .fold(reaches[p], |q, (wc, col)| q + wc.abs() * col.norm);
+        }
+        let zeros = vec![0.0; m];
+        let cxs = [zeros.as_slice(); 3];
+        self.refine(
+            &inputs,
+            &cxs,
+            &mut deltas,
+            &mut lambdas,
+            &reaches,
+            &[1.0; 3],
+        );
+        Some(Response {
+            key: r.key,
+            group: r.group,
+            pins: r.pins,
+            kind: ResponseKind::new(deltas),
+            lambdas,
+            reaches,
+            released: Vec::new(),
+            current: true,
+            exact: true,
+        })
     }
 
     /// The cached basis of the drag fast path, read-only: the shape with
@@ -1534,6 +1713,7 @@ impl Solver {
             &[max_extent(reference)],
         )
         .pop()
+        .map(|(delta, lambda, _)| (delta, lambda))
         .unwrap_or_default()
     }
 
@@ -1624,7 +1804,7 @@ impl Solver {
         inputs: &[Inputs],
         references: &[Option<&[DVec3]>],
         extents: &[f64],
-    ) -> Vec<(Vec<DVec3>, Vec<f64>)> {
+    ) -> Vec<Refined> {
         let n = self.dim();
         let m = self.eqs.len();
         let mut deltas = Vec::with_capacity(inputs.len());
@@ -1667,8 +1847,28 @@ impl Solver {
             lambdas.push(lambda);
             reaches.push(reach);
         }
+        self.refine(inputs, &cxs, &mut deltas, &mut lambdas, &reaches, extents);
+        deltas
+            .into_iter()
+            .zip(lambdas)
+            .zip(reaches)
+            .map(|((d, l), r)| (d, l, r))
+            .collect()
+    }
+
+    /// The refinement loop of [`Self::refined_deltas`] from given starting
+    /// answers (δ, λ) and their reaches: steps while a step still gains.
+    fn refine(
+        &mut self,
+        inputs: &[Inputs],
+        cxs: &[&[f64]],
+        deltas: &mut [Vec<DVec3>],
+        lambdas: &mut [Vec<f64>],
+        reaches: &[DVec3],
+        extents: &[f64],
+    ) {
         if self.eqs.is_empty() && self.loads.is_empty() && self.pin_points.is_empty() {
-            return deltas.into_iter().zip(lambdas).collect();
+            return;
         }
         // The size of the last residual per input, to stop when a step no
         // longer gains.
@@ -1710,9 +1910,9 @@ impl Solver {
             if !active.iter().any(|&a| a) {
                 break;
             }
-            self.refinement_step(&pending, &active, &mut deltas, &mut lambdas);
+            self.counts.refinement_steps += 1;
+            self.refinement_step(&pending, &active, deltas, lambdas);
         }
-        deltas.into_iter().zip(lambdas).collect()
     }
 
     /// The residuals of one input's (δ, λ): σ = d − C P_ref − C δ, per
@@ -1851,7 +2051,6 @@ impl Solver {
             if !active[p] {
                 continue;
             }
-            let delta = &mut deltas[p];
             let mut correction = vec![DVec3::ZERO; n];
             for (c, &(q, k)) in columns.iter().enumerate() {
                 if q == p {
@@ -1860,27 +2059,41 @@ impl Solver {
                     }
                 }
             }
-            // Project onto the constraints as in `delta`: r' = C y − σ.
-            let r: Vec<f64> = self
-                .c_times(&correction)
-                .iter()
-                .zip(sigma)
-                .map(|(cy, s)| cy - s)
-                .collect();
-            let m = self.eqs.len();
-            let mut w = vec![DVec3::ZERO; self.rows.len()];
-            for (e, eq) in self.eqs.iter().enumerate() {
-                let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
-                lambdas[p][e] += lam;
-                for t in &eq.terms {
-                    w[t.col][t.k] -= t.coef * lam;
-                }
-            }
-            for (d, c) in delta.iter_mut().zip(&correction) {
-                *d += *c;
-            }
-            self.add_columns(delta, &w);
+            self.project(sigma, &correction, &mut deltas[p], &mut lambdas[p]);
         }
+    }
+
+    /// δ += y + Z w with w = −Cᵀ S⁺ (C y − σ), λ += S⁺ (C y − σ): the
+    /// correction y (K̃⁻¹ of a stationarity residual) projected onto the
+    /// constraints, as in [`Self::lambda_weights`]. Returns w.
+    fn project(
+        &self,
+        sigma: &[f64],
+        correction: &[DVec3],
+        delta: &mut [DVec3],
+        lambda: &mut [f64],
+    ) -> Vec<DVec3> {
+        // r' = C y − σ.
+        let r: Vec<f64> = self
+            .c_times(correction)
+            .iter()
+            .zip(sigma)
+            .map(|(cy, s)| cy - s)
+            .collect();
+        let m = self.eqs.len();
+        let mut w = vec![DVec3::ZERO; self.rows.len()];
+        for (e, eq) in self.eqs.iter().enumerate() {
+            let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
+            lambda[e] += lam;
+            for t in &eq.terms {
+                w[t.col][t.k] -= t.coef * lam;
+            }
+        }
+        for (d, c) in delta.iter_mut().zip(correction) {
+            *d += *c;
+        }
+        self.add_columns(delta, &w);
+        w
     }
 
     /// `report` as a result: a residual above [`RESIDUAL_TOLERANCE`] of the
@@ -1964,9 +2177,119 @@ impl Solver {
     }
 }
 
+/// How the scalar equations of a new problem relate to the current ones.
+struct EquationMatch {
+    /// (new, old) pairs: the same terms on the same rows.
+    kept: Vec<(usize, usize)>,
+    /// New equations with no old counterpart.
+    added: Vec<usize>,
+    /// Old equations with no new counterpart.
+    removed: Vec<usize>,
+}
+
+/// Matches the scalar equations `new` (over `new_rows`) with `old` (over
+/// `old_rows`): an equation is kept when an old one has the same terms
+/// (coordinate, coefficient, row, bit for bit); duplicates pair in order.
+fn match_equations(
+    old_rows: &[ScalarRow],
+    old: &[ScalarEq],
+    new_rows: &[ScalarRow],
+    new: &[ScalarEq],
+) -> EquationMatch {
+    // New column → old column (the same row, the same cached Z column).
+    let old_col: HashMap<RowKey, usize> = old_rows
+        .iter()
+        .enumerate()
+        .map(|(c, r)| (row_key(r), c))
+        .collect();
+    let map: Vec<Option<usize>> = new_rows
+        .iter()
+        .map(|r| old_col.get(&row_key(r)).copied())
+        .collect();
+    type EqKey = Vec<(usize, u64, usize)>;
+    let mut old_eqs: HashMap<EqKey, Vec<usize>> = HashMap::new();
+    for (e, eq) in old.iter().enumerate().rev() {
+        let key = eq
+            .terms
+            .iter()
+            .map(|t| (t.k, t.coef.to_bits(), t.col))
+            .collect();
+        old_eqs.entry(key).or_default().push(e);
+    }
+    let mut kept: Vec<(usize, usize)> = Vec::new();
+    let mut added: Vec<usize> = Vec::new();
+    for (e, eq) in new.iter().enumerate() {
+        let key: Option<EqKey> = eq
+            .terms
+            .iter()
+            .map(|t| map[t.col].map(|c| (t.k, t.coef.to_bits(), c)))
+            .collect();
+        match key.and_then(|k| old_eqs.get_mut(&k)).and_then(Vec::pop) {
+            Some(o) => kept.push((e, o)),
+            None => added.push(e),
+        }
+    }
+    let mut is_kept = vec![false; old.len()];
+    for &(_, o) in &kept {
+        is_kept[o] = true;
+    }
+    let removed: Vec<usize> = (0..old.len()).filter(|&o| !is_kept[o]).collect();
+    EquationMatch {
+        kept,
+        added,
+        removed,
+    }
+}
+
+/// Each pin's (control point, weight, group key), in `pins` order.
+fn pin_signature<'a>(
+    pins: &'a [PinEq],
+    problem: &'a Problem,
+) -> impl Iterator<Item = (usize, f64, GroupKey)> + 'a {
+    pins.iter()
+        .map(|p| (p.index, p.weight, problem.groups[p.group].key))
+}
+
+/// Whether two groups have the same structure: key, rows, directions and
+/// gains (targets and forces aside).
+fn same_group(a: &Group, b: &Group) -> bool {
+    let same_eq = |a: &Equation, b: &Equation| match (a, b) {
+        (Equation::Vector { row: r, .. }, Equation::Vector { row: q, .. }) => r == q,
+        (
+            Equation::Projected {
+                row: r,
+                direction: d,
+                ..
+            },
+            Equation::Projected {
+                row: q,
+                direction: e,
+                ..
+            },
+        ) => r == q && d == e,
+        _ => false,
+    };
+    a.key == b.key
+        && a.equations.len() == b.equations.len()
+        && a.loads.len() == b.loads.len()
+        && a.equations
+            .iter()
+            .zip(&b.equations)
+            .all(|(x, y)| same_eq(x, y))
+        && a.loads
+            .iter()
+            .zip(&b.loads)
+            .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
+}
+
 /// One input of a batched refinement: σ = d − C P_ref − C δ, and per
 /// coordinate the stationarity residual ρ_k when it needs a refinement step.
 type Pending = (Vec<f64>, [Option<Vec<f64>>; 3]);
+
+/// One refined answer: δ, the multipliers λ (one per scalar equation) and
+/// the reach of δ on Z per coordinate (Σ_c |w_c| ‖z_c‖∞, see
+/// `Solver::residuals`).
+type Refined = (Vec<DVec3>, Vec<f64>, DVec3);
 
 struct Inputs {
     targets: Vec<f64>,
