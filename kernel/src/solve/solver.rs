@@ -747,8 +747,12 @@ impl Solver {
         eqs: &[ScalarEq],
         pins: &[PinEq],
     ) -> Option<Response> {
+        // A symmetric response keeps the x input's multipliers only.
         if !r.exact
-            || r.lambdas.iter().any(|l| l.len() != self.eqs.len())
+            || r.lambdas[0].len() != self.eqs.len()
+            || r.lambdas[1..]
+                .iter()
+                .any(|l| !l.is_empty() && l.len() != self.eqs.len())
             || !pin_signature(pins, problem).eq(r.pins.iter().copied())
         {
             return None;
@@ -760,7 +764,8 @@ impl Solver {
         }
         let matched = match_equations(&self.rows, &self.eqs, rows, eqs);
         for &o in &matched.removed {
-            let lambda: [f64; 3] = std::array::from_fn(|p| r.lambdas[p][o]);
+            let lambda: [f64; 3] =
+                std::array::from_fn(|p| r.lambdas[p].get(o).copied().unwrap_or(0.0));
             if lambda == [0.0; 3] {
                 continue;
             }
@@ -779,6 +784,9 @@ impl Solver {
             return None;
         }
         let lambdas = std::array::from_fn(|p| {
+            if r.lambdas[p].is_empty() {
+                return Vec::new();
+            }
             let mut l = vec![0.0; eqs.len()];
             for &(e, o) in &matched.kept {
                 l[e] = r.lambdas[p][o];
@@ -1401,25 +1409,59 @@ impl Solver {
     /// The drag response of group `group` (index) computed from scratch:
     /// δ per unit of drag input along x, y and z, refined to convergence.
     fn fresh_response(&mut self, group: usize) -> Response {
-        let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
+        let symmetric = self.symmetric();
+        let axes: &[DVec3] = if symmetric {
+            &[DVec3::X]
+        } else {
+            &[DVec3::X, DVec3::Y, DVec3::Z]
+        };
+        let inputs: Vec<Inputs> = axes.iter().map(|&e| self.unit_inputs(group, e)).collect();
+        let extents = vec![1.0; inputs.len()];
         let mut solved = self
             // A response is δ per unit of drag input, from a zero
             // reference: its scale is 1.
-            .refined_deltas(&inputs, &[None, None, None], &[1.0; 3])
+            .refined_deltas(&inputs, &vec![None; inputs.len()], &extents)
             .into_iter();
         let mut next = || solved.next().unwrap_or_default();
         let [(r0, l0, q0), (r1, l1, q1), (r2, l2, q2)] = [next(), next(), next()];
+        let kind = if symmetric {
+            ResponseKind::Uniform(r0.iter().map(|v| v.x).collect())
+        } else {
+            ResponseKind::new([r0, r1, r2])
+        };
         Response {
             key: self.problem.groups[group].key,
             group: self.problem.groups[group].clone(),
             pins: pin_signature(&self.pins, &self.problem).collect(),
-            kind: ResponseKind::new([r0, r1, r2]),
+            kind,
             lambdas: [l0, l1, l2],
             reaches: [q0, q1, q2],
             released: Vec::new(),
             current: true,
             exact: self.rank_deficiency == 0,
         }
+    }
+
+    /// Whether every coordinate answers alone and alike: each scalar
+    /// equation has one term, and the equations on x, y and z are the same
+    /// (row, coefficient, drag shift, group) for each. Loads and pins act
+    /// alike on every coordinate, so a drag input along x moves only x and
+    /// the response is ρ ⊗ I with ρ the x-field of the x input: one input
+    /// computed instead of three.
+    fn symmetric(&self) -> bool {
+        let mut count: HashMap<(usize, u64, bool, usize), [usize; 3]> = HashMap::new();
+        for eq in &self.eqs {
+            let [t] = eq.terms.as_slice() else {
+                return false;
+            };
+            if eq.shift.is_some_and(|k| k != t.k) {
+                return false;
+            }
+            count
+                .entry((t.col, t.coef.to_bits(), eq.shift.is_some(), eq.group))
+                .or_default()[t.k] += 1;
+        }
+        count.values().all(|c| c[0] == c[1] && c[1] == c[2])
     }
 
     /// A carried drag response (see [`Self::carried_response`]) brought up
@@ -1436,21 +1478,28 @@ impl Solver {
     /// group and the pins are as when R was computed.
     fn updated_response(&mut self, r: Response, group: usize) -> Option<Response> {
         let m = self.eqs.len();
+        // A symmetric problem needs the x input only (see `symmetric`).
+        let inputs_needed = if self.symmetric() { 1 } else { 3 };
         if !r.exact
             || self.rank_deficiency != 0
             || !self.pending.is_empty()
-            || r.lambdas.iter().any(|l| l.len() != m)
+            || r.lambdas[..inputs_needed].iter().any(|l| l.len() != m)
             || !same_group(&self.problem.groups[group], &r.group)
             || !pin_signature(&self.pins, &self.problem).eq(r.pins.iter().copied())
         {
             return None;
         }
         let n = self.dim();
-        let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
-        let mut deltas = r.kind.expand();
-        let mut lambdas = r.lambdas;
+        let inputs: Vec<Inputs> = [DVec3::X, DVec3::Y, DVec3::Z][..inputs_needed]
+            .iter()
+            .map(|&e| self.unit_inputs(group, e))
+            .collect();
+        let mut deltas: Vec<Vec<DVec3>> = r.kind.expand().into_iter().collect();
+        deltas.truncate(inputs_needed);
+        let mut lambdas: Vec<Vec<f64>> = r.lambdas.into_iter().collect();
+        lambdas.truncate(inputs_needed);
         let mut reaches = r.reaches;
-        for p in 0..3 {
+        for p in 0..inputs_needed {
             let mut y = vec![DVec3::ZERO; n];
             for rel in &r.released {
                 for (k, coef, col) in &rel.terms {
@@ -1477,21 +1526,31 @@ impl Solver {
                 .fold(reaches[p], |q, (wc, col)| q + wc.abs() * col.norm);
         }
         let zeros = vec![0.0; m];
-        let cxs = [zeros.as_slice(); 3];
+        let cxs = vec![zeros.as_slice(); inputs_needed];
         self.refine(
             &inputs,
             &cxs,
             &mut deltas,
             &mut lambdas,
-            &reaches,
-            &[1.0; 3],
+            &reaches[..inputs_needed],
+            &vec![1.0; inputs_needed],
         );
+        let kind = if inputs_needed == 1 {
+            ResponseKind::Uniform(deltas[0].iter().map(|v| v.x).collect())
+        } else {
+            let mut it = deltas.into_iter();
+            let mut next = || it.next().unwrap_or_default();
+            ResponseKind::new([next(), next(), next()])
+        };
+        lambdas.resize(3, Vec::new());
+        let mut it = lambdas.into_iter();
+        let mut next = || it.next().unwrap_or_default();
         Some(Response {
             key: r.key,
             group: r.group,
             pins: r.pins,
-            kind: ResponseKind::new(deltas),
-            lambdas,
+            kind,
+            lambdas: [next(), next(), next()],
             reaches,
             released: Vec::new(),
             current: true,
@@ -1678,8 +1737,15 @@ impl Solver {
             if *wc == DVec3::ZERO {
                 continue;
             }
-            for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
-                *d += *wc * zi;
+            if wc.y == 0.0 && wc.z == 0.0 {
+                // One coordinate (a symmetric response's x input).
+                for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
+                    d.x += wc.x * zi;
+                }
+            } else {
+                for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
+                    *d += *wc * zi;
+                }
             }
         }
     }
