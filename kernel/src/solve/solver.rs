@@ -52,12 +52,9 @@ use crate::energy::Stiffness;
 /// [`Solver::response_counts`]): what a grab cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ResponseCounts {
-    /// Responses computed from scratch (a first grab, a new group, a
-    /// refactor, or a change the update does not take).
+    /// Responses computed (a first grab, another group grabbed, or the
+    /// first grab after the problem's structure changed).
     pub computed: u64,
-    /// Responses updated from a carried one after equations were added or
-    /// removed on the same factor.
-    pub updated: u64,
     /// Refinement steps taken by any solve or response (each a projection
     /// and, when the stationarity residual asks, a batched sparse solve).
     pub refinement_steps: u64,
@@ -193,48 +190,13 @@ fn row_key(r: &ScalarRow) -> RowKey {
     )
 }
 
-/// The cached response of one group to its drag input, and what it takes
-/// to carry it over a change of the equations on the same factor (see
-/// `Solver::updated_response`).
+/// The cached response of one group to its drag input.
 #[derive(Debug)]
 struct Response {
     /// The dragged group's key.
     key: GroupKey,
-    /// That group when R was computed: its rows, directions and gains are
-    /// what the unit inputs are made of (targets and forces do not matter).
-    group: Group,
-    /// The pins when R was computed: (control point, weight, group key).
-    pins: Vec<(usize, f64, GroupKey)>,
     kind: ResponseKind,
-    /// Per unit input, the multipliers of the current scalar equations:
-    /// K̃ R + Cᵀλ + Σ (released equations' forces) = b per unit input.
-    lambdas: [Vec<f64>; 3],
-    /// Per unit input, the reach of R on Z (see `Solver::residuals`).
-    reaches: [DVec3; 3],
-    /// Equations that left the problem since R was computed, with their
-    /// multipliers (their forces are still in R).
-    released: Vec<Released>,
-    /// Whether R answers the current equations (none added or removed
-    /// since it was computed or updated).
-    current: bool,
-    /// Whether R was computed with nothing dropped (S exactly inverted):
-    /// only then are its multipliers the KKT ones an update starts from.
-    exact: bool,
 }
-
-/// A scalar equation that left the problem after a drag response was
-/// computed: its terms (coordinate, coefficient, column of Z) and its
-/// multiplier per unit input.
-#[derive(Debug)]
-struct Released {
-    terms: Vec<(usize, f64, Column)>,
-    lambda: [f64; 3],
-}
-
-/// Most released scalar-equation terms a drag response is carried over
-/// (see `Solver::carried_response`); past it the response is recomputed.
-/// Each costs one pass over a column of Z when the response is updated.
-const MAX_RELEASED_TERMS: usize = 256;
 
 /// δ(t) − δ(0) = R t. Without projected equations every coordinate answers
 /// alone and alike, so R = ρ ⊗ I with one scalar field ρ: a third of the
@@ -246,16 +208,6 @@ enum ResponseKind {
 }
 
 impl ResponseKind {
-    /// R as three fields of DVec3 (one per unit input).
-    fn expand(&self) -> [Vec<DVec3>; 3] {
-        match self {
-            ResponseKind::Uniform(rho) => {
-                std::array::from_fn(|k| rho.iter().map(|&r| DVec3::AXES[k] * r).collect())
-            }
-            ResponseKind::Coupled(r) => r.clone(),
-        }
-    }
-
     fn new(r: [Vec<DVec3>; 3]) -> Self {
         let scale = r
             .iter()
@@ -428,8 +380,8 @@ impl Solver {
         self.factor.columns_solved()
     }
 
-    /// How the drag responses were obtained so far (computed, updated)
-    /// and how many refinement steps every solve took: a diagnostic, as
+    /// How many drag responses were computed so far and how many
+    /// refinement steps every solve took: a diagnostic, as
     /// [`Self::columns_solved`].
     pub fn response_counts(&self) -> ResponseCounts {
         self.counts
@@ -702,13 +654,7 @@ impl Solver {
                 .iter()
                 .zip(&z)
                 .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
-        // Otherwise, on the same factor, the response is carried over to
-        // the new equations and updated at the next drag.
-        let response = match self.response.take() {
-            Some(r) if same_structure => Some(r),
-            Some(r) if !refactored => self.carried_response(r, &problem, &rows, &eqs, &pins),
-            _ => None,
-        };
+        let response = self.response.take().filter(|_| same_structure);
         self.retire(&z);
         self.problem = problem;
         self.rows = rows;
@@ -728,74 +674,6 @@ impl Solver {
         self.base = None;
         self.response = response;
         Ok(())
-    }
-
-    /// The drag response `r` carried over to the new equations `eqs` (over
-    /// `rows`, with `pins`) of `problem` on the current factor: the
-    /// multipliers of equations that stay move to their new places, new
-    /// equations start at λ = 0, and equations that leave are kept with
-    /// their multipliers as released forces, so that K̃R + Cᵀλ + Σ released
-    /// = b per unit input still holds. R itself is updated at the next drag
-    /// (`updated_response`). `None` (recompute) when the pins or the dragged
-    /// group's structure changed, a released column is not solved, or too
-    /// many equations were released.
-    fn carried_response(
-        &self,
-        mut r: Response,
-        problem: &Problem,
-        rows: &[ScalarRow],
-        eqs: &[ScalarEq],
-        pins: &[PinEq],
-    ) -> Option<Response> {
-        // A symmetric response keeps the x input's multipliers only.
-        if !r.exact
-            || r.lambdas[0].len() != self.eqs.len()
-            || r.lambdas[1..]
-                .iter()
-                .any(|l| !l.is_empty() && l.len() != self.eqs.len())
-            || !pin_signature(pins, problem).eq(r.pins.iter().copied())
-        {
-            return None;
-        }
-        if let Some(g) = problem.groups.iter().find(|g| g.key == r.key)
-            && !same_group(g, &r.group)
-        {
-            return None;
-        }
-        let matched = match_equations(&self.rows, &self.eqs, rows, eqs);
-        for &o in &matched.removed {
-            let lambda: [f64; 3] =
-                std::array::from_fn(|p| r.lambdas[p].get(o).copied().unwrap_or(0.0));
-            if lambda == [0.0; 3] {
-                continue;
-            }
-            let terms = self.eqs[o]
-                .terms
-                .iter()
-                .map(|t| (t.k, t.coef, self.z[t.col].clone()))
-                .collect::<Vec<_>>();
-            if terms.iter().any(|(_, _, c)| c.values.len() != self.dim()) {
-                return None;
-            }
-            r.released.push(Released { terms, lambda });
-        }
-        let released: usize = r.released.iter().map(|e| e.terms.len()).sum();
-        if released > MAX_RELEASED_TERMS {
-            return None;
-        }
-        let lambdas = std::array::from_fn(|p| {
-            if r.lambdas[p].is_empty() {
-                return Vec::new();
-            }
-            let mut l = vec![0.0; eqs.len()];
-            for &(e, o) in &matched.kept {
-                l[e] = r.lambdas[p][o];
-            }
-            l
-        });
-        r.lambdas = lambdas;
-        r.current &= matched.added.is_empty() && matched.removed.is_empty();
-        Some(r)
     }
 
     /// Z = K̃⁻¹[free rows] (cached columns reused, the rest in one batched
@@ -1369,22 +1247,9 @@ impl Solver {
             });
         }
         let key = self.problem.groups[group].key;
-        if self
-            .response
-            .as_ref()
-            .is_none_or(|r| r.key != key || !r.current)
-        {
-            let stale = self.response.take().filter(|r| r.key == key);
-            let response = match stale.and_then(|r| self.updated_response(r, group)) {
-                Some(r) => {
-                    self.counts.updated += 1;
-                    r
-                }
-                None => {
-                    self.counts.computed += 1;
-                    self.fresh_response(group)
-                }
-            };
+        if self.response.as_ref().is_none_or(|r| r.key != key) {
+            self.counts.computed += 1;
+            let response = self.fresh_response(group);
             self.response = Some(response);
         }
         let (Some(base), Some(resp)) = (&self.base, &self.response) else {
@@ -1407,7 +1272,8 @@ impl Solver {
     }
 
     /// The drag response of group `group` (index) computed from scratch:
-    /// δ per unit of drag input along x, y and z, refined to convergence.
+    /// δ per unit of drag input along x, y and z, refined to convergence
+    /// (along x only when the problem is [`Self::symmetric`]).
     fn fresh_response(&mut self, group: usize) -> Response {
         let symmetric = self.symmetric();
         let axes: &[DVec3] = if symmetric {
@@ -1422,8 +1288,8 @@ impl Solver {
             // reference: its scale is 1.
             .refined_deltas(&inputs, &vec![None; inputs.len()], &extents)
             .into_iter();
-        let mut next = || solved.next().unwrap_or_default();
-        let [(r0, l0, q0), (r1, l1, q1), (r2, l2, q2)] = [next(), next(), next()];
+        let mut next = || solved.next().map(|(delta, _, _)| delta).unwrap_or_default();
+        let [r0, r1, r2] = [next(), next(), next()];
         let kind = if symmetric {
             ResponseKind::Uniform(r0.iter().map(|v| v.x).collect())
         } else {
@@ -1431,14 +1297,7 @@ impl Solver {
         };
         Response {
             key: self.problem.groups[group].key,
-            group: self.problem.groups[group].clone(),
-            pins: pin_signature(&self.pins, &self.problem).collect(),
             kind,
-            lambdas: [l0, l1, l2],
-            reaches: [q0, q1, q2],
-            released: Vec::new(),
-            current: true,
-            exact: self.rank_deficiency == 0,
         }
     }
 
@@ -1462,100 +1321,6 @@ impl Solver {
                 .or_default()[t.k] += 1;
         }
         count.values().all(|c| c[0] == c[1] && c[1] == c[2])
-    }
-
-    /// A carried drag response (see [`Self::carried_response`]) brought up
-    /// to the current equations on the same factor, instead of computed
-    /// again. K is unchanged, so the new response is the old one plus one
-    /// exactly known correction: the released equations' forces give the
-    /// stationarity residual K̃⁻¹Σ a_r λ_r = Σ z_r λ_r (their columns, no
-    /// solve), the new equations the constraint residual σ = t − C R, and
-    /// one projection through the new S⁻¹ meets both (a bordered /
-    /// downdated KKT solve). The refinement loop then checks the result
-    /// with the same criteria as a fresh response (usually without a
-    /// step). `None` (compute it fresh) unless the response was exact, S is
-    /// inverted with nothing dropped, nothing is pending, and the dragged
-    /// group and the pins are as when R was computed.
-    fn updated_response(&mut self, r: Response, group: usize) -> Option<Response> {
-        let m = self.eqs.len();
-        // A symmetric problem needs the x input only (see `symmetric`).
-        let inputs_needed = if self.symmetric() { 1 } else { 3 };
-        if !r.exact
-            || self.rank_deficiency != 0
-            || !self.pending.is_empty()
-            || r.lambdas[..inputs_needed].iter().any(|l| l.len() != m)
-            || !same_group(&self.problem.groups[group], &r.group)
-            || !pin_signature(&self.pins, &self.problem).eq(r.pins.iter().copied())
-        {
-            return None;
-        }
-        let n = self.dim();
-        let inputs: Vec<Inputs> = [DVec3::X, DVec3::Y, DVec3::Z][..inputs_needed]
-            .iter()
-            .map(|&e| self.unit_inputs(group, e))
-            .collect();
-        let mut deltas: Vec<Vec<DVec3>> = r.kind.expand().into_iter().collect();
-        deltas.truncate(inputs_needed);
-        let mut lambdas: Vec<Vec<f64>> = r.lambdas.into_iter().collect();
-        lambdas.truncate(inputs_needed);
-        let mut reaches = r.reaches;
-        for p in 0..inputs_needed {
-            let mut y = vec![DVec3::ZERO; n];
-            for rel in &r.released {
-                for (k, coef, col) in &rel.terms {
-                    let a = coef * rel.lambda[p];
-                    if a == 0.0 {
-                        continue;
-                    }
-                    for (yi, zi) in y.iter_mut().zip(col.values.iter()) {
-                        yi[*k] += a * zi;
-                    }
-                    reaches[p][*k] += a.abs() * col.norm;
-                }
-            }
-            let sigma: Vec<f64> = inputs[p]
-                .targets
-                .iter()
-                .zip(self.c_times(&deltas[p]))
-                .map(|(t, c)| t - c)
-                .collect();
-            let w = self.project(&sigma, &y, &mut deltas[p], &mut lambdas[p]);
-            reaches[p] = w
-                .iter()
-                .zip(&self.z)
-                .fold(reaches[p], |q, (wc, col)| q + wc.abs() * col.norm);
-        }
-        let zeros = vec![0.0; m];
-        let cxs = vec![zeros.as_slice(); inputs_needed];
-        self.refine(
-            &inputs,
-            &cxs,
-            &mut deltas,
-            &mut lambdas,
-            &reaches[..inputs_needed],
-            &vec![1.0; inputs_needed],
-        );
-        let kind = if inputs_needed == 1 {
-            ResponseKind::Uniform(deltas[0].iter().map(|v| v.x).collect())
-        } else {
-            let mut it = deltas.into_iter();
-            let mut next = || it.next().unwrap_or_default();
-            ResponseKind::new([next(), next(), next()])
-        };
-        lambdas.resize(3, Vec::new());
-        let mut it = lambdas.into_iter();
-        let mut next = || it.next().unwrap_or_default();
-        Some(Response {
-            key: r.key,
-            group: r.group,
-            pins: r.pins,
-            kind,
-            lambdas: [next(), next(), next()],
-            reaches,
-            released: Vec::new(),
-            current: true,
-            exact: true,
-        })
     }
 
     /// The cached basis of the drag fast path, read-only: the shape with
@@ -2131,14 +1896,14 @@ impl Solver {
 
     /// δ += y + Z w with w = −Cᵀ S⁺ (C y − σ), λ += S⁺ (C y − σ): the
     /// correction y (K̃⁻¹ of a stationarity residual) projected onto the
-    /// constraints, as in [`Self::lambda_weights`]. Returns w.
+    /// constraints, as in [`Self::lambda_weights`].
     fn project(
         &self,
         sigma: &[f64],
         correction: &[DVec3],
         delta: &mut [DVec3],
         lambda: &mut [f64],
-    ) -> Vec<DVec3> {
+    ) {
         // r' = C y − σ.
         let r: Vec<f64> = self
             .c_times(correction)
@@ -2159,7 +1924,6 @@ impl Solver {
             *d += *c;
         }
         self.add_columns(delta, &w);
-        w
     }
 
     /// `report` as a result: a residual above [`RESIDUAL_TOLERANCE`] of the
@@ -2305,15 +2069,6 @@ fn match_equations(
         added,
         removed,
     }
-}
-
-/// Each pin's (control point, weight, group key), in `pins` order.
-fn pin_signature<'a>(
-    pins: &'a [PinEq],
-    problem: &'a Problem,
-) -> impl Iterator<Item = (usize, f64, GroupKey)> + 'a {
-    pins.iter()
-        .map(|p| (p.index, p.weight, problem.groups[p.group].key))
 }
 
 /// Whether two groups have the same structure: key, rows, directions and
