@@ -10,4 +10,4 @@ mod solver;
 pub use error::SolveError;
 pub use factor::Factor;
 pub use problem::{Equation, Group, GroupKey, Load, Problem, ScalarRow};
-pub use solver::{RESIDUAL_TOLERANCE, SolveReport, SolveWarning, Solver};
+pub use solver::{RESIDUAL_TOLERANCE, ResponseCounts, SolveReport, SolveWarning, Solver};

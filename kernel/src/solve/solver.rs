@@ -48,6 +48,18 @@ use super::factor::Factor;
 use super::{Equation, Group, GroupKey, Problem, ScalarRow, SolveError};
 use crate::energy::Stiffness;
 
+/// How the solver obtained its drag responses so far (see
+/// [`Solver::response_counts`]): what a grab cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ResponseCounts {
+    /// Responses computed (a first grab, another group grabbed, or the
+    /// first grab after the problem's structure changed).
+    pub computed: u64,
+    /// Refinement steps taken by any solve or response (each a projection
+    /// and, when the stationarity residual asks, a batched sparse solve).
+    pub refinement_steps: u64,
+}
+
 /// What a solve achieved.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolveReport {
@@ -181,7 +193,8 @@ fn row_key(r: &ScalarRow) -> RowKey {
 /// The cached response of one group to its drag input.
 #[derive(Debug)]
 struct Response {
-    group: usize,
+    /// The dragged group's key.
+    key: GroupKey,
     kind: ResponseKind,
 }
 
@@ -321,6 +334,7 @@ pub struct Solver {
     base: Option<Base>,
     response: Option<Response>,
     last: Option<LastSolve>,
+    counts: ResponseCounts,
 }
 
 impl Solver {
@@ -351,6 +365,7 @@ impl Solver {
             base: None,
             response: None,
             last: None,
+            counts: ResponseCounts::default(),
         })
     }
 
@@ -363,6 +378,13 @@ impl Solver {
     /// constraint columns, refinement steps): what a problem change cost.
     pub fn columns_solved(&self) -> u64 {
         self.factor.columns_solved()
+    }
+
+    /// How many drag responses were computed so far and how many
+    /// refinement steps every solve took: a diagnostic, as
+    /// [`Self::columns_solved`].
+    pub fn response_counts(&self) -> ResponseCounts {
+        self.counts
     }
 
     /// The stiffness K (the factor holds K with the pinned control points
@@ -632,6 +654,7 @@ impl Solver {
                 .iter()
                 .zip(&z)
                 .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
+        let response = self.response.take().filter(|_| same_structure);
         self.retire(&z);
         self.problem = problem;
         self.rows = rows;
@@ -649,9 +672,7 @@ impl Solver {
         self.pin_points = pin_points;
         self.pin_redundant = pin_redundant;
         self.base = None;
-        if !same_structure {
-            self.response = None;
-        }
+        self.response = response;
         Ok(())
     }
 
@@ -827,45 +848,11 @@ impl Solver {
         if !self.s_exact || m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
             return None;
         }
-        // New column → old column (the same row, the same cached Z column).
-        let old_col: HashMap<RowKey, usize> = self
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(c, r)| (row_key(r), c))
-            .collect();
-        let map: Vec<Option<usize>> = rows
-            .iter()
-            .map(|r| old_col.get(&row_key(r)).copied())
-            .collect();
-        type EqKey = Vec<(usize, u64, usize)>;
-        let mut old_eqs: HashMap<EqKey, Vec<usize>> = HashMap::new();
-        for (e, eq) in self.eqs.iter().enumerate().rev() {
-            let key = eq
-                .terms
-                .iter()
-                .map(|t| (t.k, t.coef.to_bits(), t.col))
-                .collect();
-            old_eqs.entry(key).or_default().push(e);
-        }
-        let mut kept: Vec<(usize, usize)> = Vec::new();
-        let mut added: Vec<usize> = Vec::new();
-        for (e, eq) in eqs.iter().enumerate() {
-            let key: Option<EqKey> = eq
-                .terms
-                .iter()
-                .map(|t| map[t.col].map(|c| (t.k, t.coef.to_bits(), c)))
-                .collect();
-            match key.and_then(|k| old_eqs.get_mut(&k)).and_then(Vec::pop) {
-                Some(old) => kept.push((e, old)),
-                None => added.push(e),
-            }
-        }
-        let mut is_kept = vec![false; m_old];
-        for &(_, o) in &kept {
-            is_kept[o] = true;
-        }
-        let removed: Vec<usize> = (0..m_old).filter(|&o| !is_kept[o]).collect();
+        let EquationMatch {
+            kept,
+            added,
+            removed,
+        } = match_equations(&self.rows, &self.eqs, rows, eqs);
         let (k, a, r) = (kept.len(), added.len(), removed.len());
         if k == 0 || 4 * (a + r) > m_old.max(m) {
             return None;
@@ -947,22 +934,6 @@ impl Solver {
     /// Whether `problem` has the current problem's structure (see
     /// [`Self::retarget`]) and the caches built for it are whole.
     fn same_structure(&self, problem: &Problem) -> bool {
-        let same_eq = |a: &Equation, b: &Equation| match (a, b) {
-            (Equation::Vector { row: r, .. }, Equation::Vector { row: q, .. }) => r == q,
-            (
-                Equation::Projected {
-                    row: r,
-                    direction: d,
-                    ..
-                },
-                Equation::Projected {
-                    row: q,
-                    direction: e,
-                    ..
-                },
-            ) => r == q && d == e,
-            _ => false,
-        };
         // After a refactor the columns are forgotten until `set_problem`
         // rebuilds them.
         let whole = self.z.len() == self.rows.len()
@@ -978,19 +949,7 @@ impl Solver {
                 .groups
                 .iter()
                 .zip(&self.problem.groups)
-                .all(|(a, b)| {
-                    a.key == b.key
-                        && a.equations.len() == b.equations.len()
-                        && a.loads.len() == b.loads.len()
-                        && a.equations
-                            .iter()
-                            .zip(&b.equations)
-                            .all(|(x, y)| same_eq(x, y))
-                        && a.loads
-                            .iter()
-                            .zip(&b.loads)
-                            .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
-                })
+                .all(|(a, b)| same_group(a, b))
     }
 
     /// The targets and forces of `problem` (of the current structure, valid)
@@ -1287,19 +1246,11 @@ impl Solver {
                 start,
             });
         }
-        if self.response.as_ref().is_none_or(|r| r.group != group) {
-            let inputs = [DVec3::X, DVec3::Y, DVec3::Z].map(|e| self.unit_inputs(group, e));
-            let mut solved = self
-                // A response is δ per unit of drag input, from a zero
-                // reference: its scale is 1.
-                .refined_deltas(&inputs, &[None, None, None], &[1.0; 3])
-                .into_iter();
-            let mut next = || solved.next().map(|(delta, _)| delta).unwrap_or_default();
-            let r = [next(), next(), next()];
-            self.response = Some(Response {
-                group,
-                kind: ResponseKind::new(r),
-            });
+        let key = self.problem.groups[group].key;
+        if self.response.as_ref().is_none_or(|r| r.key != key) {
+            self.counts.computed += 1;
+            let response = self.fresh_response(group);
+            self.response = Some(response);
         }
         let (Some(base), Some(resp)) = (&self.base, &self.response) else {
             return Err(SolveError::Factor("drag caches missing".into()));
@@ -1318,6 +1269,58 @@ impl Solver {
         }
         let report = self.report(out, Some(group), t);
         self.checked(report, out, Some((group, t)))
+    }
+
+    /// The drag response of group `group` (index) computed from scratch:
+    /// δ per unit of drag input along x, y and z, refined to convergence
+    /// (along x only when the problem is [`Self::symmetric`]).
+    fn fresh_response(&mut self, group: usize) -> Response {
+        let symmetric = self.symmetric();
+        let axes: &[DVec3] = if symmetric {
+            &[DVec3::X]
+        } else {
+            &[DVec3::X, DVec3::Y, DVec3::Z]
+        };
+        let inputs: Vec<Inputs> = axes.iter().map(|&e| self.unit_inputs(group, e)).collect();
+        let extents = vec![1.0; inputs.len()];
+        let mut solved = self
+            // A response is δ per unit of drag input, from a zero
+            // reference: its scale is 1.
+            .refined_deltas(&inputs, &vec![None; inputs.len()], &extents)
+            .into_iter();
+        let mut next = || solved.next().map(|(delta, _, _)| delta).unwrap_or_default();
+        let [r0, r1, r2] = [next(), next(), next()];
+        let kind = if symmetric {
+            ResponseKind::Uniform(r0.iter().map(|v| v.x).collect())
+        } else {
+            ResponseKind::new([r0, r1, r2])
+        };
+        Response {
+            key: self.problem.groups[group].key,
+            kind,
+        }
+    }
+
+    /// Whether every coordinate answers alone and alike: each scalar
+    /// equation has one term, and the equations on x, y and z are the same
+    /// (row, coefficient, drag shift, group) for each. Loads and pins act
+    /// alike on every coordinate, so a drag input along x moves only x and
+    /// the response is ρ ⊗ I with ρ the x-field of the x input: one input
+    /// computed instead of three.
+    fn symmetric(&self) -> bool {
+        let mut count: HashMap<(usize, u64, bool, usize), [usize; 3]> = HashMap::new();
+        for eq in &self.eqs {
+            let [t] = eq.terms.as_slice() else {
+                return false;
+            };
+            if eq.shift.is_some_and(|k| k != t.k) {
+                return false;
+            }
+            count
+                .entry((t.col, t.coef.to_bits(), eq.shift.is_some(), eq.group))
+                .or_default()[t.k] += 1;
+        }
+        count.values().all(|c| c[0] == c[1] && c[1] == c[2])
     }
 
     /// The cached basis of the drag fast path, read-only: the shape with
@@ -1499,8 +1502,15 @@ impl Solver {
             if *wc == DVec3::ZERO {
                 continue;
             }
-            for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
-                *d += *wc * zi;
+            if wc.y == 0.0 && wc.z == 0.0 {
+                // One coordinate (a symmetric response's x input).
+                for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
+                    d.x += wc.x * zi;
+                }
+            } else {
+                for (d, &zi) in delta.iter_mut().zip(self.z[c].values.iter()) {
+                    *d += *wc * zi;
+                }
             }
         }
     }
@@ -1534,6 +1544,7 @@ impl Solver {
             &[max_extent(reference)],
         )
         .pop()
+        .map(|(delta, lambda, _)| (delta, lambda))
         .unwrap_or_default()
     }
 
@@ -1624,7 +1635,7 @@ impl Solver {
         inputs: &[Inputs],
         references: &[Option<&[DVec3]>],
         extents: &[f64],
-    ) -> Vec<(Vec<DVec3>, Vec<f64>)> {
+    ) -> Vec<Refined> {
         let n = self.dim();
         let m = self.eqs.len();
         let mut deltas = Vec::with_capacity(inputs.len());
@@ -1667,8 +1678,28 @@ impl Solver {
             lambdas.push(lambda);
             reaches.push(reach);
         }
+        self.refine(inputs, &cxs, &mut deltas, &mut lambdas, &reaches, extents);
+        deltas
+            .into_iter()
+            .zip(lambdas)
+            .zip(reaches)
+            .map(|((d, l), r)| (d, l, r))
+            .collect()
+    }
+
+    /// The refinement loop of [`Self::refined_deltas`] from given starting
+    /// answers (δ, λ) and their reaches: steps while a step still gains.
+    fn refine(
+        &mut self,
+        inputs: &[Inputs],
+        cxs: &[&[f64]],
+        deltas: &mut [Vec<DVec3>],
+        lambdas: &mut [Vec<f64>],
+        reaches: &[DVec3],
+        extents: &[f64],
+    ) {
         if self.eqs.is_empty() && self.loads.is_empty() && self.pin_points.is_empty() {
-            return deltas.into_iter().zip(lambdas).collect();
+            return;
         }
         // The size of the last residual per input, to stop when a step no
         // longer gains.
@@ -1710,9 +1741,9 @@ impl Solver {
             if !active.iter().any(|&a| a) {
                 break;
             }
-            self.refinement_step(&pending, &active, &mut deltas, &mut lambdas);
+            self.counts.refinement_steps += 1;
+            self.refinement_step(&pending, &active, deltas, lambdas);
         }
-        deltas.into_iter().zip(lambdas).collect()
     }
 
     /// The residuals of one input's (δ, λ): σ = d − C P_ref − C δ, per
@@ -1851,7 +1882,6 @@ impl Solver {
             if !active[p] {
                 continue;
             }
-            let delta = &mut deltas[p];
             let mut correction = vec![DVec3::ZERO; n];
             for (c, &(q, k)) in columns.iter().enumerate() {
                 if q == p {
@@ -1860,27 +1890,40 @@ impl Solver {
                     }
                 }
             }
-            // Project onto the constraints as in `delta`: r' = C y − σ.
-            let r: Vec<f64> = self
-                .c_times(&correction)
-                .iter()
-                .zip(sigma)
-                .map(|(cy, s)| cy - s)
-                .collect();
-            let m = self.eqs.len();
-            let mut w = vec![DVec3::ZERO; self.rows.len()];
-            for (e, eq) in self.eqs.iter().enumerate() {
-                let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
-                lambdas[p][e] += lam;
-                for t in &eq.terms {
-                    w[t.col][t.k] -= t.coef * lam;
-                }
-            }
-            for (d, c) in delta.iter_mut().zip(&correction) {
-                *d += *c;
-            }
-            self.add_columns(delta, &w);
+            self.project(sigma, &correction, &mut deltas[p], &mut lambdas[p]);
         }
+    }
+
+    /// δ += y + Z w with w = −Cᵀ S⁺ (C y − σ), λ += S⁺ (C y − σ): the
+    /// correction y (K̃⁻¹ of a stationarity residual) projected onto the
+    /// constraints, as in [`Self::lambda_weights`].
+    fn project(
+        &self,
+        sigma: &[f64],
+        correction: &[DVec3],
+        delta: &mut [DVec3],
+        lambda: &mut [f64],
+    ) {
+        // r' = C y − σ.
+        let r: Vec<f64> = self
+            .c_times(correction)
+            .iter()
+            .zip(sigma)
+            .map(|(cy, s)| cy - s)
+            .collect();
+        let m = self.eqs.len();
+        let mut w = vec![DVec3::ZERO; self.rows.len()];
+        for (e, eq) in self.eqs.iter().enumerate() {
+            let lam: f64 = (0..m).map(|f| self.s_pinv[e * m + f] * r[f]).sum();
+            lambda[e] += lam;
+            for t in &eq.terms {
+                w[t.col][t.k] -= t.coef * lam;
+            }
+        }
+        for (d, c) in delta.iter_mut().zip(correction) {
+            *d += *c;
+        }
+        self.add_columns(delta, &w);
     }
 
     /// `report` as a result: a residual above [`RESIDUAL_TOLERANCE`] of the
@@ -1964,9 +2007,110 @@ impl Solver {
     }
 }
 
+/// How the scalar equations of a new problem relate to the current ones.
+struct EquationMatch {
+    /// (new, old) pairs: the same terms on the same rows.
+    kept: Vec<(usize, usize)>,
+    /// New equations with no old counterpart.
+    added: Vec<usize>,
+    /// Old equations with no new counterpart.
+    removed: Vec<usize>,
+}
+
+/// Matches the scalar equations `new` (over `new_rows`) with `old` (over
+/// `old_rows`): an equation is kept when an old one has the same terms
+/// (coordinate, coefficient, row, bit for bit); duplicates pair in order.
+fn match_equations(
+    old_rows: &[ScalarRow],
+    old: &[ScalarEq],
+    new_rows: &[ScalarRow],
+    new: &[ScalarEq],
+) -> EquationMatch {
+    // New column → old column (the same row, the same cached Z column).
+    let old_col: HashMap<RowKey, usize> = old_rows
+        .iter()
+        .enumerate()
+        .map(|(c, r)| (row_key(r), c))
+        .collect();
+    let map: Vec<Option<usize>> = new_rows
+        .iter()
+        .map(|r| old_col.get(&row_key(r)).copied())
+        .collect();
+    type EqKey = Vec<(usize, u64, usize)>;
+    let mut old_eqs: HashMap<EqKey, Vec<usize>> = HashMap::new();
+    for (e, eq) in old.iter().enumerate().rev() {
+        let key = eq
+            .terms
+            .iter()
+            .map(|t| (t.k, t.coef.to_bits(), t.col))
+            .collect();
+        old_eqs.entry(key).or_default().push(e);
+    }
+    let mut kept: Vec<(usize, usize)> = Vec::new();
+    let mut added: Vec<usize> = Vec::new();
+    for (e, eq) in new.iter().enumerate() {
+        let key: Option<EqKey> = eq
+            .terms
+            .iter()
+            .map(|t| map[t.col].map(|c| (t.k, t.coef.to_bits(), c)))
+            .collect();
+        match key.and_then(|k| old_eqs.get_mut(&k)).and_then(Vec::pop) {
+            Some(o) => kept.push((e, o)),
+            None => added.push(e),
+        }
+    }
+    let mut is_kept = vec![false; old.len()];
+    for &(_, o) in &kept {
+        is_kept[o] = true;
+    }
+    let removed: Vec<usize> = (0..old.len()).filter(|&o| !is_kept[o]).collect();
+    EquationMatch {
+        kept,
+        added,
+        removed,
+    }
+}
+
+/// Whether two groups have the same structure: key, rows, directions and
+/// gains (targets and forces aside).
+fn same_group(a: &Group, b: &Group) -> bool {
+    let same_eq = |a: &Equation, b: &Equation| match (a, b) {
+        (Equation::Vector { row: r, .. }, Equation::Vector { row: q, .. }) => r == q,
+        (
+            Equation::Projected {
+                row: r,
+                direction: d,
+                ..
+            },
+            Equation::Projected {
+                row: q,
+                direction: e,
+                ..
+            },
+        ) => r == q && d == e,
+        _ => false,
+    };
+    a.key == b.key
+        && a.equations.len() == b.equations.len()
+        && a.loads.len() == b.loads.len()
+        && a.equations
+            .iter()
+            .zip(&b.equations)
+            .all(|(x, y)| same_eq(x, y))
+        && a.loads
+            .iter()
+            .zip(&b.loads)
+            .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
+}
+
 /// One input of a batched refinement: σ = d − C P_ref − C δ, and per
 /// coordinate the stationarity residual ρ_k when it needs a refinement step.
 type Pending = (Vec<f64>, [Option<Vec<f64>>; 3]);
+
+/// One refined answer: δ, the multipliers λ (one per scalar equation) and
+/// the reach of δ on Z per coordinate (Σ_c |w_c| ‖z_c‖∞, see
+/// `Solver::residuals`).
+type Refined = (Vec<DVec3>, Vec<f64>, DVec3);
 
 struct Inputs {
     targets: Vec<f64>,
