@@ -74,6 +74,11 @@ pub enum ServerMessage {
         can_undo: bool,
         /// Whether redo has something to redo.
         can_redo: bool,
+        /// The fairing jobs running now, each with its latest progress
+        /// (a client joining while one runs learns of it here, not only
+        /// from its next `fairing_progress`); left out when none runs.
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        fairing: Vec<crate::network::FairingProgress>,
     },
     /// An icon was created.
     IconCreated {

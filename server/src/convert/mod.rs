@@ -672,6 +672,7 @@ pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
         presence: presence_to_wire(&v.presence),
         can_undo: v.can_undo,
         can_redo: v.can_redo,
+        fairing: v.fairing.iter().map(network::fairing_progress).collect(),
     })
 }
 

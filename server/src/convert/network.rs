@@ -115,9 +115,10 @@ pub fn edit_from_wire(e: &NetworkEdit) -> NetworkEditDoc {
     }
 }
 
-/// A fairing job's progress on the wire.
-pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
-    super::text(&ServerMessage::FairingProgress(FairingProgress {
+/// A fairing job's progress as the wire has it (in `fairing_progress` and
+/// a snapshot's `fairing`).
+pub fn fairing_progress(p: &JobProgress) -> FairingProgress {
+    FairingProgress {
         part: p.part,
         face: p.face as u32,
         client: p.client,
@@ -126,7 +127,12 @@ pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
         max_move: p.max_move,
         threshold: p.threshold,
         fraction: p.fraction,
-    }))
+    }
+}
+
+/// A fairing job's progress on the wire.
+pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
+    super::text(&ServerMessage::FairingProgress(fairing_progress(p)))
 }
 
 /// A fairing job's end on the wire.

@@ -78,6 +78,8 @@ pub struct SnapshotView {
     pub can_undo: bool,
     /// Redo available.
     pub can_redo: bool,
+    /// The fairing jobs running, each with its latest progress.
+    pub fairing: Vec<super::fairing_job::JobProgress>,
 }
 
 /// Where a dragged icon actually went (the bridge's spring model needs it).
@@ -815,6 +817,7 @@ impl Actor {
             presence: Arc::new(self.clients.values().cloned().collect()),
             can_undo: self.undo.can_undo(),
             can_redo: self.undo.can_redo(),
+            fairing: self.jobs.running(),
         })
     }
 
