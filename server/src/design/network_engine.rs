@@ -576,7 +576,12 @@ impl NetworkEngine {
     }
 
     /// Every face's mesh, faces one after another, with area-weighted
-    /// vertex normals.
+    /// vertex normals — except on the boundary of a patch (not faired),
+    /// where the normal is the patch's own (exact): one-sided averages
+    /// there would tilt by about curvature × spacing, and zebra stripes or
+    /// a curvature map across a shared curve would show a crease that the
+    /// patches (G1 along their curves) do not have. At a domain corner,
+    /// where the patch's derivatives vanish, the average stays.
     pub fn mesh(&self) -> MeshData {
         let mut out = MeshData::default();
         for f in &self.faces {
@@ -593,6 +598,17 @@ impl NetworkEngine {
                     normals[i as usize] += n;
                 }
                 out.indices.extend([a + base, b + base, c + base]);
+            }
+            if f.faired.is_none() {
+                let domain = f.sampler.mesh();
+                for (i, n) in normals.iter_mut().enumerate() {
+                    if domain.boundary.get(i).copied().unwrap_or(false) {
+                        let exact = f.patch.normal(domain.points[i]);
+                        if exact.is_finite() {
+                            *n = exact;
+                        }
+                    }
+                }
             }
             out.positions
                 .extend(f.points.iter().map(|p| p.as_vec3().to_array()));
