@@ -1,7 +1,8 @@
 //! A styling-curve network part on the wire (paper 004): B-spline curves,
 //! the meetings and faces the server finds between them, the faces it has
 //! faired, and the edits a client sends (`network_edit`): move a control
-//! point, drag a point of a curve, add or remove a curve, fair a face.
+//! point, drag a point of a curve, add or remove a curve, fair a face, set
+//! a side's ribbon handles (scale, twist).
 //! A fair runs as a job off the design's thread: its progress
 //! ([`FairingProgress`]) and how it ended ([`FairingOutcome`]) go to every
 //! client; an editor may cancel it (`cancel_fairing`).
@@ -24,6 +25,8 @@ use crate::types::Vec3;
 pub const MAX_NETWORK_CURVES: usize = 64;
 /// Most sweeps a fairing request may ask for.
 pub const MAX_FAIRING_ITERATIONS: u32 = 100_000;
+/// Most a side's ribbon scale may be; the least is its inverse (1/10).
+pub const MAX_RIBBON_SCALE: f64 = 10.0;
 
 /// A network part's shape: its curves and what the server found of them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -46,6 +49,24 @@ pub struct NetworkData {
     /// index (set by the server; ignored in `create_part`).
     #[serde(default)]
     pub faired: Vec<u32>,
+    /// Per face, per side, its ribbon handles (set by the server; ignored
+    /// in `create_part`; left out when there are no faces).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ribbons: Vec<Vec<RibbonHandles>>,
+}
+
+/// A side's ribbon handles (paper 004 §5): how the patch leaves the side.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RibbonHandles {
+    /// The cross-boundary derivative's length is multiplied by
+    /// 1 + (scale − 1)·sin(πs) along the side (1: the ribbon the corners
+    /// give; in [1/10, 10]).
+    pub scale: f64,
+    /// The tangent plane along the side turned about its curve by
+    /// twist·sin(πu) radians on each of its edges (0: none; |twist| < π/2).
+    /// Shared with the face across the side, so the join stays G1.
+    pub twist: f64,
 }
 
 /// A point where two or more curves meet.
@@ -163,6 +184,21 @@ pub enum NetworkEdit {
     /// Fair one face's point mesh toward curvature goals (paper 004 §8);
     /// the faired mesh replaces the face's patch until its curves change.
     Fair(FairingRequest),
+    /// Set side `side` of face `face`'s ribbon handles (at least one of
+    /// `scale`, `twist`; an omitted one keeps its value): the patches
+    /// update and a mesh frame follows.
+    SetRibbon {
+        /// The face.
+        face: u32,
+        /// The side (index into the face's `sides`).
+        side: u32,
+        /// The new scale, in [1/10, 10].
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        scale: Option<f64>,
+        /// The new twist in radians, |twist| < π/2.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        twist: Option<f64>,
+    },
 }
 
 /// How a fairing job ended (`fairing_ended`).
@@ -271,6 +307,33 @@ impl NetworkEdit {
             }
             NetworkEdit::AddCurve { curve: c } => curve(c),
             NetworkEdit::RemoveCurve { .. } => Ok(()),
+            NetworkEdit::SetRibbon { scale, twist, .. } => {
+                if scale.is_none() && twist.is_none() {
+                    return Err(bad(
+                        ErrorCode::Malformed,
+                        "set_ribbon needs a scale or a twist",
+                    ));
+                }
+                if let Some(x) = *scale {
+                    number("scale", x)?;
+                    if !(1.0 / MAX_RIBBON_SCALE..=MAX_RIBBON_SCALE).contains(&x) {
+                        return Err(bad(
+                            ErrorCode::OutOfRange,
+                            format!("scale {x} must be in [0.1, {MAX_RIBBON_SCALE}]"),
+                        ));
+                    }
+                }
+                if let Some(t) = *twist {
+                    number("twist", t)?;
+                    if t.abs() >= std::f64::consts::FRAC_PI_2 {
+                        return Err(bad(
+                            ErrorCode::OutOfRange,
+                            format!("twist {t} must have |twist| < π/2"),
+                        ));
+                    }
+                }
+                Ok(())
+            }
             NetworkEdit::Fair(f) => {
                 if let FairingGoal::Constant(g) = f.goal {
                     number("goal", g)?;

@@ -83,6 +83,11 @@ pub enum ServerMessage {
         /// omitted).
         #[serde(default)]
         comments: Vec<Comment>,
+        /// The fairing jobs running now, each with its latest progress
+        /// (a client joining while one runs learns of it here, not only
+        /// from its next `fairing_progress`); left out when none runs.
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        fairing: Vec<crate::network::FairingProgress>,
     },
     /// An icon was created.
     IconCreated {

@@ -411,3 +411,54 @@ async fn deleting_the_part_cancels_its_job() {
     assert_eq!(r["code"], "conflict", "{r}");
     s.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_joining_while_a_job_runs_finds_it_in_its_snapshot() {
+    let s = setup("fairing-job-join").await;
+    let mut a = s.client("ann").await;
+    assert!(
+        a.snapshot.get("fairing").is_none(),
+        "no job runs yet: {}",
+        a.snapshot["fairing"]
+    );
+    send_req(&mut a, s.long_fair(), 900).await;
+    // Wait until the job has done sweeps, so the snapshot has more to say
+    // than the start.
+    let seen = loop {
+        let p = job_message(&mut a, "fairing_progress", s.part, s.five).await;
+        if p["iteration"].as_u64().unwrap() > 0 {
+            break p;
+        }
+    };
+
+    // Cy joins now: its snapshot lists the job, at least as far on as the
+    // progress Ann saw before Cy joined.
+    let c = s.client("cy").await;
+    let jobs = c.snapshot["fairing"].as_array().expect("fairing listed");
+    assert_eq!(jobs.len(), 1, "{}", c.snapshot["fairing"]);
+    let j = &jobs[0];
+    assert_eq!(j["part"], json!(s.part), "{j}");
+    assert_eq!(j["face"], json!(s.five), "{j}");
+    assert_eq!(j["client"], json!(a.client_id()), "{j}");
+    assert_eq!(j["max_iterations"], 100_000, "{j}");
+    assert!(
+        j["iteration"].as_u64().unwrap() >= seen["iteration"].as_u64().unwrap(),
+        "{j} is behind {seen}"
+    );
+    let fraction = j["fraction"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&fraction), "{j}");
+    assert!(j["max_move"].as_f64().unwrap() > 0.0, "{j}");
+
+    // Once the job ended (cancelled), a joiner's snapshot lists none.
+    a.ok(json!({"type": "cancel_fairing", "part": s.part, "face": s.five}))
+        .await;
+    let r = answer(&mut a, 900).await;
+    assert_eq!(r["code"], "conflict", "{r}");
+    let d = s.client("dee").await;
+    assert!(
+        d.snapshot.get("fairing").is_none(),
+        "{}",
+        d.snapshot["fairing"]
+    );
+    s.stop().await;
+}

@@ -26,6 +26,7 @@ import { DsmPanel } from './dsm-panel.js';
 import { Follow } from './follow.js';
 import { Measure } from './measure.js';
 import { Comments } from './comments.js';
+import { MEASURES, isMeasure, isSigned } from './mesh-curvature.js';
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -367,7 +368,7 @@ function onMessage(msg) {
       state.clientId = msg.client_id;
       // The reviewer's page is a studio: the product stands on a ground with its contact shadow.
       view.groundShadow = msg.access !== 'editor';
-      // Jobs are announced again by their next progress.
+      // The snapshot that follows lists the jobs running now.
       networkView.jobs.clear();
       renderFairing();
       break;
@@ -386,6 +387,8 @@ function onMessage(msg) {
       keepSelection();
       setHistory(msg.can_undo, msg.can_redo);
       comments.comments = new Map((msg.comments || []).map((c) => [c.id, c]));
+      networkView.setJobs(msg.fairing || []);
+      renderFairing();
       redraw();
       break;
     case 'comment_added':
@@ -480,7 +483,10 @@ function onFrame(f) {
   // the frame and each keeps only its own kind once the parts are known.
   if (f.kind === 'mesh') {
     const part = design.parts.get(f.part);
-    if ((!part || part.kind === 'network') && networkView.mesh(f)) pictured = true;
+    if ((!part || part.kind === 'network') && networkView.mesh(f)) {
+      pictured = true;
+      renderLegendValues();
+    }
     if ((!part || part.kind === 'dsm') && dsmView.show(f, part)) {
       dsmView.style(part || { id: f.part }, partShownHere(f.part));
       pictured = true;
@@ -899,25 +905,50 @@ function addCurve() {
 function setRange(r) {
   view.setRange(r);
   $('range').value = r;
-  $('legend-min').textContent = (-r).toPrecision(2);
+  // A variation (≥ 0) runs white → red from 0; a curvature blue → white → red.
+  $('legend-min').textContent = isSigned(view.mode) ? (-r).toPrecision(2) : '0';
+  $('legend').classList.toggle('unsigned', !isSigned(view.mode));
   $('legend-max').textContent = r.toPrecision(2);
+}
+
+/** The values of the view's measure on everything drawn: surfaces (mean, Gaussian) and network patches (every measure). */
+function measureValues(mode) {
+  const out = networkView.shownValues(mode);
+  if (mode === 'mean' || mode === 'gauss') for (const d of partsView.drawings.values()) if (d.visible && d.tess) out.push(mode === 'mean' ? d.tess.mean : d.tess.gauss);
+  return out;
+}
+
+/** The legend's line of the values drawn: their smallest and largest. */
+function renderLegendValues() {
+  const mode = view.mode;
+  if (!isMeasure(mode)) return;
+  let [lo, hi] = [Infinity, -Infinity];
+  for (const a of measureValues(mode))
+    for (const x of a)
+      if (Number.isFinite(x)) {
+        if (x < lo) lo = x;
+        if (x > hi) hi = x;
+      }
+  $('legend-values').textContent = lo <= hi ? `${MEASURES[mode]}: ${lo.toPrecision(3)} … ${hi.toPrecision(3)}` : '';
 }
 
 $('mode').addEventListener('change', (e) => {
   const mode = e.target.value;
   view.setMode(mode);
-  const analysis = mode === 'mean' || mode === 'gauss';
+  const analysis = isMeasure(mode);
   $('legend').hidden = !analysis;
-  const tessellations = [...partsView.drawings.values()].filter((d) => d.visible && d.tess).map((d) => d.tess);
-  if (analysis && tessellations.length) {
-    // Start from the 95th percentile of |curvature| over the surfaces drawn; the slider spans 100× around it.
-    const values = tessellations.flatMap((t) => Array.from(mode === 'mean' ? t.mean : t.gauss, Math.abs)).sort((a, b) => a - b);
+  $('legend').classList.toggle('unsigned', !isSigned(mode));
+  const drawnValues = analysis ? measureValues(mode) : [];
+  if (analysis && drawnValues.length) {
+    // Start from the 95th percentile of |value| over what is drawn; the slider spans 100× around it.
+    const values = drawnValues.flatMap((a) => Array.from(a, Math.abs).filter(Number.isFinite)).sort((a, b) => a - b);
     const p95 = values[Math.floor(values.length * 0.95)] || 1;
     $('range').min = p95 / 10;
     $('range').max = p95 * 10;
     $('range').step = p95 / 100;
     setRange(p95);
   }
+  renderLegendValues();
 });
 $('range').addEventListener('input', (e) => setRange(Number(e.target.value)));
 $('net').addEventListener('change', (e) => partsView.setShowNet(e.target.checked));

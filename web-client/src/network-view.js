@@ -6,10 +6,17 @@
 // the newest pointer position goes next. Fairing a part's faces is
 // `fairAll` (one `network_edit` fair per face); each runs as a job on the
 // server, whose `fairing_progress` and `fairing_ended` (to every client)
-// keep `jobs` current; `cancelJobs` cancels them.
+// keep `jobs` current (a snapshot's `fairing` lists those running when a
+// client joins); `cancelJobs` cancels them. In a measure mode of the view
+// (mesh-curvature.js: H, K, k1, k2 and their variations) the patches are
+// coloured by the measure estimated on the drawn mesh; in zebra mode they
+// get the view's stripes, so tangent-plane continuity across the curves
+// shows.
 
 import * as THREE from 'three';
 import { curveDerivs } from './bspline.js';
+import { curvatureColor } from './view.js';
+import { isMeasure, measureOf, meshCurvature } from './mesh-curvature.js';
 
 /** Samples per curve for drawing and picking. */
 const SAMPLES = 200;
@@ -57,6 +64,11 @@ export class NetworkView {
     this.jobs = new Map();
     /** The last `fairing_ended`. */
     this.lastEnded = null;
+    const previousMode = view.onModeChange;
+    view.onModeChange = () => {
+      previousMode.call(view);
+      this.restyle();
+    };
     const previous = view.bounds;
     view.bounds = () => {
       const box = previous() || new THREE.Box3();
@@ -156,11 +168,63 @@ export class NetworkView {
       d.mesh.name = `network-${f.part}-patches`;
       d.root.add(d.mesh);
     }
-    // Zebra stripes (the view's shared material) show tangent-plane continuity across the curves.
     if (!d.shaded) d.shaded = d.mesh.material;
-    d.mesh.material = this.view.mode === 'zebra' ? this.view.zebra : d.shaded;
+    this.style(d);
     this.view.drawn();
     return true;
+  }
+
+  /** Every part's patches drawn for the view's mode (and range). */
+  restyle() {
+    for (const d of this.parts.values()) this.style(d);
+  }
+
+  /**
+   * Part `d`'s patches for the view's mode: zebra stripes (the view's shared
+   * material: tangent-plane continuity across the curves shows), vertex
+   * colours of a measure (blue −range → white 0 → red +range; grey where it
+   * could not be estimated), or shaded in the part's colour.
+   */
+  style(d) {
+    if (!d.mesh) return;
+    const mode = this.view.mode;
+    if (mode === 'zebra') d.mesh.material = this.view.zebra;
+    else if (isMeasure(mode)) {
+      this.colour(d, mode);
+      d.mesh.material = this.view.colored;
+    } else d.mesh.material = d.shaded;
+  }
+
+  /** Measure `mode` at every vertex of part `id`'s drawn patches (Float64Array), or null when none are drawn. */
+  values(id, mode) {
+    const d = this.parts.get(id);
+    if (!d || !d.frame) return null;
+    if (!d.curvature || d.curvature.frame !== d.frame) {
+      d.curvature = meshCurvature(d.frame.positions, d.frame.normals, d.frame.indices);
+      d.curvature.frame = d.frame;
+    }
+    return measureOf(d.curvature, mode);
+  }
+
+  /** The values of measure `mode` on every shown part's patches. */
+  shownValues(mode) {
+    return [...this.parts.values()].filter((d) => d.root.visible && d.frame).map((d) => this.values(d.id, mode));
+  }
+
+  colour(d, mode) {
+    const v = this.values(d.id, mode);
+    const g = d.mesh.geometry;
+    let attr = g.getAttribute('color');
+    if (!attr || attr.count !== v.length) {
+      attr = new THREE.BufferAttribute(new Float32Array(3 * v.length), 3);
+      g.setAttribute('color', attr);
+    }
+    const out = attr.array;
+    for (let i = 0; i < v.length; i++) {
+      if (Number.isFinite(v[i])) curvatureColor(v[i], this.view.range, out, 3 * i);
+      else out.fill(0.5, 3 * i, 3 * i + 3);
+    }
+    attr.needsUpdate = true;
   }
 
   /** Pointer position in pixels of the canvas. */
@@ -265,6 +329,15 @@ export class NetworkView {
       this.jobs.delete(key);
       this.lastEnded = msg;
     }
+  }
+
+  /**
+   * A snapshot's `fairing`: the jobs running now (each with its latest
+   * progress) replace those known; a job missing from it has ended.
+   */
+  setJobs(list) {
+    this.jobs.clear();
+    for (const j of list) this.jobs.set(`${j.part}:${j.face}`, { type: 'fairing_progress', ...j });
   }
 
   /** The jobs running on network part `id` (every part's when `id` is null). */

@@ -8,7 +8,9 @@
 // fairing button fairs the faces and the boundary stays on the curves.
 // Fairing runs as a job: both browsers show its progress, the editor's
 // fair button turns into a cancel button (the viewer's is not shown) that
-// cancels it and changes nothing; a finished fairing is drawn.
+// cancels it and changes nothing; a finished fairing is drawn. A client
+// joining while jobs run finds them in its snapshot (its page drops every
+// `fairing_progress`, so nothing else could tell it).
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -39,12 +41,13 @@ async function bottleDesign(name) {
   };
 }
 
-/** Opens `url` and waits until the network part's curves and patches are drawn and the shell is gone. */
-async function openNetwork(url) {
+/** Opens `url` and waits until the network part's curves and patches are drawn and the shell is gone; `init` runs in the page before its scripts. */
+async function openNetwork(url, init = null) {
   const page = await browser.newPage({ viewport: { width: 1100, height: 700 } });
   const errors = [];
   page.on('pageerror', (e) => errors.push(String(e)));
   page.errors = errors;
+  if (init) await page.addInitScript(init);
   await page.goto(url);
   await page.waitForFunction(
     () => {
@@ -204,13 +207,37 @@ test('fairing runs as a job: progress in both browsers, the button cancels it, a
   assert.equal(await viewer.evaluate(() => document.querySelector('#fair-network').offsetParent), null, 'a viewer sees no fair button');
   assert.equal(await viewer.evaluate(() => window.vsculpt.networkView.jobs.size), 6);
 
+  // A viewer joining now, whose page never hears a `fairing_progress` (its
+  // socket drops them), learns of the six jobs from its snapshot alone.
+  const late = await openNetwork(d.viewer, () => {
+    const Native = window.WebSocket;
+    window.droppedProgress = 0;
+    window.WebSocket = class extends Native {
+      set onmessage(handler) {
+        super.onmessage = (ev) => {
+          if (typeof ev.data === 'string' && ev.data.startsWith('{"type":"fairing_progress"')) window.droppedProgress++;
+          else handler(ev);
+        };
+      }
+      get onmessage() {
+        return super.onmessage;
+      }
+    };
+  });
+  await late.waitForFunction(() => window.vsculpt.networkView.jobs.size === 6 && !document.querySelector('#fairing').hidden && /^fairing 6 faces: \d+ % \(sweep \d+\)$/.test(document.querySelector('#fair-status').textContent), null, { timeout: 15000 });
+  const lateJobs = await late.evaluate(() => window.vsculpt.networkView.jobsOf(1).map((j) => [j.face, j.max_iterations]).sort((a, b) => a[0] - b[0]));
+  assert.deepEqual(lateJobs, [0, 1, 2, 3, 4, 5].map((f) => [f, 100000]));
+  await late.waitForFunction(() => window.droppedProgress > 0, null, { timeout: 15000 });
+
   // The button cancels every job: both browsers see them end, nothing changed.
   await editor.click('#fair-network');
-  for (const page of [editor, viewer]) {
+  for (const page of [editor, viewer, late]) {
     await page.waitForFunction(() => window.vsculpt.networkView.jobs.size === 0 && document.querySelector('#fairing').hidden, null, { timeout: 15000 });
     assert.equal(await page.evaluate(() => window.vsculpt.networkView.lastEnded.outcome), 'cancelled');
     assert.equal(await page.evaluate(() => window.vsculpt.networkView.parts.get(1).network.faired.length), 0);
   }
+  assert.deepEqual(late.errors, []);
+  await late.close();
   assert.equal(await editor.evaluate(() => document.querySelector('#fair-network').textContent), 'fair network');
   const cancelled = await drawn(viewer);
   assert.equal(cancelled.revision, before.revision, 'a cancelled fairing sent new patches');

@@ -694,6 +694,7 @@ pub fn snapshot(v: &SnapshotView, points: bool) -> Utf8Bytes {
         can_undo: v.can_undo,
         can_redo: v.can_redo,
         comments: v.comments.iter().map(comments::thread_to_wire).collect(),
+        fairing: v.fairing.iter().map(network::fairing_progress).collect(),
     })
 }
 

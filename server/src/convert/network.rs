@@ -14,7 +14,7 @@ use vsculpt_protocol as wire;
 use vsculpt_protocol::ServerMessage;
 use vsculpt_protocol::network::{
     FaceSide, FairingGoal, FairingOutcome, FairingProgress, FairnessMeasure, Meeting, NetworkData,
-    NetworkEdit, NetworkFace,
+    NetworkEdit, NetworkFace, RibbonHandles,
 };
 
 fn curve_from_wire(c: &wire::CurveData) -> CurveDoc {
@@ -43,6 +43,7 @@ pub fn network_from_wire(n: &NetworkData) -> NetworkPart {
         tolerance: n.tolerance,
         up: n.up,
         faired: Vec::new(),
+        ribbons: Default::default(),
         icons: Vec::new(),
     }
 }
@@ -76,6 +77,16 @@ pub fn network_to_wire(v: &NetworkView) -> NetworkData {
             })
             .collect(),
         faired: v.part.faired.iter().map(|f| f.face as u32).collect(),
+        ribbons: v
+            .ribbons
+            .iter()
+            .map(|sides| {
+                sides
+                    .iter()
+                    .map(|&(scale, twist)| RibbonHandles { scale, twist })
+                    .collect()
+            })
+            .collect(),
     }
 }
 
@@ -94,6 +105,17 @@ pub fn edit_from_wire(e: &NetworkEdit) -> NetworkEditDoc {
         },
         NetworkEdit::AddCurve { curve } => NetworkEditDoc::AddCurve(curve_from_wire(curve)),
         NetworkEdit::RemoveCurve { curve } => NetworkEditDoc::RemoveCurve(*curve as usize),
+        NetworkEdit::SetRibbon {
+            face,
+            side,
+            scale,
+            twist,
+        } => NetworkEditDoc::SetRibbon {
+            face: *face as usize,
+            side: *side as usize,
+            scale: *scale,
+            twist: *twist,
+        },
         NetworkEdit::Fair(f) => NetworkEditDoc::Fair(FairingDoc {
             face: f.face as usize,
             measure: match f.measure {
@@ -115,9 +137,10 @@ pub fn edit_from_wire(e: &NetworkEdit) -> NetworkEditDoc {
     }
 }
 
-/// A fairing job's progress on the wire.
-pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
-    super::text(&ServerMessage::FairingProgress(FairingProgress {
+/// A fairing job's progress as the wire has it (in `fairing_progress` and
+/// a snapshot's `fairing`).
+pub fn fairing_progress(p: &JobProgress) -> FairingProgress {
+    FairingProgress {
         part: p.part,
         face: p.face as u32,
         client: p.client,
@@ -126,7 +149,12 @@ pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
         max_move: p.max_move,
         threshold: p.threshold,
         fraction: p.fraction,
-    }))
+    }
+}
+
+/// A fairing job's progress on the wire.
+pub fn fairing_progress_to_wire(p: &JobProgress) -> Utf8Bytes {
+    super::text(&ServerMessage::FairingProgress(fairing_progress(p)))
 }
 
 /// A fairing job's end on the wire.

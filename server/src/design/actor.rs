@@ -80,6 +80,8 @@ pub struct SnapshotView {
     pub can_redo: bool,
     /// The review comments, oldest first.
     pub comments: Arc<Vec<super::comments::CommentThread>>,
+    /// The fairing jobs running, each with its latest progress.
+    pub fairing: Vec<super::fairing_job::JobProgress>,
 }
 
 /// Where a dragged icon actually went (the bridge's spring model needs it).
@@ -829,6 +831,7 @@ impl Actor {
             can_undo: self.undo.can_undo(),
             can_redo: self.undo.can_redo(),
             comments: self.comments.view(),
+            fairing: self.jobs.running(),
         })
     }
 

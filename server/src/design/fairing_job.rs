@@ -33,8 +33,8 @@ use super::network_engine::{FairingDoc, FairingInput, NetworkEditDoc};
 use super::part::PartBody;
 use crate::store::Role;
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tokio::sync::{broadcast, mpsc, oneshot};
 use vsculpt_kernel::fairing::{Control, FairingError, Progress};
@@ -125,6 +125,9 @@ struct Job {
     client: u64,
     input: Arc<FairingInput>,
     cancel: Arc<AtomicBool>,
+    /// Its latest progress (written by the run after every sweep, read for
+    /// a joiner's snapshot).
+    progress: Arc<Mutex<JobProgress>>,
     /// Why it was cancelled, once it is.
     reason: Option<String>,
     reply: Reply,
@@ -197,6 +200,17 @@ impl FairingJobs {
     /// Whether any job is running.
     pub fn is_empty(&self) -> bool {
         self.jobs.is_empty()
+    }
+
+    /// The running jobs with their latest progress, by (part, face).
+    pub fn running(&self) -> Vec<JobProgress> {
+        self.jobs
+            .values()
+            .map(|j| match j.progress.lock() {
+                Ok(p) => p.clone(),
+                Err(poisoned) => poisoned.into_inner().clone(),
+            })
+            .collect()
     }
 
     /// Starts fairing `f` on network part `part` for `client` (of `role`;
@@ -274,19 +288,22 @@ impl FairingJobs {
         self.next += 1;
         let cancel = Arc::new(AtomicBool::new(false));
         let max_iterations = f.max_iterations;
+        let started = JobProgress {
+            part,
+            face: f.face,
+            client,
+            iteration: 0,
+            max_iterations,
+            max_move: 0.0,
+            threshold: 0.0,
+            fraction: 0.0,
+        };
+        let progress = Arc::new(Mutex::new(started.clone()));
         let _ = self
             .events
-            .send(DesignEvent::FairingProgress(Box::new(JobProgress {
-                part,
-                face: f.face,
-                client,
-                iteration: 0,
-                max_iterations,
-                max_move: 0.0,
-                threshold: 0.0,
-                fraction: 0.0,
-            })));
+            .send(DesignEvent::FairingProgress(Box::new(started)));
         let (run_input, run_cancel) = (input.clone(), cancel.clone());
+        let run_progress = progress.clone();
         let (events, actor) = (self.events.clone(), self.actor.clone());
         let face = f.face;
         tokio::task::spawn_blocking(move || {
@@ -297,18 +314,22 @@ impl FairingJobs {
                     return Control::Cancel;
                 }
                 let first = *first.get_or_insert(p.max_move);
+                let now = JobProgress {
+                    part,
+                    face,
+                    client,
+                    iteration: p.iteration,
+                    max_iterations,
+                    max_move: p.max_move,
+                    threshold: p.threshold,
+                    fraction: fraction(p, first, max_iterations),
+                };
+                if let Ok(mut latest) = run_progress.lock() {
+                    *latest = now.clone();
+                }
                 if last.elapsed() >= PROGRESS_INTERVAL {
                     last = Instant::now();
-                    let _ = events.send(DesignEvent::FairingProgress(Box::new(JobProgress {
-                        part,
-                        face,
-                        client,
-                        iteration: p.iteration,
-                        max_iterations,
-                        max_move: p.max_move,
-                        threshold: p.threshold,
-                        fraction: fraction(p, first, max_iterations),
-                    })));
+                    let _ = events.send(DesignEvent::FairingProgress(Box::new(now)));
                 }
                 Control::Continue
             });
@@ -327,6 +348,7 @@ impl FairingJobs {
             client,
             input,
             cancel,
+            progress,
             reason: None,
             reply: None,
         })

@@ -26,6 +26,7 @@ pub fn bottle_part() -> Result<NetworkPart, CommandError> {
         tolerance: net.options().tolerance,
         up: net.options().up.to_array(),
         faired: Vec::new(),
+        ribbons: Default::default(),
         icons: Vec::new(),
     };
     // Built once as the server will build it (faces found, patches made).

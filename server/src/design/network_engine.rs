@@ -12,7 +12,9 @@
 
 use super::error::{CommandError, ErrorKind};
 use super::model::MeshData;
-use super::part::{CurveDoc, FairedFaceDoc, NetworkPart};
+use super::part::{
+    CurveDoc, FairedFaceDoc, NetworkPart, RibbonHandlesDoc, check_scale, check_twist,
+};
 use glam::DVec3;
 use std::collections::BTreeMap;
 use vsculpt_kernel::bspline::{BSplineCurve, KnotVector, basis_derivs};
@@ -101,6 +103,19 @@ pub enum NetworkEditDoc {
     /// Set a face's faired mesh (a fairing job's result; refused when the
     /// face's mesh has another number of points).
     SetFaired(FairedFaceDoc),
+    /// Set side `side` of face `face`'s ribbon handles: its scale (that
+    /// side of that face only) and the twist of every edge of the side
+    /// (the face across follows, so the join stays G1). `None` keeps one.
+    SetRibbon {
+        /// The face.
+        face: usize,
+        /// The side (in the face's order).
+        side: usize,
+        /// The scale, in [1/10, 10].
+        scale: Option<f64>,
+        /// The twist in radians, |twist| < π/2.
+        twist: Option<f64>,
+    },
 }
 
 /// A snapshot of one face's mesh with a fairing run's settings: what a
@@ -272,6 +287,8 @@ impl NetworkEngine {
         if net.faces().is_empty() {
             return Err(network_error(NetworkError::NoFaces));
         }
+        let mut net = net;
+        set_handles(&mut net, &part.ribbons)?;
         let mut faces: Vec<FaceMesh> = net.patches().into_iter().map(FaceMesh::new).collect();
         let mut seen = std::collections::BTreeSet::new();
         for f in &part.faired {
@@ -317,6 +334,7 @@ impl NetworkEngine {
                     })
                 })
                 .collect(),
+            ribbons: handles(&self.net),
             icons: Vec::new(),
         }
     }
@@ -356,7 +374,57 @@ impl NetworkEngine {
             }
             NetworkEditDoc::Fair(f) => self.fair(f).map(|()| vec![f.face]),
             NetworkEditDoc::SetFaired(f) => self.set_faired(f).map(|()| vec![f.face]),
+            NetworkEditDoc::SetRibbon {
+                face,
+                side,
+                scale,
+                twist,
+            } => self.set_ribbon(*face, *side, *scale, *twist),
         }
+    }
+
+    /// Sets a side's ribbon handles (see [`NetworkEditDoc::SetRibbon`]);
+    /// the faces whose patch changed are re-sampled (and lose a fair).
+    fn set_ribbon(
+        &mut self,
+        face: usize,
+        side: usize,
+        scale: Option<f64>,
+        twist: Option<f64>,
+    ) -> Result<Vec<usize>, CommandError> {
+        if scale.is_none() && twist.is_none() {
+            return Err(invalid("set_ribbon needs a scale or a twist"));
+        }
+        let sides = self
+            .net
+            .faces()
+            .get(face)
+            .ok_or_else(|| {
+                invalid(format!(
+                    "no face {face} (the part has {})",
+                    self.net.faces().len()
+                ))
+            })?
+            .sides
+            .len();
+        if side >= sides {
+            return Err(invalid(format!(
+                "face {face} has no side {side} (it has {sides})"
+            )));
+        }
+        let mut net = self.net.clone();
+        if let Some(x) = scale {
+            check_scale(x).map_err(invalid)?;
+            net.set_scale(face, side, x).map_err(network_error)?;
+        }
+        if let Some(t) = twist {
+            check_twist(t).map_err(invalid)?;
+            let edges = net.faces()[face].sides[side].edges.clone();
+            for e in edges {
+                net.set_twist(e, t).map_err(network_error)?;
+            }
+        }
+        Ok(self.adopt(net))
     }
 
     fn curve(&self, k: usize) -> Result<&BSplineCurve, CommandError> {
@@ -374,6 +442,13 @@ impl NetworkEngine {
         if net.faces().is_empty() {
             return Err(network_error(NetworkError::NoFaces));
         }
+        Ok(self.adopt(net))
+    }
+
+    /// Takes `net` (accepted by the kernel): faces of the same structure
+    /// are re-sampled only where their patch changed, else every face is
+    /// re-derived. Returns the faces whose mesh changed.
+    fn adopt(&mut self, net: CurveNetwork) -> Vec<usize> {
         let patches = net.patches();
         let mut changed = Vec::new();
         if patches.len() == self.faces.len()
@@ -403,7 +478,7 @@ impl NetworkEngine {
             changed = (0..self.faces.len()).collect();
         }
         self.net = net;
-        Ok(changed)
+        changed
     }
 
     fn rebuild(&mut self, curves: Vec<BSplineCurve>) -> Result<Vec<usize>, CommandError> {
@@ -576,7 +651,12 @@ impl NetworkEngine {
     }
 
     /// Every face's mesh, faces one after another, with area-weighted
-    /// vertex normals.
+    /// vertex normals — except on the boundary of a patch (not faired),
+    /// where the normal is the patch's own (exact): one-sided averages
+    /// there would tilt by about curvature × spacing, and zebra stripes or
+    /// a curvature map across a shared curve would show a crease that the
+    /// patches (G1 along their curves) do not have. At a domain corner,
+    /// where the patch's derivatives vanish, the average stays.
     pub fn mesh(&self) -> MeshData {
         let mut out = MeshData::default();
         for f in &self.faces {
@@ -593,6 +673,17 @@ impl NetworkEngine {
                     normals[i as usize] += n;
                 }
                 out.indices.extend([a + base, b + base, c + base]);
+            }
+            if f.faired.is_none() {
+                let domain = f.sampler.mesh();
+                for (i, n) in normals.iter_mut().enumerate() {
+                    if domain.boundary.get(i).copied().unwrap_or(false) {
+                        let exact = f.patch.normal(domain.points[i]);
+                        if exact.is_finite() {
+                            *n = exact;
+                        }
+                    }
+                }
             }
             out.positions
                 .extend(f.points.iter().map(|p| p.as_vec3().to_array()));
@@ -650,6 +741,9 @@ pub struct NetworkView {
     pub meetings: Vec<MeetingView>,
     /// Per face, its sides as (curve, t_start, t_end).
     pub faces: Vec<Vec<(usize, f64, f64)>>,
+    /// Per face, per side, its ribbon handles (scale, twist): the twist of
+    /// the side's first edge (a `set_ribbon` sets every edge of the side).
+    pub ribbons: Vec<Vec<(f64, f64)>>,
 }
 
 impl NetworkView {
@@ -669,6 +763,22 @@ impl NetworkView {
                     f.sides
                         .iter()
                         .map(|s| (s.curve, s.t_start, s.t_end))
+                        .collect()
+                })
+                .collect(),
+            ribbons: net
+                .faces()
+                .iter()
+                .enumerate()
+                .map(|(f, face)| {
+                    face.sides
+                        .iter()
+                        .enumerate()
+                        .map(|(k, s)| {
+                            let scale = net.scale(f, k).unwrap_or(1.0);
+                            let twist = s.edges.first().and_then(|&e| net.twist(e)).unwrap_or(0.0);
+                            (scale, twist)
+                        })
                         .collect()
                 })
                 .collect(),
@@ -694,16 +804,53 @@ impl NetworkView {
                     },
                 )
                 .ok()
-            });
+            })
+            .and_then(|mut net| set_handles(&mut net, &part.ribbons).ok().map(|()| net));
         match net {
             Some(net) => Self::from_network(part.clone(), &net),
             None => Self {
                 part: part.clone(),
                 meetings: Vec::new(),
                 faces: Vec::new(),
+                ribbons: Vec::new(),
             },
         }
     }
+}
+
+/// Sets a stored part's ribbon handles on its network (refused: a face,
+/// side or edge the network does not have, a value out of range).
+fn set_handles(net: &mut CurveNetwork, h: &RibbonHandlesDoc) -> Result<(), CommandError> {
+    h.validate()?;
+    for &(f, s, x) in &h.scales {
+        net.set_scale(f, s, x).map_err(network_error)?;
+    }
+    for &(e, t) in &h.twists {
+        net.set_twist(e, t).map_err(network_error)?;
+    }
+    Ok(())
+}
+
+/// The handles of `net` that differ from the default.
+fn handles(net: &CurveNetwork) -> RibbonHandlesDoc {
+    let mut h = RibbonHandlesDoc::default();
+    for (f, face) in net.faces().iter().enumerate() {
+        for k in 0..face.sides.len() {
+            if let Some(x) = net.scale(f, k)
+                && x != 1.0
+            {
+                h.scales.push((f, k, x));
+            }
+        }
+    }
+    for e in 0..net.topology().edges.len() {
+        if let Some(t) = net.twist(e)
+            && t != 0.0
+        {
+            h.twists.push((e, t));
+        }
+    }
+    h
 }
 
 fn finite(p: [f64; 3]) -> Result<DVec3, CommandError> {

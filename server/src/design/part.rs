@@ -143,6 +143,68 @@ pub struct FairedFaceDoc {
     pub converged: bool,
 }
 
+/// Most a side's ribbon scale handle may be (and 1 / this the least).
+pub const MAX_RIBBON_SCALE: f64 = 10.0;
+
+/// The designer's ribbon handles of a network part (paper 004 §5): a side's
+/// scale (the cross-boundary derivative's length, times
+/// 1 + (scale − 1) sin(πs) along the side) and an edge's twist (the tangent
+/// plane along the edge turned about the curve by twist·sin(πu); both faces
+/// on the edge follow, so they stay G1). Edge indices are the kernel's
+/// (derived from the curves, so they are the same whenever the part is
+/// built); only handles that differ from the default are kept.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RibbonHandlesDoc {
+    /// (face, side, scale) with scale ≠ 1.
+    #[serde(default)]
+    pub scales: Vec<(usize, usize, f64)>,
+    /// (edge, twist in radians) with twist ≠ 0.
+    #[serde(default)]
+    pub twists: Vec<(usize, f64)>,
+}
+
+impl RibbonHandlesDoc {
+    /// No handle moved.
+    pub fn is_empty(&self) -> bool {
+        self.scales.is_empty() && self.twists.is_empty()
+    }
+
+    /// Finite values in range (indices are the kernel's to check).
+    pub fn validate(&self) -> Result<(), CommandError> {
+        for &(f, s, x) in &self.scales {
+            check_scale(x).map_err(|m| invalid(format!("face {f} side {s}: {m}")))?;
+        }
+        for &(e, t) in &self.twists {
+            check_twist(t).map_err(|m| invalid(format!("edge {e}: {m}")))?;
+        }
+        Ok(())
+    }
+}
+
+/// Whether `x` is a ribbon scale handle: finite, in
+/// [1/[`MAX_RIBBON_SCALE`], [`MAX_RIBBON_SCALE`]].
+pub fn check_scale(x: f64) -> Result<(), String> {
+    if x.is_finite() && (1.0 / MAX_RIBBON_SCALE..=MAX_RIBBON_SCALE).contains(&x) {
+        Ok(())
+    } else {
+        Err(format!(
+            "ribbon scale {x} must be finite and in [{}, {MAX_RIBBON_SCALE}]",
+            1.0 / MAX_RIBBON_SCALE
+        ))
+    }
+}
+
+/// Whether `t` is a twist handle: finite, |t| < π/2 radians.
+pub fn check_twist(t: f64) -> Result<(), String> {
+    if t.is_finite() && t.abs() < std::f64::consts::FRAC_PI_2 {
+        Ok(())
+    } else {
+        Err(format!(
+            "ribbon twist {t} must be finite and |twist| < π/2 radians"
+        ))
+    }
+}
+
 /// A styling-curve network part (paper 004): its curves, the tolerance
 /// within which they meet, the side its patches face and the faces faired.
 /// Meetings and faces are derived (by the kernel) and not stored.
@@ -157,6 +219,10 @@ pub struct NetworkPart {
     /// Faired faces (dropped when a curve of the face changes).
     #[serde(default)]
     pub faired: Vec<FairedFaceDoc>,
+    /// Ribbon handles that differ from the compatible ribbon (scale 1,
+    /// twist 0); reset when the curves' faces are re-derived.
+    #[serde(default, skip_serializing_if = "RibbonHandlesDoc::is_empty")]
+    pub ribbons: RibbonHandlesDoc,
     /// Icons: none yet (a network is edited by its curves); always empty.
     #[serde(default)]
     pub icons: Vec<IconDoc>,
@@ -194,6 +260,7 @@ impl NetworkPart {
         {
             return Err(invalid("non-finite faired point"));
         }
+        self.ribbons.validate()?;
         Ok(())
     }
 }
