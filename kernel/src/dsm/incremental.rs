@@ -48,7 +48,9 @@
 //! active set, and with it Φ at all its corners, changes as a whole.
 
 use super::interval::Tri;
-use super::mesh::{Grid, LEAF, LeafMesh, Mesh, MeshStats, assemble, mesh_leaf};
+use super::mesh::{
+    Grid, LEAF, LeafMesh, Mesh, MeshStats, assemble, mesh_leaf, touches, update_leaf,
+};
 use super::model::{Active, Model};
 use glam::{DVec3, IVec3};
 use std::collections::{BTreeMap, BTreeSet};
@@ -77,12 +79,6 @@ fn morton(l: IVec3) -> u64 {
     m
 }
 
-fn touches(balls: &[Ball], c: DVec3, r: f64) -> bool {
-    // The test of `Model::cull`, so that a node outside every ball is one from
-    // whose active set every changed primitive was culled.
-    balls.iter().any(|&(bc, br)| (bc - c).length() <= br + r)
-}
-
 impl LeafTree {
     /// A fresh walk of `model` over `grid`.
     pub(crate) fn build(model: &Model, grid: &Grid) -> Self {
@@ -96,7 +92,7 @@ impl LeafTree {
             leaves: BTreeMap::new(),
             expanded: BTreeSet::new(),
         };
-        let mut n = 0;
+        let mut n = Redone::default();
         tree.visit(
             model,
             IVec3::ZERO,
@@ -111,13 +107,14 @@ impl LeafTree {
 
     /// The mesh of every leaf.
     pub(crate) fn assemble(&self) -> (Mesh, MeshStats) {
-        assemble(self.leaves.values())
+        assemble(&self.grid, self.leaves.values())
     }
 
     /// Re-walks the tree for `model`, which differs from the model of the
-    /// previous walk only inside `changed`; returns the leaves re-sampled.
-    fn update(&mut self, model: &Model, changed: &[Ball]) -> usize {
-        let mut n = 0;
+    /// previous walk only inside `changed`; returns the leaves reached and the
+    /// cells contoured again.
+    fn update(&mut self, model: &Model, changed: &[Ball]) -> Redone {
+        let mut n = Redone::default();
         let act = model.all_active();
         self.visit(model, IVec3::ZERO, self.size, &act, changed, false, &mut n);
         n
@@ -151,7 +148,7 @@ impl LeafTree {
         parent: &Active,
         changed: &[Ball],
         fresh: bool,
-        recomputed: &mut usize,
+        redone: &mut Redone,
     ) {
         let grid = self.grid;
         if o.cmpge(grid.dims).any() {
@@ -183,14 +180,36 @@ impl LeafTree {
                     &act,
                     changed,
                     fresh || !was_expanded,
-                    recomputed,
+                    redone,
                 );
             }
             return;
         }
-        self.leaves.insert(key, mesh_leaf(model, &grid, o, &act));
-        *recomputed += 1;
+        redone.leaves += 1;
+        let leaf = match self.leaves.get(&key) {
+            Some(old) if !fresh => {
+                let (leaf, cells) = update_leaf(model, &grid, old, changed);
+                redone.cells += cells;
+                leaf
+            }
+            _ => {
+                redone.fresh += 1;
+                mesh_leaf(model, &grid, o)
+            }
+        };
+        self.leaves.insert(key, leaf);
     }
+}
+
+/// What one re-walk did.
+#[derive(Clone, Copy, Debug, Default)]
+struct Redone {
+    /// Leaves reached (sampled afresh or in part).
+    leaves: usize,
+    /// Of those, leaves sampled afresh (new to the tree).
+    fresh: usize,
+    /// Mixed cells contoured again in the leaves updated in part.
+    cells: usize,
 }
 
 /// What one [`IncrementalMesh::update`] did.
@@ -200,8 +219,13 @@ pub struct UpdateStats {
     pub full: bool,
     /// Primitives found changed (old and new counted apart).
     pub changed: usize,
-    /// Leaves sampled and contoured again.
+    /// Leaves reached by the edit: sampled afresh, or, when the leaf was
+    /// meshed before, sampled again only within the edit's reach.
     pub recomputed: usize,
+    /// Of those, leaves new to the tree (sampled and contoured whole).
+    pub fresh_leaves: usize,
+    /// Mixed cells contoured again in the leaves updated in part.
+    pub cells: usize,
     /// Leaves in the tree after the update.
     pub leaves: usize,
 }
@@ -285,11 +309,13 @@ impl IncrementalMesh {
         };
         let stats = match support {
             Some(balls) => {
-                let recomputed = self.tree.update(&model, &balls);
+                let redone = self.tree.update(&model, &balls);
                 UpdateStats {
                     full: false,
                     changed: balls.len(),
-                    recomputed,
+                    recomputed: redone.leaves,
+                    fresh_leaves: redone.fresh,
+                    cells: redone.cells,
                     leaves: self.tree.leaves.len(),
                 }
             }
@@ -299,6 +325,8 @@ impl IncrementalMesh {
                     full: true,
                     changed: 0,
                     recomputed: self.tree.leaves.len(),
+                    fresh_leaves: self.tree.leaves.len(),
+                    cells: 0,
                     leaves: self.tree.leaves.len(),
                 }
             }
