@@ -389,7 +389,12 @@ impl Model {
                 any = true;
                 f += v;
             }
-            if let Some(d) = d.as_deref_mut() {
+            // Without cuts of its own (`has_cuts`) the only cut is the
+            // culling range, where F jumps by less than τ D_e: no boundary of
+            // S and no piece of Φ (as in `piece_gradient`).
+            if let Some(d) = d.as_deref_mut()
+                && self.cuts[k][i]
+            {
                 *d = d.min(dp.cut_distance(p, self.ranges[k][i]).0);
             }
         }
