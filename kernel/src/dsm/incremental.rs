@@ -2,11 +2,12 @@
 //! edits, and re-sampled only where an edit can change it.
 //!
 //! What a leaf holds ([`super::mesh`] steps 2–4: corner membership and Φ, the
-//! Hermite data, the cell vertices and the crossing edges) is a function of the
-//! leaf's origin, its *active* primitives (those whose influence ball reaches the
-//! leaf's ball, in model order), D_e, τ, the groups' incorporations, the terms of
-//! eq. (7) and each group's Φ scale (its largest reducing factor). Nothing else
-//! enters [`Model::sample`] or [`Model::classify`].
+//! cell vertices and the crossing edges) is made of samples taken at points
+//! within one cell of the leaf, and each sample ([`Model::sample`],
+//! [`Model::piece_gradient`]) is a function of the point and of the primitives
+//! that *reach* it (those whose ball holds it, in model order), D_e, τ, the
+//! groups' incorporations, the terms of eq. (7) and each group's Φ scale (its
+//! largest reducing factor) — not of the leaf's culled active set.
 //!
 //! The support of an edit, derived from the density functions:
 //! * A geometric primitive (eq. 2) contributes ±D_e inside itself and exactly 0
@@ -44,8 +45,10 @@
 //! then assembled from every leaf in Morton order, exactly as a fresh mesh of
 //! the same model on the same grid ([`super::mesh_on`], which is this walk
 //! from an empty tree): the same vertices, bit for bit, and the same triangles.
-//! The re-meshed region is the leaves (8³ cells) that meet the support: a leaf's
-//! active set, and with it Φ at all its corners, changes as a whole.
+//! In a leaf the walk reaches that was meshed before, only the corners inside
+//! a changed ball are sampled again and only the cells within one cell of a
+//! changed ball contoured again ([`super::mesh`]'s `update_leaf`): samples being
+//! pointwise, every other corner and cell vertex is what a fresh leaf computes.
 
 use super::interval::Tri;
 use super::mesh::{
