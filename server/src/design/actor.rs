@@ -1369,8 +1369,8 @@ impl Actor {
             }
             Command::CancelFairing { part, face } => self.jobs.cancel(part, face, client),
             Command::BodyMorph { part, t } => {
-                heavy(|| self.model.set_morph_time(part, t))?;
-                geometry_dirty.parts(vec![part]);
+                let moved = heavy(|| self.model.set_morph_time(part, t))?;
+                geometry_dirty.parts(moved);
                 Ok(Ack::default())
             }
             Command::Undo | Command::Redo => {
