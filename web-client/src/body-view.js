@@ -348,14 +348,16 @@ export class BodyView {
     const { part, box, value, slider } = this.controls;
     const ids = [...this.bodies.keys()];
     box.hidden = ids.length === 0;
-    const want = ids.map(String).join(',');
+    const label = (id) => this.bodies.get(id).part?.name || `body ${id}`;
+    // Rebuilt when a body comes or goes or is renamed (its part may arrive after its first frame).
+    const want = JSON.stringify(ids.map((id) => [id, label(id)]));
     if (part.dataset.ids !== want) {
       const was = part.value;
       part.innerHTML = '';
       for (const id of ids) {
         const opt = document.createElement('option');
         opt.value = String(id);
-        opt.textContent = this.bodies.get(id).part?.name || `body ${id}`;
+        opt.textContent = label(id);
         part.appendChild(opt);
       }
       if (ids.map(String).includes(was)) part.value = was;
