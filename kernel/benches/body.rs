@@ -9,7 +9,8 @@
 //! * `ffd/bernstein_move_point` — the same move on Sederberg–Parry's
 //!   4 × 4 × 4 Bernstein lattice (one span: every vertex depends on every
 //!   point, so no locality);
-//! * `chair/display` — evaluation for display of the five-body chair: six
+//! * `chair/display` — evaluation for display of the five-body chair (the
+//!   cantilever strip of `body::demo::chair`, C1/C0/C2/C1 joints): six
 //!   boundary faces and 3 isoparametric surfaces per direction per body,
 //!   17 × 17 vertices each (75 surfaces, 21 675 vertices with normals and
 //!   curvature);

@@ -235,13 +235,20 @@ pub async fn mesh(
     if let Some(p) = part.and_then(|id| doc.part(id))
         && let crate::design::part::PartBody::Dsm(d) = &p.body
     {
-        // A DSM part: its implicit surface meshed within the vertex budget.
+        // A DSM part: its implicit surface meshed within the vertex budget,
+        // deformed by the body it is bound to, if any.
         let data = d.dsm.clone();
+        let deform = crate::design::ffd_binding::export_deformation(&doc, p.id);
         drop(doc);
         return stream(
             move || {
-                let t = crate::design::dsm_engine::export_mesh(&data, max_vertices)
-                    .map_err(|e| ExportError::Part(e.message))?;
+                use crate::design::{dsm_engine, ffd_binding};
+                let part = |e: crate::design::CommandError| ExportError::Part(e.message);
+                let mut m = dsm_engine::export_kernel_mesh(&data, max_vertices).map_err(part)?;
+                if let Some((rest, current)) = &deform {
+                    ffd_binding::deform_export(rest, current, &mut m).map_err(part)?;
+                }
+                let t = dsm_engine::mesh_data(&m);
                 Mesh::new(&t.positions, &t.normals, &t.indices)?;
                 Ok(t)
             },

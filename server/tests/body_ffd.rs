@@ -25,10 +25,10 @@ use serde_json::{Value, json};
 use vsculpt_kernel::body::BSplineVolume;
 use vsculpt_kernel::bspline::{BSplineSurface, KnotVector, basis_derivs};
 use vsculpt_server::design::body_part::LatticeSelect;
-use vsculpt_server::design::doc::DesignDoc;
+use vsculpt_server::design::doc::{DesignDoc, MaterialDoc, SurfaceDoc};
 use vsculpt_server::design::edit::{Edit, PartEdit};
 use vsculpt_server::design::model::DesignModel;
-use vsculpt_server::design::part::{PartBody, RelationKind};
+use vsculpt_server::design::part::{PartBody, RelationKind, SurfacePart};
 
 /// Clamped knots of `degree` with `n` points, uniform on [0, 1].
 fn knots(degree: usize, n: usize) -> Vec<f64> {
@@ -691,4 +691,192 @@ async fn control_point_ffd_stays_within_its_second_order_bound_of_the_deformed_s
     println!("control-point FFD: largest deviation {worst:.3e}, ≤ {worst_ratio:.2} of the bound");
     drop(ed);
     server.stop().await;
+}
+
+/// The smoothstep timing of the eased morph path, s = 3t² − 2t³.
+fn eased(t: f64) -> f64 {
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A bound DSM part and a bound surface follow their body's metamorphosis
+/// as it plays, the document untouched. Expected values from the
+/// definitions: the body is the affine box [0, 2]³ (a point's parameters
+/// are x / 2) morphing along straight eased paths to a lattice whose
+/// centre moved, so a carried point is A(x/2) + s(t) (B(x/2) − A(x/2)) with
+/// A, B the two bodies evaluated by the kernel's volume (not the FFD code).
+#[test]
+fn bound_parts_follow_the_body_s_metamorphosis_exactly_and_the_document_stays() {
+    let rest = box_points(2, 3);
+    let mut target = rest.clone();
+    target[13] = [1.3, 0.8, 1.15]; // the centre (1, 1, 1) moved
+    target[26] = [2.2, 2.1, 2.3]; // and a corner: the boundary changes too
+    let body: PartBody = serde_json::from_value(json!({"kind": "body",
+        "lattice": {"degrees": [2, 2, 2], "knots": [knots(2, 3), knots(2, 3), knots(2, 3)], "points": rest},
+        "morph_target": {"degrees": [2, 2, 2], "knots": [knots(2, 3), knots(2, 3), knots(2, 3)], "points": target}}))
+    .unwrap();
+    let mut m = DesignModel::load(&DesignDoc::single("morph", "box", body)).unwrap();
+    let dsm: PartBody = serde_json::from_value(
+        json!({"kind": "dsm", "dsm": {"de": 1.0, "cells": 20, "groups": [
+        {"op": "add", "primitives": [
+            {"id": 1, "at": [0.9, 1.0, 1.1], "shape": {"type": "sphere", "radius": 0.5}}]}]}}),
+    )
+    .unwrap();
+    let surface = PartBody::Surface(SurfacePart {
+        surface: SurfaceDoc {
+            u_degree: 3,
+            v_degree: 3,
+            u_knots: knots(3, 5),
+            v_knots: knots(3, 5),
+            nu: 5,
+            nv: 5,
+            points: serde_json::from_value(patch(0.3, 0.4, 1.2, 1.0)["points"].clone()).unwrap(),
+        },
+        material: MaterialDoc::default(),
+        icons: Vec::new(),
+        kappa: None,
+    });
+    for (name, b) in [("blob", dsm), ("patch", surface)] {
+        m.apply(Edit::CreatePart {
+            name: name.into(),
+            body: Box::new(b),
+            colour: None,
+        })
+        .unwrap();
+    }
+    for part in [2, 3] {
+        m.apply(Edit::Relate(RelationKind::Ffd {
+            body: 1,
+            part,
+            rest: None,
+        }))
+        .unwrap();
+    }
+    let doc = m.doc().clone();
+    let mesh0 = m.dsm_mesh(2).unwrap().positions.clone();
+    let patch0 = control_points(&serde_json::to_value(&doc).unwrap(), 3);
+    let frame_points = |m: &DesignModel| -> Vec<DVec3> {
+        let g = m.geometry(1, 3, 7, false).unwrap();
+        vsculpt_protocol::GeometryFrame::decode(&g.frame)
+            .unwrap()
+            .points
+            .iter()
+            .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect()
+    };
+    let (a, b) = (volume(2, 3, &rest), volume(2, 3, &target));
+    let carried = |x: DVec3, t: f64| {
+        let (pa, pb) = (
+            a.point(x.x / 2.0, x.y / 2.0, x.z / 2.0),
+            b.point(x.x / 2.0, x.y / 2.0, x.z / 2.0),
+        );
+        pa + (pb - pa) * eased(t)
+    };
+    for t in [0.3, 0.5, 1.0] {
+        let moved = m.set_morph_time(1, t).unwrap();
+        assert_eq!(
+            moved,
+            vec![1, 2, 3],
+            "the body and both bound parts are resent"
+        );
+        let want: Vec<DVec3> = mesh0.iter().map(|x| carried(*x, t)).collect();
+        let e = max_dist(&m.dsm_mesh(2).unwrap().positions, &want);
+        assert!(e <= 1e-12, "t = {t}: mesh off by {e:e}");
+        // The surface frame (f32) shows the carried control points.
+        let want: Vec<DVec3> = patch0.iter().map(|x| carried(*x, t)).collect();
+        let e = max_dist(&frame_points(&m), &want);
+        assert!(e <= 1e-6, "t = {t}: surface off by {e:e}");
+        // It is a real move (the corner and centre travel).
+        assert!(max_dist(&want, &patch0) > 1e-3);
+        // Nothing stored changed.
+        assert_eq!(*m.doc(), doc);
+    }
+    // The deformed mesh's normals are those of its triangles.
+    let mesh = m.dsm_mesh(2).unwrap();
+    let mut want = vec![DVec3::ZERO; mesh.positions.len()];
+    for tri in &mesh.triangles {
+        let [p, q, r] = tri.map(|i| mesh.positions[i as usize]);
+        for i in tri {
+            want[*i as usize] += (q - p).cross(r - p);
+        }
+    }
+    for (n, w) in mesh.normals.iter().zip(&want) {
+        assert!((*n - w.normalize()).length() < 1e-12);
+    }
+    // Back to t = 0: everything as stored, exactly.
+    assert_eq!(m.set_morph_time(1, 0.0).unwrap(), vec![1, 2, 3]);
+    assert_eq!(m.dsm_mesh(2).unwrap().positions, mesh0);
+    let e = max_dist(&frame_points(&m), &patch0);
+    assert!(e <= 1e-6, "surface at t = 0 off by {e:e}");
+}
+
+/// The STL export of a DSM part bound to a body is the mesh the body
+/// deforms: the box [0, 2]³ of degree 1 with its top face raised by 0.5 is
+/// the stretch z → 1.25 z (x, y kept), so every exported vertex is the
+/// unbound export's vertex stretched (the same DSM data meshes the same).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_export_of_a_bound_dsm_part_is_deformed_by_its_body() {
+    let data = data_dir("body-ffd-export");
+    let server = TestServer::start(data.clone()).await;
+    let (addr, design) = (server.addr, server.demo().id);
+    let editor = server.demo().editor.clone();
+    let mut ed = Client::connect(addr, design, &editor, "ffd").await;
+    let body = create(
+        &mut ed,
+        "box",
+        "body",
+        json!({"lattice": box_lattice(1, 2)}),
+    )
+    .await;
+    let blob = create(
+        &mut ed,
+        "blob",
+        "dsm",
+        json!({"de": 1.0, "cells": 20, "groups": [{"op": "add", "primitives": [
+            {"id": 1, "at": [0.9, 1.0, 1.1], "shape": {"type": "sphere", "radius": 0.5}}]}]}),
+    )
+    .await;
+    let stl = |bytes: &[u8]| -> Vec<DVec3> {
+        let n = u32::from_le_bytes(bytes[80..84].try_into().unwrap()) as usize;
+        assert_eq!(bytes.len(), 84 + 50 * n);
+        let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as f64;
+        (0..n)
+            .flat_map(|t| {
+                (0..3).map(move |v| {
+                    let o = 84 + 50 * t + 12 + 12 * v;
+                    DVec3::new(f(o), f(o + 4), f(o + 8))
+                })
+            })
+            .collect()
+    };
+    let url = format!("/api/designs/{design}/export.stl?part={blob}");
+    let before = get(addr, &url, Some(&editor)).await;
+    assert_eq!(before.status, 200);
+    let v0 = stl(&before.body);
+    assert!(v0.len() > 300);
+    ok(
+        &mut ed,
+        json!({"type": "relate", "req": 3, "relation": {"kind": "ffd", "body": body, "part": blob}}),
+    )
+    .await;
+    ok(
+        &mut ed,
+        json!({"type": "body_edit", "req": 4, "part": body, "edit": {"select": {"face": "w_max"}, "delta": [0.0, 0.0, 0.5]}}),
+    )
+    .await;
+    let after = get(addr, &url, Some(&editor)).await;
+    assert_eq!(after.status, 200);
+    let v1 = stl(&after.body);
+    let want: Vec<DVec3> = v0
+        .iter()
+        .map(|p| DVec3::new(p.x, p.y, 1.25 * p.z))
+        .collect();
+    let e = max_dist(&v1, &want);
+    assert!(
+        e <= 1e-5,
+        "exported vertices off the stretched mesh by {e:e}"
+    );
+    assert!(max_dist(&v1, &v0) > 0.1, "the export is deformed");
+    drop(ed);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
 }

@@ -82,7 +82,12 @@ export class BodyView {
     const prev = view.bounds;
     view.bounds = () => {
       const box = prev() ? prev().clone() : new THREE.Box3();
-      for (const b of this.bodies.values()) if (b.group.visible) box.expandByObject(b.group);
+      // In model units (the parts' boxes are): the geometries' own boxes, not world boxes, which
+      // differ once the model is placed in VR (placeOnTable scales and turns it).
+      for (const b of this.bodies.values()) {
+        if (!b.group.visible) continue;
+        for (const o of [b.mesh, b.handles]) if (o.geometry.boundingBox) box.union(o.geometry.boundingBox);
+      }
       return box.isEmpty() ? null : box;
     };
     view.renderer.localClippingEnabled = true;
@@ -291,6 +296,7 @@ export class BodyView {
     g.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(f.normals), 3));
     g.setIndex(new THREE.BufferAttribute(new Uint32Array(f.triangles), 1));
     g.computeBoundingSphere();
+    g.computeBoundingBox();
     // Polylines as segments, coloured by the direction held constant.
     const s = f.lineSamples;
     const nLines = f.lineDirs.length;
@@ -314,6 +320,7 @@ export class BodyView {
     if (!this.drag || this.drag.body !== b) {
       b.handles.geometry.setAttribute('position', new THREE.BufferAttribute(new Float32Array(f.lattice), 3));
       b.handles.geometry.computeBoundingSphere();
+      b.handles.geometry.computeBoundingBox();
     }
     this.showChosen(b);
   }
@@ -348,14 +355,16 @@ export class BodyView {
     const { part, box, value, slider } = this.controls;
     const ids = [...this.bodies.keys()];
     box.hidden = ids.length === 0;
-    const want = ids.map(String).join(',');
+    const label = (id) => this.bodies.get(id).part?.name || `body ${id}`;
+    // Rebuilt when a body comes or goes or is renamed (its part may arrive after its first frame).
+    const want = JSON.stringify(ids.map((id) => [id, label(id)]));
     if (part.dataset.ids !== want) {
       const was = part.value;
       part.innerHTML = '';
       for (const id of ids) {
         const opt = document.createElement('option');
         opt.value = String(id);
-        opt.textContent = this.bodies.get(id).part?.name || `body ${id}`;
+        opt.textContent = label(id);
         part.appendChild(opt);
       }
       if (ids.map(String).includes(was)) part.value = was;

@@ -1438,8 +1438,8 @@ impl Actor {
             Command::CancelFairing { part, face } => self.jobs.cancel(part, face, client),
             Command::Comment(op) => self.comment(client, op).await,
             Command::BodyMorph { part, t } => {
-                heavy(|| self.model.set_morph_time(part, t))?;
-                geometry_dirty.parts(vec![part]);
+                let moved = heavy(|| self.model.set_morph_time(part, t))?;
+                geometry_dirty.parts(moved);
                 Ok(Ack::default())
             }
             Command::Undo | Command::Redo => {

@@ -15,7 +15,7 @@ use super::part::PartBody;
 use crate::cad::HexGrid;
 use std::collections::BTreeMap;
 use vsculpt_kernel::body::display::{BodyDisplay, iso_parameters};
-use vsculpt_kernel::body::{BSplineVolume, Dir, Face, Morph, Path, VolumeScratch};
+use vsculpt_kernel::body::{BSplineVolume, Dir, Face, Ffd, Morph, Path, VolumeScratch};
 use vsculpt_protocol::BodyFrame;
 
 /// Vertices per side of a tessellated boundary face.
@@ -115,6 +115,10 @@ pub struct BodyEngine {
     morph: Option<Morph>,
     t: f64,
     shown: BSplineVolume,
+    /// At t > 0: the lattice from the morph's source (the body on the
+    /// common lattice) to the body shown, which carries the parts bound to
+    /// the body along (`morph_follow`).
+    follow: Option<Ffd>,
     display: BodyDisplay,
     shape: BodyShape,
 }
@@ -139,6 +143,7 @@ impl BodyEngine {
             part: part.clone(),
             shown: volume.clone(),
             volume,
+            follow: morph.as_ref().map(|m| Ffd::new(m.source().clone())),
             morph,
             t,
             display: BodyDisplay::new(0, FACE_SAMPLES),
@@ -153,7 +158,23 @@ impl BodyEngine {
             Some(m) if self.t > 0.0 => m.at_into(self.t, &mut self.shown),
             _ => self.shown = self.volume.clone(),
         }
+        if let Some(f) = &mut self.follow
+            && self.morph.is_some()
+            && self.t > 0.0
+        {
+            // Same lattice as the source (the morph's common lattice).
+            let _ = f.set_lattice(self.shown.points().to_vec());
+        }
         self.shape = evaluate(&self.shown, &mut self.display);
+    }
+
+    /// The deformation the metamorphosis applies at the time shown to what
+    /// is bound to this body: `None` at t = 0 (or without a morph target),
+    /// where bound parts are shown as they are. Its rest lattice is the
+    /// body on the morph's common lattice, its current lattice the body
+    /// shown, so a point x inside the body goes to B_t(B₀⁻¹(x)).
+    pub fn follow(&self) -> Option<&Ffd> {
+        self.follow.as_ref().filter(|_| self.t > 0.0)
     }
 
     /// Shows the body at morph time `t` ∈ [0, 1].
@@ -253,6 +274,12 @@ impl BodyEngines {
     /// The engine of body part `part`.
     pub fn get(&self, part: u64) -> Option<&BodyEngine> {
         self.engines.get(&part)
+    }
+
+    /// The morph deformation of body part `part` at the time shown (see
+    /// [`BodyEngine::follow`]).
+    pub fn follow(&self, part: u64) -> Option<&Ffd> {
+        self.engines.get(&part).and_then(BodyEngine::follow)
     }
 
     /// Shows body part `part` at morph time `t`.

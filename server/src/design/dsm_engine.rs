@@ -344,7 +344,8 @@ pub fn mesh_at(data: &DsmData, cells: u32) -> Result<Mesh, CommandError> {
 }
 
 /// `m` as an export tessellation (f32).
-fn mesh_data(m: &Mesh) -> MeshData {
+/// `m` in the export's f32 form.
+pub fn mesh_data(m: &Mesh) -> MeshData {
     MeshData {
         positions: m.positions.iter().map(|p| p.as_vec3().to_array()).collect(),
         normals: m.normals.iter().map(|n| n.as_vec3().to_array()).collect(),
@@ -356,12 +357,18 @@ fn mesh_data(m: &Mesh) -> MeshData {
 /// at the part's own resolution, or coarser (down to 8 cells) until it fits;
 /// a clear error if even that is over the budget.
 pub fn export_mesh(data: &DsmData, max_vertices: usize) -> Result<MeshData, CommandError> {
+    export_kernel_mesh(data, max_vertices).map(|m| mesh_data(&m))
+}
+
+/// [`export_mesh`] before the conversion to f32 (for a bound part, which is
+/// deformed in f64 first: `ffd_binding::deform_export`).
+pub fn export_kernel_mesh(data: &DsmData, max_vertices: usize) -> Result<Mesh, CommandError> {
     let mut cells = data.cells;
     loop {
         let m = mesh_at(data, cells)?;
         let n = m.positions.len();
         if n <= max_vertices {
-            return Ok(mesh_data(&m));
+            return Ok(m);
         }
         if cells <= 8 {
             return Err(invalid(format!(

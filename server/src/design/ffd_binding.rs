@@ -38,8 +38,12 @@
 //!   vertices in its support ([`Ffd::move_point`]); the normals are
 //!   recomputed from the deformed triangles. A DSM edit re-meshes and
 //!   re-embeds; vertices outside the rest body then keep their positions.
-//! * **Morph playback** does not deform bound parts: they follow the body's
-//!   lattice, not the frames of its metamorphosis.
+//! * **Morph playback** carries bound parts along for display
+//!   (`morph_follow`); the document keeps them as the body's lattice left
+//!   them.
+//! * **Exports** of a bound DSM part (`?part=`) deform the mesh made for the
+//!   export the same way ([`deform_export`]): the body's stored lattice, so
+//!   what is exported is what the document holds (morph time 0).
 //! * **Unbinding** (`unrelate`, or deleting the body, which unbinds): a
 //!   surface or curve keeps its deformed shape; a DSM mesh shows its own
 //!   shape again. A part follows one body at most.
@@ -392,7 +396,7 @@ impl DsmFfd {
 }
 
 /// Area-weighted vertex normals of `m`'s triangles.
-fn renormal(m: &mut Mesh) {
+pub fn renormal(m: &mut Mesh) {
     let mut n = vec![DVec3::ZERO; m.positions.len()];
     for t in &m.triangles {
         let [a, b, c] = t.map(|i| m.positions[i as usize]);
@@ -475,6 +479,47 @@ impl DsmFfds {
     pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
         super::dsm_engine::mesh_frame(self.mesh(id)?, design, id, rev, drag)
     }
+}
+
+/// The deformation of DSM part `part`'s export mesh by the body it is bound
+/// to in `doc`: (rest lattice, current lattice), or `None` when the part is
+/// not bound.
+pub fn export_deformation(doc: &DesignDoc, part: u64) -> Option<(LatticeDoc, LatticeDoc)> {
+    doc.relations.iter().find_map(|r| match &r.kind {
+        RelationKind::Ffd {
+            body,
+            part: p,
+            rest: Some(rest),
+        } if *p == part => match doc.part(*body).map(|b| &b.body) {
+            Some(PartBody::Body(b)) => Some((rest.clone(), b.lattice.clone())),
+            _ => None,
+        },
+        _ => None,
+    })
+}
+
+/// Deforms `mesh` (a bound DSM part's mesh made for an export, finer or
+/// coarser than the one shown) by the body: each vertex embedded in the
+/// `rest` lattice, carrying its inversion residual, and mapped by the
+/// `current` lattice — as the mesh shown is; vertices outside the rest
+/// body keep their places. Normals are recomputed from the triangles.
+pub fn deform_export(
+    rest: &LatticeDoc,
+    current: &LatticeDoc,
+    mesh: &mut Mesh,
+) -> Result<(), CommandError> {
+    let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
+    let vol = rest.volume()?;
+    let mut ffd = Ffd::new(vol.clone());
+    let mut emb = ffd
+        .embed(&mesh.positions, tolerance(&vol))
+        .map_err(kernel)?;
+    emb.carry_residual(&ffd).map_err(kernel)?;
+    ffd.set_lattice(current.volume()?.points().to_vec())
+        .map_err(kernel)?;
+    ffd.deform_all(&emb, &mut mesh.positions).map_err(kernel)?;
+    renormal(mesh);
+    Ok(())
 }
 
 /// The rest lattice a new `ffd` relation of DSM part `part` to `body`

@@ -25,6 +25,7 @@ pub mod ffd_binding;
 pub mod hub;
 pub mod legacy;
 pub mod model;
+pub mod morph_follow;
 pub mod network_demo;
 pub mod network_engine;
 pub mod part;

@@ -12,6 +12,7 @@ pub use super::edit::{Created, Edit, MaterialEdit, PartEdit};
 use super::engine::Engine;
 use super::error::{CommandError, ErrorKind};
 use super::ffd_binding::DsmFfds;
+use super::morph_follow::MorphMeshes;
 use super::network_engine::{NetworkEngine, NetworkEngines};
 use super::part::{PartBody, RelationKind, SurfacePart};
 use super::product_engine::ProductEngine;
@@ -86,6 +87,8 @@ pub struct DesignModel {
     bodies: BodyEngines,
     /// The deformed meshes of DSM parts bound to bodies (`ffd_binding`).
     ffds: DsmFfds,
+    /// Those meshes as a morphing body carries them (`morph_follow`).
+    morphs: MorphMeshes,
     /// The solve warning of the last edit (see [`Self::edit_warning`]).
     warning: Option<String>,
 }
@@ -112,6 +115,7 @@ impl DesignModel {
             networks,
             bodies,
             ffds,
+            morphs: MorphMeshes::default(),
             warning: None,
         };
         m.sync();
@@ -287,6 +291,15 @@ impl DesignModel {
             m.dedup();
             Ok(m)
         });
+        let outcome = outcome.and_then(|mut m| {
+            let (ffds, dsm) = (&self.ffds, self.engine.dsm());
+            m.extend(self.morphs.update(&doc, &self.bodies, |id| {
+                ffds.mesh(id).or_else(|| dsm.mesh(id))
+            })?);
+            m.sort_unstable();
+            m.dedup();
+            Ok(m)
+        });
         let moved = match outcome {
             Ok(m) => m,
             Err(e) => {
@@ -295,6 +308,10 @@ impl DesignModel {
                 self.networks = network_engines(&current)?;
                 self.bodies.sync(&current)?;
                 self.ffds.sync(&current, self.engine.dsm())?;
+                let (ffds, dsm) = (&self.ffds, self.engine.dsm());
+                self.morphs.update(&current, &self.bodies, |id| {
+                    ffds.mesh(id).or_else(|| dsm.mesh(id))
+                })?;
                 return Err(e);
             }
         };
@@ -394,26 +411,49 @@ impl DesignModel {
     }
 
     /// Shows body part `part` at morph time `t` (evaluated here: run it
-    /// where heavy work may run).
-    pub fn set_morph_time(&mut self, part: u64, t: f64) -> Result<(), CommandError> {
+    /// where heavy work may run), carrying the parts bound to it along
+    /// (`morph_follow`). Returns the parts whose frames changed: the body
+    /// and the parts bound to it.
+    pub fn set_morph_time(&mut self, part: u64, t: f64) -> Result<Vec<u64>, CommandError> {
         match self.doc.part(part).map(|p| &p.body) {
-            None => Err(unknown_part(part)),
-            Some(PartBody::Body(_)) => self.bodies.set_time(part, t),
-            Some(_) => Err(CommandError::new(
-                ErrorKind::Unsupported,
-                format!("part {part} is not a body: it has no morph"),
-            )),
+            None => return Err(unknown_part(part)),
+            Some(PartBody::Body(_)) => {}
+            Some(_) => {
+                return Err(CommandError::new(
+                    ErrorKind::Unsupported,
+                    format!("part {part} is not a body: it has no morph"),
+                ));
+            }
         }
+        let before = self.bodies.get(part).map(|e| e.time());
+        self.bodies.set_time(part, t)?;
+        let (ffds, dsm) = (&self.ffds, self.engine.dsm());
+        let updated = self.morphs.update(&self.doc, &self.bodies, |id| {
+            ffds.mesh(id).or_else(|| dsm.mesh(id))
+        });
+        if let Err(e) = updated {
+            // Back to the time shown before (its meshes were made for it).
+            if let Some(t0) = before {
+                self.bodies.set_time(part, t0)?;
+            }
+            return Err(e);
+        }
+        let mut moved = vec![part];
+        moved.extend(super::morph_follow::bound_parts(&self.doc, part));
+        Ok(moved)
     }
 
-    /// The mesh DSM part `part` shows: deformed by the body it is bound to
+    /// The mesh DSM part `part` shows: carried by a morphing body
+    /// (`morph_follow`), else deformed by the body it is bound to
     /// (`ffd_binding`), else its own.
     pub fn dsm_mesh(&self, part: u64) -> Option<&vsculpt_kernel::dsm::Mesh> {
-        self.ffds
+        self.morphs
             .mesh(part)
+            .or_else(|| self.ffds.mesh(part))
             .or_else(|| self.engine.dsm().mesh(part))
     }
 
+<<<<<<< HEAD
     /// The point S(u, v) of surface part `part` as solved now (mid-drag
     /// too): `unknown_part`, `unsupported` for a part that is not a
     /// surface, `out_of_domain` for (u, v) outside its domain.
@@ -454,6 +494,13 @@ impl DesignModel {
         Ok(surface.point(u, v))
     }
 
+    /// The morph deformation that carries part `part` (bound to a body shown
+    /// at morph time t > 0), if any.
+    fn morph_of(&self, part: u64) -> Option<&vsculpt_kernel::body::Ffd> {
+        self.bodies
+            .follow(super::morph_follow::body_of(&self.doc, part)?)
+    }
+
     /// The volume body part `part` shows (its morph at the current time).
     pub fn body_volume(&self, part: u64) -> Option<&vsculpt_kernel::body::BSplineVolume> {
         self.bodies.get(part).map(|e| e.shown())
@@ -467,8 +514,10 @@ impl DesignModel {
             return Some(Geometry::new(rev, n.frame(design, part, rev, drag), None));
         }
         if let Some(frame) = self
-            .ffds
-            .frame(design, part, rev, drag)
+            .morphs
+            .mesh(part)
+            .and_then(|m| super::dsm_engine::mesh_frame(m, design, part, rev, drag))
+            .or_else(|| self.ffds.frame(design, part, rev, drag))
             .or_else(|| self.engine.dsm().frame(design, part, rev, drag))
         {
             return Some(Geometry::new(rev, frame, None));
@@ -487,6 +536,21 @@ impl DesignModel {
         }
         let (points, icons) = self.frame_data(part)?;
         let p = self.doc.part(part)?;
+        if let Some(follow) = self.morph_of(part) {
+            // Carried by a morphing body: what is shown, not what is stored.
+            let points = super::morph_follow::carry(follow, points);
+            let at: Vec<DVec3> = icons.iter().map(|(_, x)| *x).collect();
+            let icons: IconPositions = icons
+                .iter()
+                .map(|(id, _)| *id)
+                .zip(super::morph_follow::carry(follow, &at))
+                .collect();
+            return Some(Geometry::new(
+                rev,
+                crate::convert::geometry_frame(design, rev, drag, p, &points, &icons),
+                None,
+            ));
+        }
         Some(Geometry::new(
             rev,
             crate::convert::geometry_frame(design, rev, drag, p, points, &icons),
@@ -506,6 +570,10 @@ impl DesignModel {
         streams: &mut super::drag_stream::DragStreams,
     ) -> Option<Geometry> {
         let mut g = self.geometry(design, part, rev, true)?;
+        if self.morph_of(part).is_some() {
+            // Carried by a morphing body: full frames only.
+            return Some(g);
+        }
         let (points, icons) = self.frame_data(part)?;
         g.stream = streams.frame(super::drag_stream::DragInput {
             design,
