@@ -453,7 +453,6 @@ impl DesignModel {
             .or_else(|| self.engine.dsm().mesh(part))
     }
 
-<<<<<<< HEAD
     /// The point S(u, v) of surface part `part` as solved now (mid-drag
     /// too): `unknown_part`, `unsupported` for a part that is not a
     /// surface, `out_of_domain` for (u, v) outside its domain.
