@@ -72,13 +72,8 @@ async fn a_compact_join_sends_the_shape_first_in_binary_and_snapshots_without_po
         let shape = &parts::part(snap, id)["shape"];
         shape[shape["kind"].as_str().unwrap()].clone()
     };
-    // The surface and curve parts (the demo's body part, the spool, holds a
-    // lattice and is drawn from body frames).
-    let ids: Vec<u64> = parts::part_ids(&legacy_snap)
-        .into_iter()
-        .filter(|id| parts::part(&legacy_snap, *id)["shape"]["kind"] != "body")
-        .collect();
-    assert_eq!(ids.len(), 4, "the demo has four surface and curve parts");
+    let ids = parts::part_ids(&legacy_snap);
+    assert_eq!(ids.len(), 4, "the demo has four parts");
     for &id in &ids {
         assert!(
             !shape_of(&legacy_snap, id)["points"]
@@ -93,16 +88,13 @@ async fn a_compact_join_sends_the_shape_first_in_binary_and_snapshots_without_po
     h["geometry_first"] = json!(true);
     compact.send(Message::text(h.to_string())).await.unwrap();
     let (bytes, order, frames, snap) = join(&mut compact).await;
-    // The frames between the welcome and the snapshot.
+    // One frame per part, between the welcome and the snapshot.
     let mut expected = vec!["text:welcome".to_string()];
-    expected.extend(frames.iter().map(|_| "binary".to_string()));
+    expected.extend(ids.iter().map(|_| "binary".to_string()));
     expected.push("text:snapshot".into());
     assert_eq!(order, expected);
     let mut framed = Vec::new();
     for frame in &frames {
-        if frame[4] == vsculpt_protocol::body_frame::KIND_BODY {
-            continue;
-        }
         // Header (protocol/README.md): magic "VSGF", kind u8 at 4, version
         // u8 at 5, flags u16 at 6, design u64 at 8, part u64 at 16,
         // revision u64 at 24.
@@ -161,10 +153,6 @@ async fn a_compact_join_sends_the_shape_first_in_binary_and_snapshots_without_po
                 Got::Text(v) if v["type"] == "snapshot" => {
                     for id in parts::part_ids(&v) {
                         let shape = &parts::part(&v, id)["shape"];
-                        // A body part (the demo's spool) holds a lattice, not points.
-                        if shape["kind"] == "body" {
-                            continue;
-                        }
                         let n = shape[shape["kind"].as_str().unwrap()]["points"]
                             .as_array()
                             .unwrap()
