@@ -676,8 +676,7 @@ async fn exports_the_interior_as_vtu_read_by_vtkio_and_the_boundary_as_iges_and_
         "the stored spool part is the cube at t = 0: {total} vs {exact}"
     );
     assert!((exact - 216_000.0).abs() < 1e-6 * exact);
-    // Every body at once (no part named): the three grids (the block, the
-    // spool added here and the demo design's own spool, also a cube).
+    // Every body at once (no part named): both grids.
     let all = get(
         addr,
         &format!("/api/designs/{design}/export.vtu"),
@@ -685,8 +684,8 @@ async fn exports_the_interior_as_vtu_read_by_vtkio_and_the_boundary_as_iges_and_
     )
     .await;
     let (cells_all, total_all, _, _) = read_vtu(&all.text());
-    assert_eq!(cells_all, 512 + 2 * cells);
-    assert!((total_all - 8.0 - 2.0 * exact).abs() < 1e-6 * exact);
+    assert_eq!(cells_all, 512 + cells);
+    assert!((total_all - 8.0 - exact).abs() < 1e-6 * exact);
     // Not a body: refused.
     let r = get(
         addr,
