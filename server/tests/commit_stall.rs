@@ -11,7 +11,8 @@
 //! was when the commit was asked; edits made while it is written belong to
 //! the next version. A commit whose write fails changes nothing, and two
 //! commits asked together give consecutive versions in the order asked.
-//! Every check of what is committed is made after a restart.
+//! Every check of what is committed is made after a restart. A review
+//! comment's write (a viewer may comment) holds up no drag either.
 
 mod common;
 
@@ -97,7 +98,7 @@ async fn dragged(c: &mut Client, icon: u64, p: [f64; 3], z: f64, after: u64) -> 
         .await;
     let f = tokio::time::timeout(ANSWER_WITHIN, c.frame_of_after(SHELL, after))
         .await
-        .expect("no geometry frame of a drag while a commit was being written");
+        .expect("no geometry frame of a drag while a store write was held up");
     f.revision
 }
 
@@ -322,4 +323,73 @@ async fn two_commits_asked_together_give_consecutive_versions_in_order() {
         parts::icons(&versions[2].2, SHELL),
         parts::icons(&first_state, SHELL)
     );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_comment_being_written_holds_up_no_drag_and_is_answered_once_durable() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    let s = start(&data).await;
+    let mut bob = s.connect("bob").await;
+    let mut customer =
+        Client::connect(s.addr, s.design.id, &s.design.tokens.viewer, "customer").await;
+    let (icon, p) = load_icon(&bob.snapshot);
+    bob.ok(json!({"type": "drag_start", "part": SHELL, "icon": icon}))
+        .await;
+
+    // The disk stalls; the customer comments; the comment's write waits.
+    let release = s.store.stall();
+    ask(
+        &mut customer,
+        1,
+        json!({"type": "add_comment", "part": SHELL, "anchor": {"u": 0.4, "v": 0.6}, "text": "Softer here?"}),
+    )
+    .await;
+    write_started(&s).await;
+    // A second request queues behind it and is checked in its turn.
+    ask(
+        &mut customer,
+        2,
+        json!({"type": "reply_comment", "comment": 1, "text": "and the rim"}),
+    )
+    .await;
+
+    // Meanwhile bob drags and gets the frame of every drag.
+    let mut rev = 0;
+    for k in 1..=5 {
+        rev = dragged(&mut bob, icon, p, k as f64, rev).await;
+    }
+    // Nobody has heard of the comment: it is not durable yet.
+    for v in texts_so_far(&mut customer) {
+        assert!(
+            v["req"] != json!(1) && v["req"] != json!(2),
+            "answered before durable: {v}"
+        );
+        assert_ne!(v["type"], "comment_added", "{v}");
+    }
+    for v in texts_so_far(&mut bob) {
+        assert_ne!(v["type"], "comment_added", "{v}");
+    }
+
+    // The disk is back: the comment lands, then its reply, in that order.
+    drop(release);
+    let mut events = Vec::new();
+    let first = reply_to(&mut customer, 1, &mut events).await;
+    assert_eq!(first["type"], "ack", "{first}");
+    let id = first["comment"]
+        .as_u64()
+        .expect("the ack names the comment");
+    let second = reply_to(&mut customer, 2, &mut events).await;
+    assert_eq!(second["type"], "ack", "{second}");
+    let added = bob.wait_for("comment_added").await;
+    assert_eq!(added["comment"]["id"], json!(id), "{added}");
+    assert_eq!(added["comment"]["text"], "Softer here?");
+    let changed = bob.wait_for("comment_changed").await;
+    assert_eq!(
+        changed["comment"]["replies"][0]["text"], "and the rim",
+        "{changed}"
+    );
+    drop(bob);
+    drop(customer);
+    s.stop().await;
 }

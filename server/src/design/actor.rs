@@ -459,6 +459,8 @@ enum Wake {
     Written(Result<Result<(), String>, tokio::task::JoinError>),
     /// The commit in flight landed.
     Committed(super::commit_write::Landed),
+    /// The comment write in flight landed.
+    Commented(super::comment_write::Landed),
 }
 
 /// The actor's state.
@@ -494,6 +496,9 @@ struct Actor {
     /// Commits asked and not yet durable (see [`super::commit_write`]):
     /// written one at a time, in order, while the actor goes on.
     commits: super::commit_write::CommitWrites,
+    /// Comment requests not yet durable (see [`super::comment_write`]):
+    /// written one at a time, in order, while the actor goes on.
+    comment_writes: super::comment_write::CommentWrites,
     /// The (part, icon) each client is dragging.
     dragging: BTreeMap<u64, (u64, u64)>,
     /// Whether the geometry published last came from a drag.
@@ -529,6 +534,7 @@ pub fn spawn(
         id,
         model,
         commits: super::commit_write::CommitWrites::new(store.clone(), id),
+        comment_writes: super::comment_write::CommentWrites::new(store.clone(), id),
         store,
         metrics: metrics.clone(),
         persist_delay,
@@ -569,6 +575,7 @@ impl Actor {
             };
             let writing = self.persisting.as_mut();
             let committing = self.commits.landed();
+            let commenting = self.comment_writes.landed();
             let wake = tokio::select! {
                 n = rx.recv_many(&mut batch, 256) => Wake::Requests(n),
                 _ = sleep => Wake::PersistDue,
@@ -579,6 +586,7 @@ impl Actor {
                     }
                 } => Wake::Written(r),
                 landed = committing => Wake::Committed(landed),
+                landed = commenting => Wake::Commented(landed),
             };
             match wake {
                 Wake::Requests(0) => break,
@@ -597,8 +605,13 @@ impl Actor {
                     self.commit_landed(landed);
                     self.start_commit();
                 }
+                Wake::Commented(landed) => {
+                    self.comment_landed(landed);
+                    self.start_comment();
+                }
             }
         }
+        self.settle_comments().await;
         self.persist().await;
         tracing::debug!(design = self.id, "design actor stopped");
     }
@@ -716,6 +729,11 @@ impl Actor {
                     command: Command::Commit { message },
                     reply,
                 } => self.ask_commit(client, message, reply),
+                Request::Command {
+                    client,
+                    command: Command::Comment(op),
+                    reply,
+                } => self.ask_comment(client, op, reply),
                 Request::Command {
                     client,
                     command,
@@ -1201,42 +1219,102 @@ impl Actor {
         }
     }
 
-    /// A comment request: checked against the design, written to the store
-    /// (durable before anyone hears of it; the actor waits for that one
-    /// write, as for a restore), then announced to every client.
-    async fn comment(
+    /// A client asks something of the comments: queued behind the comment
+    /// requests before it, checked when its turn comes, written off the
+    /// actor, answered and announced once durable ([`Actor::comment_landed`]).
+    fn ask_comment(
         &mut self,
         client: u64,
         op: super::comments::CommentOp,
-    ) -> Result<Ack, CommandError> {
-        let (role, author) = match self.clients.get(&client) {
-            Some(p) => (p.client.role, p.client.name.clone()),
-            None if client == 0 => (Role::Editor, "rest".to_string()),
-            None => return Err(CommandError::new(ErrorKind::Forbidden, "not joined")),
-        };
-        let write = self
-            .comments
-            .check(op, role, &author, self.base_version, &self.model)?;
-        let store = self.store.clone();
-        let id = self.id;
-        let written = tokio::task::spawn_blocking(move || write.run(&store, id))
-            .await
-            .map_err(|e| CommandError::new(ErrorKind::Storage, e.to_string()))?
-            .map_err(|e| match e {
-                crate::store::StoreError::UnknownComment(_, c) => CommandError::new(
-                    ErrorKind::InvalidValue,
-                    format!("no comment {c} in this design"),
-                ),
-                e => CommandError::new(ErrorKind::Storage, e.to_string()),
-            })?;
-        let (created, change) = self.comments.apply(written);
-        if let Some(change) = change {
-            let _ = self.events.send(DesignEvent::Comment(change));
+        reply: Option<super::commit_write::Reply>,
+    ) {
+        let command = Command::Comment(op);
+        if let Err(e) = self.authorize(client, &command) {
+            if let Some(reply) = reply {
+                let _ = reply.send(Err(e));
+            }
+            return;
         }
-        Ok(Ack {
-            created_comment: created,
-            ..Ack::default()
-        })
+        let Command::Comment(op) = command else {
+            return;
+        };
+        self.comment_writes
+            .ask(super::comment_write::Asked { client, op, reply });
+        self.start_comment();
+    }
+
+    /// Starts the oldest waiting comment request's write if none is in
+    /// flight: checked now against the comments and the design (so it sees
+    /// the writes before it); one that fails its check is answered at once
+    /// and the next one gets its turn.
+    fn start_comment(&mut self) {
+        while let Some(asked) = self.comment_writes.take_turn() {
+            let super::comment_write::Asked { client, op, reply } = asked;
+            let checked = match self.clients.get(&client) {
+                Some(p) => Ok((p.client.role, p.client.name.clone())),
+                None if client == 0 => Ok((Role::Editor, "rest".to_string())),
+                None => Err(CommandError::new(ErrorKind::Forbidden, "not joined")),
+            }
+            .and_then(|(role, author)| {
+                self.comments
+                    .check(op, role, &author, self.base_version, &self.model)
+            });
+            match checked {
+                Ok(write) => {
+                    self.comment_writes.start(write, reply);
+                    return;
+                }
+                Err(e) => {
+                    if let Some(reply) = reply {
+                        let _ = reply.send(Err(e));
+                    }
+                }
+            }
+        }
+    }
+
+    /// A comment write ended: once durable, every client hears of it and
+    /// the asker gets the new id; a failed write changes nothing and the
+    /// asker gets why.
+    fn comment_landed(&mut self, landed: super::comment_write::Landed) {
+        let super::comment_write::Landed { outcome, reply } = landed;
+        let out = match outcome {
+            Ok(written) => {
+                let (created, change) = self.comments.apply(written);
+                if let Some(change) = change {
+                    let _ = self.events.send(DesignEvent::Comment(change));
+                }
+                Ok(Ack {
+                    created_comment: created,
+                    ..Ack::default()
+                })
+            }
+            Err(crate::store::StoreError::UnknownComment(_, c)) => Err(CommandError::new(
+                ErrorKind::InvalidValue,
+                format!("no comment {c} in this design"),
+            )),
+            Err(e) => {
+                tracing::warn!(design = self.id, "comment not stored: {e}");
+                Err(CommandError::new(ErrorKind::Storage, e.to_string()))
+            }
+        };
+        if let Some(reply) = reply {
+            let _ = reply.send(out);
+        }
+    }
+
+    /// Waits until no comment request is in flight or waiting, answering
+    /// each as it lands (before the actor stops: nothing asked is dropped
+    /// unanswered).
+    async fn settle_comments(&mut self) {
+        while self.comment_writes.pending() {
+            self.start_comment();
+            if !self.comment_writes.pending() {
+                break;
+            }
+            let landed = self.comment_writes.landed().await;
+            self.comment_landed(landed);
+        }
     }
 
     fn role(&self, client: u64) -> Option<Role> {
@@ -1436,7 +1514,12 @@ impl Actor {
                 Ok(Ack::default())
             }
             Command::CancelFairing { part, face } => self.jobs.cancel(part, face, client),
-            Command::Comment(op) => self.comment(client, op).await,
+            // A comment's reply waits for its write: `handle_batch` queues
+            // it with `ask_comment` and never passes it here.
+            Command::Comment(_) => Err(CommandError::new(
+                ErrorKind::Unavailable,
+                "a comment is answered once it is written",
+            )),
             Command::BodyMorph { part, t } => {
                 let moved = heavy(|| self.model.set_morph_time(part, t))?;
                 geometry_dirty.parts(moved);

@@ -8,6 +8,7 @@ pub mod body_demo;
 pub mod body_engine;
 pub mod body_part;
 pub mod command;
+pub mod comment_write;
 pub mod comments;
 pub mod commit_write;
 pub mod curve_engine;
