@@ -8,7 +8,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{ErrorCode, ProtocolError};
-use crate::limits::{MAX_COMMENT_BYTES, MAX_MAGNITUDE};
+use crate::limits::MAX_COMMENT_BYTES;
 use crate::types::{Access, Vec3};
 
 /// Where a pin sits on its part. A client gives (u, v) on a surface part —
@@ -113,31 +113,15 @@ pub fn validate_text(text: &str) -> Result<(), ProtocolError> {
     Ok(())
 }
 
-fn coordinate(name: &str, x: f64) -> Result<(), ProtocolError> {
-    if !x.is_finite() {
-        return Err(ProtocolError::new(
-            ErrorCode::NotFinite,
-            format!("{name} is not finite"),
-        ));
-    }
-    if x.abs() > MAX_MAGNITUDE {
-        return Err(ProtocolError::new(
-            ErrorCode::OutOfRange,
-            format!("{name} = {x} exceeds ±{MAX_MAGNITUDE}"),
-        ));
-    }
-    Ok(())
-}
-
 impl CommentAnchor {
     /// Checks the anchor without the design: (u, v) both or neither, at
     /// least one of (u, v) and `xyz`, every number finite and within
-    /// ±[`MAX_MAGNITUDE`]. The server checks the part and the domain.
+    /// ±[`MAX_MAGNITUDE`](crate::limits::MAX_MAGNITUDE). The server checks the part and the domain.
     pub fn validate(&self) -> Result<(), ProtocolError> {
         match (self.u, self.v) {
             (Some(u), Some(v)) => {
-                coordinate("anchor.u", u)?;
-                coordinate("anchor.v", v)?;
+                crate::validate::number("anchor.u", u)?;
+                crate::validate::number("anchor.v", v)?;
             }
             (None, None) => {
                 if self.xyz.is_none() {
@@ -156,7 +140,7 @@ impl CommentAnchor {
         }
         if let Some(p) = self.xyz {
             for (k, x) in p.into_iter().enumerate() {
-                coordinate(&format!("anchor.xyz[{k}]"), x)?;
+                crate::validate::number(&format!("anchor.xyz[{k}]"), x)?;
             }
         }
         Ok(())

@@ -8,7 +8,9 @@ use crate::limits::*;
 use crate::parts::{CurveData, PartMaterial, PartShape, PartSpec, is_colour};
 use crate::types::{Anchor, Camera, IconSpec, Knots, Material, SurfaceData, UvCurve};
 
-fn number(name: &str, x: f64) -> Result<(), ProtocolError> {
+/// A finite number within ±[`MAX_MAGNITUDE`], or `not_finite` /
+/// `out_of_range` naming `name`.
+pub(crate) fn number(name: &str, x: f64) -> Result<(), ProtocolError> {
     if !x.is_finite() {
         return Err(ProtocolError::new(
             ErrorCode::NotFinite,

@@ -114,16 +114,7 @@ impl Store {
         let time_ms = super::now_ms();
         let mut conn = self.conn();
         let tx = conn.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
-        let live: Option<i64> = tx
-            .query_row(
-                "SELECT id FROM designs WHERE id = ?1 AND deleted = 0",
-                params![id as i64],
-                |r| r.get(0),
-            )
-            .optional()?;
-        if live.is_none() {
-            return Err(StoreError::UnknownDesign(id));
-        }
+        super::live_design(&tx, id)?;
         if let Some(p) = c.parent {
             let head: Option<i64> = tx
                 .query_row(

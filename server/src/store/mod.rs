@@ -308,16 +308,7 @@ impl Store {
         // meanwhile (`checkpoint::WAL_CAP_FRAMES`), could not upgrade to a
         // write (`SQLITE_BUSY_SNAPSHOT`, not retried by the busy handler).
         let tx = conn.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
-        let live: Option<i64> = tx
-            .query_row(
-                "SELECT id FROM designs WHERE id = ?1 AND deleted = 0",
-                params![id as i64],
-                |r| r.get(0),
-            )
-            .optional()?;
-        if live.is_none() {
-            return Err(StoreError::UnknownDesign(id));
-        }
+        live_design(&tx, id)?;
         let number: i64 = tx.query_row(
             "SELECT COALESCE(MAX(number), 0) + 1 FROM versions WHERE design_id = ?1",
             params![id as i64],
@@ -474,5 +465,21 @@ impl Store {
             Some(n) => self.version(id, n as u64),
             None => Ok(None),
         }
+    }
+}
+
+/// `UnknownDesign` unless design `id` exists and is not deleted (inside the
+/// write transaction that is about to change it).
+fn live_design(tx: &rusqlite::Transaction, id: DesignId) -> Result<(), StoreError> {
+    let live: Option<i64> = tx
+        .query_row(
+            "SELECT id FROM designs WHERE id = ?1 AND deleted = 0",
+            params![id as i64],
+            |r| r.get(0),
+        )
+        .optional()?;
+    match live {
+        Some(_) => Ok(()),
+        None => Err(StoreError::UnknownDesign(id)),
     }
 }
