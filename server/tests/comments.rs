@@ -103,7 +103,8 @@ async fn drain(c: &mut Client) -> Vec<Value> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_viewer_comments_every_client_sees_it_and_the_viewer_still_cannot_edit() {
-    let server = TestServer::start(common::data_dir("comments-live")).await;
+    let data = common::data_dir("comments-live");
+    let server = TestServer::start(data.clone()).await;
     let d = server.demo().clone();
     let mut editor = Client::connect(server.addr, d.id, &d.editor, "Ana").await;
     let mut viewer = Client::connect(server.addr, d.id, &d.viewer, "Ben (customer)").await;
@@ -223,11 +224,13 @@ async fn a_viewer_comments_every_client_sees_it_and_the_viewer_still_cannot_edit
     assert_eq!(comments[0]["resolved"], json!(true));
     assert_eq!(comments[0]["replies"][0]["text"], "Softened it.");
     server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn bad_comments_get_a_clear_error_and_change_nothing() {
-    let server = TestServer::start(common::data_dir("comments-bad")).await;
+    let data = common::data_dir("comments-bad");
+    let server = TestServer::start(data.clone()).await;
     let d = server.demo().clone();
     let mut viewer = Client::connect(server.addr, d.id, &d.viewer, "Ben").await;
     let mut other = Client::connect(server.addr, d.id, &d.editor, "Ana").await;
@@ -301,12 +304,14 @@ async fn bad_comments_get_a_clear_error_and_change_nothing() {
     let c = other.wait_for("comment_added").await["comment"].clone();
     assert_eq!(c["anchor"], json!({"xyz": [1.5, -2.0, 3.25]}));
     server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_per_design_limit_and_the_rate_limit_hold() {
+    let data = common::data_dir("comments-limit");
     let server = TestServer::start_configured(
-        common::data_dir("comments-limit"),
+        data.clone(),
         std::path::PathBuf::from("/nonexistent-web"),
         |c| c.max_comments = 3,
     )
@@ -382,6 +387,7 @@ async fn the_per_design_limit_and_the_rate_limit_hold() {
         .sum();
     assert_eq!(total, 3, "{comments:?}");
     server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -467,6 +473,7 @@ async fn comments_carry_their_version_stay_out_of_undo_and_survive_a_restart() {
         "a comment after a restore is on the restored version"
     );
     server.kill9();
+    let _ = std::fs::remove_dir_all(&data);
 }
 
 #[test]
