@@ -28,15 +28,25 @@
 //   node --experimental-websocket web-client/bench/protocol-bench.mjs target/release/vsculpt-server
 // Optional: BENCH_SOAK_ROUNDS (default 6), BENCH_JOINS (200), BENCH_DRAGS (300),
 // BENCH_VIEWERS (50), BENCH_FANOUT_SECONDS (5), BENCH_COMMIT_PAUSE_MS (50),
-// BENCH_ONLY (a comma list of join, own, fanout, soak, commits; default all).
+// BENCH_ONLY (a comma list of join, own, fanout, soak, commits; default all),
+// BENCH_VIEWER_THREADS (5: the fanout's viewers are spread over this many
+// worker threads, so that one viewer's work does not delay another's arrival
+// stamp; 1 puts them all on the main thread, as each browser would not be).
+//
+// The join is measured twice: a plain hello (the snapshot carries the net as
+// JSON numbers) and the compact join the web client uses (README, "The
+// compact join": `geometry_first`, the shape as a binary frame first, then a
+// snapshot without points); for the latter the time to the first frame is
+// reported too.
 
 import { spawn } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { performance } from 'node:perf_hooks';
+import { Worker, isMainThread, parentPort, workerData } from 'node:worker_threads';
 
-const bin = process.argv[2] ?? 'target/release/vsculpt-server';
+const bin = (isMainThread ? process.argv[2] : null) ?? 'target/release/vsculpt-server';
 const env = (k, d) => Number(process.env[k] ?? d);
 const JOINS = env('BENCH_JOINS', 200);
 const DRAGS = env('BENCH_DRAGS', 300);
@@ -44,6 +54,7 @@ const VIEWERS = env('BENCH_VIEWERS', 50);
 const FANOUT_SECONDS = env('BENCH_FANOUT_SECONDS', 5);
 const SOAK_ROUNDS = env('BENCH_SOAK_ROUNDS', 6);
 const COMMIT_PAUSE_MS = env('BENCH_COMMIT_PAUSE_MS', 50);
+const VIEWER_THREADS = Math.max(1, env('BENCH_VIEWER_THREADS', 5));
 const ONLY = (process.env.BENCH_ONLY ?? 'join,own,fanout,soak,commits').split(',');
 const runs = (name) => ONLY.includes(name);
 const SOAK_DESIGNS = 300;
@@ -56,6 +67,8 @@ const pct = (xs, p) => {
   return s[Math.min(s.length - 1, Math.ceil((p / 100) * s.length) - 1)];
 };
 const fmt = (x) => x.toFixed(2);
+/** A clock shared by the main thread and the workers (ms since the epoch). */
+const clock = () => performance.timeOrigin + performance.now();
 
 // ---- the server ----------------------------------------------------------
 
@@ -180,7 +193,7 @@ class Client {
     this.bytes = 0;
     this.stream = stream ? new StreamState() : null;
     this.ws.onmessage = (ev) => {
-      const now = performance.now();
+      const now = clock();
       if (typeof ev.data === 'string') this.onText(JSON.parse(ev.data), now);
       else {
         this.bytes += ev.data.byteLength;
@@ -214,15 +227,28 @@ class Client {
       };
     });
   }
-  /** Opens, says hello, resolves at the snapshot with [snapshot, ms from hello]. */
-  async join(design, token, name) {
+  /**
+   * Opens, says hello, resolves at the snapshot with [snapshot, ms from hello,
+   * ms from hello to the first binary frame or null]. `geometryFirst` asks
+   * for the compact join.
+   */
+  async join(design, token, name, geometryFirst = false) {
     await this.open();
     const got = this.waitText((m) => m.type === 'snapshot' || m.type === 'error');
-    const t0 = performance.now();
-    this.send({ type: 'hello', protocol: PROTOCOL, token, design, client_name: name, client_kind: 'tool' });
+    let firstFrame = null;
+    const onFrame = this.onFrame;
+    this.onFrame = (h, t) => {
+      if (firstFrame === null) firstFrame = t;
+      onFrame(h, t);
+    };
+    const t0 = clock();
+    const hello = { type: 'hello', protocol: PROTOCOL, token, design, client_name: name, client_kind: 'tool' };
+    if (geometryFirst) hello.geometry_first = true;
+    this.send(hello);
     const [m, t1] = await got;
+    this.onFrame = onFrame;
     if (m.type === 'error') throw new Error(`join refused: ${m.code} ${m.message}`);
-    return [m, t1 - t0];
+    return [m, t1 - t0, firstFrame === null ? null : firstFrame - t0];
   }
   close() {
     this.ws.close();
@@ -231,15 +257,18 @@ class Client {
 
 // ---- the benches -------------------------------------------------------------
 
-async function benchJoin(srv, design, viewer) {
+/** JOINS sequential joins: hello → snapshot, and hello → first frame. */
+async function benchJoin(srv, design, viewer, geometryFirst = false) {
   const times = [];
+  const firstFrames = [];
   for (let k = 0; k < JOINS; k++) {
     const c = new Client(srv.addr);
-    const [, ms] = await c.join(design.id, viewer, `joiner-${k}`);
+    const [, ms, frame] = await c.join(design.id, viewer, `joiner-${k}`, geometryFirst);
     times.push(ms);
+    if (frame !== null) firstFrames.push(frame);
     c.close();
   }
-  return times;
+  return { times, firstFrames };
 }
 
 /** An editor holding a load icon at (0.5, 0.5) of part 1. */
@@ -278,7 +307,7 @@ async function ownFrames(ed, part, icon) {
         }
       };
     });
-    const t0 = performance.now();
+    const t0 = clock();
     ed.send({ type: 'drag', part, icon, xyz: [0.5, 0.5, 0.1 + 0.001 * (k % 100)] });
     times.push((await frame) - t0);
     await sleep(1000 / 60);
@@ -302,7 +331,7 @@ async function benchOwnFrameWhileCommitting(srv, design) {
     while (!done) {
       const r = req++;
       const ack = committer.waitText((m) => m.req === r);
-      const t0 = performance.now();
+      const t0 = clock();
       committer.send({ type: 'commit', req: r, message: `bench ${r}` });
       const [m, t1] = await ack;
       if (m.type !== 'ack' || typeof m.version !== 'number') throw new Error(`commit: ${JSON.stringify(m)}`);
@@ -319,14 +348,91 @@ async function benchOwnFrameWhileCommitting(srv, design) {
   return { drags, commits };
 }
 
+/**
+ * `count` viewers of one design: they join, then from `start()` to `stop()`
+ * stamp each geometry frame's arrival with the shared clock.
+ */
+class ViewerGroup {
+  constructor({ addr, design, token, stream, count, offset }) {
+    Object.assign(this, { addr, design, token, stream, count, offset });
+    this.viewers = [];
+    this.arrivals = [];
+    this.measuring = false;
+  }
+  async join() {
+    for (let k = 0; k < this.count; k++) {
+      const c = new Client(this.addr, this.stream);
+      await c.join(this.design, this.token, `viewer-${this.offset + k}`);
+      const arrivals = [];
+      c.onFrame = (h, t) => {
+        if (this.measuring) arrivals.push([h.part, h.revision, t]);
+      };
+      this.viewers.push(c);
+      this.arrivals.push(arrivals);
+    }
+  }
+  start() {
+    this.bytes0 = this.viewers.map((c) => c.bytes);
+    this.measuring = true;
+  }
+  stop() {
+    this.measuring = false;
+    const out = {
+      arrivals: this.arrivals,
+      bytes: this.viewers.map((c, i) => c.bytes - this.bytes0[i]),
+      applyMs: this.stream ? this.viewers.flatMap((c) => c.stream.applyMs) : [],
+    };
+    this.viewers.forEach((c) => c.close());
+    return out;
+  }
+}
+
+/** A ViewerGroup on its own worker thread, driven by messages. */
+class ThreadedViewerGroup {
+  constructor(spec) {
+    this.worker = new Worker(new URL(import.meta.url), { workerData: spec });
+    // Messages are queued from the start: one may come before it is awaited.
+    const queue = [];
+    const waiting = [];
+    this.worker.on('message', (m) => (waiting.length ? waiting.shift().resolve(m) : queue.push(m)));
+    this.worker.on('error', (e) => {
+      while (waiting.length) waiting.shift().reject(e);
+      queue.push(e);
+    });
+    this.next = () =>
+      queue.length
+        ? queue[0] instanceof Error
+          ? Promise.reject(queue[0])
+          : Promise.resolve(queue.shift())
+        : new Promise((resolve, reject) => waiting.push({ resolve, reject }));
+  }
+  async join() {
+    const m = await this.next();
+    if (m !== 'ready') throw new Error(`viewer thread: ${JSON.stringify(m)}`);
+  }
+  start() {
+    this.worker.postMessage('start');
+  }
+  async stop() {
+    const got = this.next();
+    this.worker.postMessage('stop');
+    const out = await got;
+    await this.worker.terminate();
+    return out;
+  }
+}
+
 async function benchFanout(srv, design, stream = false) {
   const { ed, part, icon } = await editorWithIcon(srv, design);
-  const viewers = [];
-  for (let k = 0; k < VIEWERS; k++) {
-    const c = new Client(srv.addr, stream);
-    await c.join(design.id, design.tokens.viewer, `viewer-${k}`);
-    viewers.push(c);
+  const groups = [];
+  const threads = Math.min(VIEWER_THREADS, VIEWERS);
+  for (let g = 0, offset = 0; g < threads; g++) {
+    const count = Math.floor(VIEWERS / threads) + (g < VIEWERS % threads ? 1 : 0);
+    const spec = { addr: srv.addr, design: design.id, token: design.tokens.viewer, stream, count, offset };
+    groups.push(threads === 1 ? new ViewerGroup(spec) : new ThreadedViewerGroup(spec));
+    offset += count;
   }
+  for (const g of groups) await g.join();
   // Drag k asks for z = zk; icon_feedback names the revision that solved it.
   const sentAt = new Map(); // requested z (string) → send time
   const revisionSent = new Map(); // revision → send time
@@ -336,42 +442,36 @@ async function benchFanout(srv, design, stream = false) {
       if (t !== undefined) revisionSent.set(m.revision, t);
     }
   };
-  const arrivals = viewers.map(() => []); // [revision, time]
-  let measuring = false;
-  viewers.forEach((c, i) => {
-    c.onFrame = (h, t) => {
-      if (measuring && h.part === part) arrivals[i].push([h.revision, t]);
-    };
-  });
-  measuring = true;
-  const bytes0 = viewers.map((c) => c.bytes);
+  groups.forEach((g) => g.start());
+  await sleep(50); // every thread has seen its start
   const start = performance.now();
   const n = Math.round(FANOUT_SECONDS * 60);
   for (let k = 0; k < n; k++) {
     const z = 0.1 + 0.0001 * k;
-    sentAt.set(z.toFixed(6), performance.now());
+    sentAt.set(z.toFixed(6), clock());
     ed.send({ type: 'drag', part, icon, xyz: [0.5, 0.5, z] });
     const next = start + ((k + 1) * 1000) / 60;
     await sleep(Math.max(0, next - performance.now()));
   }
   await sleep(300);
-  measuring = false;
   const seconds = (performance.now() - start - 300) / 1000;
+  const results = await Promise.all(groups.map((g) => g.stop()));
+  const arrivals = results.flatMap((r) => r.arrivals);
   const lat = [];
   const fps = [];
   for (const a of arrivals) {
-    fps.push(a.length / seconds);
-    for (const [rev, t] of a) {
+    const mine = a.filter(([p]) => p === part);
+    fps.push(mine.length / seconds);
+    for (const [, rev, t] of mine) {
       const t0 = revisionSent.get(rev);
       if (t0 !== undefined) lat.push(t - t0);
     }
   }
-  const bytes = viewers.map((c, i) => (c.bytes - bytes0[i]) / seconds);
+  const bytes = results.flatMap((r) => r.bytes).map((b) => b / seconds);
   const frames = arrivals.reduce((m, a) => m + a.length, 0);
-  const applyMs = stream ? viewers.flatMap((c) => c.stream.applyMs) : [];
-  viewers.forEach((c) => c.close());
+  const applyMs = results.flatMap((r) => r.applyMs);
   ed.close();
-  return { lat, fps, drags: n, bytesPerFrame: bytes.reduce((a, b) => a + b, 0) * seconds / Math.max(1, frames), bytesPerSecond: pct(bytes, 50), applyMs };
+  return { lat, fps, drags: n, threads, bytesPerFrame: bytes.reduce((a, b) => a + b, 0) * seconds / Math.max(1, frames), bytesPerSecond: pct(bytes, 50), applyMs };
 }
 
 async function benchSoak(srv) {
@@ -413,48 +513,64 @@ async function benchSoak(srv) {
 
 // ---- main ----------------------------------------------------------------------
 
-const srv = await startServer();
-try {
-  console.log(`server ${bin} on ${srv.addr}, pid ${srv.child.pid}`);
-  const big = await createDesign(srv, 'bench 81x159', 81, 159);
-  if (runs('join')) {
-    const join = await benchJoin(srv, big, big.tokens.viewer);
-    console.log(`join 81x159 (hello → snapshot), ${join.length} joins: p50 ${fmt(pct(join, 50))} ms, p99 ${fmt(pct(join, 99))} ms`);
-  }
-  if (runs('own')) {
-    const own = await benchOwnFrame(srv, big);
-    console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
-  }
-  if (runs('commits')) {
-    const fresh = await createDesign(srv, 'bench 81x159 commits', 81, 159);
-    const { drags, commits } = await benchOwnFrameWhileCommitting(srv, fresh);
-    console.log(
-      `editor's own drag frame 81x159 while another editor commits (pause ${COMMIT_PAUSE_MS} ms), ${drags.length} drags at 60 Hz: ` +
-        `p50 ${fmt(pct(drags, 50))} ms, p99 ${fmt(pct(drags, 99))} ms, max ${fmt(Math.max(...drags))} ms; ` +
-        `${commits.length} commits, commit → ack p50 ${fmt(pct(commits, 50))} ms, p99 ${fmt(pct(commits, 99))} ms`,
-    );
-  }
-  for (const stream of runs('fanout') ? [false, true] : []) {
-    // Each fanout on a fresh 81 × 159 design: the same starting point.
-    const fresh = await createDesign(srv, `bench 81x159 ${stream ? 'stream' : 'full'}`, 81, 159);
-    const f = await benchFanout(srv, fresh, stream);
-    console.log(
-      `${VIEWERS} viewers at 60 Hz on 81x159 (${f.drags} drags), ${stream ? 'drag stream' : 'full frames'}: drag → viewer frame p50 ${fmt(pct(f.lat, 50))} ms, ` +
-        `p99 ${fmt(pct(f.lat, 99))} ms over ${f.lat.length} frames; frames/s per viewer min ${fmt(Math.min(...f.fps))}, median ${fmt(pct(f.fps, 50))}; ` +
-        `bytes per frame ${Math.round(f.bytesPerFrame)}, per viewer ${fmt(f.bytesPerSecond / 1e6)} MB/s` +
-        (stream ? `; client R + ρ·d per frame p50 ${fmt(pct(f.applyMs, 50))} ms, p99 ${fmt(pct(f.applyMs, 99))} ms` : ''),
-    );
-  }
-  if (runs('soak') && SOAK_ROUNDS > 0) {
-    const rss0 = rssMiB(srv.child.pid);
-    const rounds = await benchSoak(srv);
-    console.log(`soak: ${SOAK_DESIGNS} designs, ${SOAK_CLIENTS} clients joining and leaving per round; RSS before ${fmt(rss0)} MiB`);
-    for (const r of rounds) {
-      console.log(`  round ${r.round}: RSS ${fmt(r.rss)} MiB, join p50 ${fmt(r.p50)} ms, p99 ${fmt(r.p99)} ms, ${fmt(r.seconds)} s`);
+if (!isMainThread) {
+  // A viewer thread of the fanout: join, then answer 'start' and 'stop'.
+  const group = new ViewerGroup(workerData);
+  await group.join();
+  parentPort.on('message', (m) => {
+    if (m === 'start') group.start();
+    if (m === 'stop') parentPort.postMessage(group.stop());
+  });
+  parentPort.postMessage('ready');
+} else {
+  const srv = await startServer();
+  try {
+    console.log(`server ${bin} on ${srv.addr}, pid ${srv.child.pid}`);
+    const big = await createDesign(srv, 'bench 81x159', 81, 159);
+    if (runs('join')) {
+      const plain = await benchJoin(srv, big, big.tokens.viewer);
+      console.log(`join 81x159 (hello → snapshot), ${plain.times.length} joins: p50 ${fmt(pct(plain.times, 50))} ms, p99 ${fmt(pct(plain.times, 99))} ms`);
+      const compact = await benchJoin(srv, big, big.tokens.viewer, true);
+      console.log(
+        `compact join 81x159 (geometry_first), ${compact.times.length} joins: hello → first frame p50 ${fmt(pct(compact.firstFrames, 50))} ms, ` +
+          `p99 ${fmt(pct(compact.firstFrames, 99))} ms; hello → snapshot p50 ${fmt(pct(compact.times, 50))} ms, p99 ${fmt(pct(compact.times, 99))} ms`,
+      );
     }
+    if (runs('own')) {
+      const own = await benchOwnFrame(srv, big);
+      console.log(`editor's own drag frame 81x159, ${own.length} drags at 60 Hz: p50 ${fmt(pct(own, 50))} ms, p99 ${fmt(pct(own, 99))} ms, max ${fmt(Math.max(...own))} ms`);
+    }
+    if (runs('commits')) {
+      const fresh = await createDesign(srv, 'bench 81x159 commits', 81, 159);
+      const { drags, commits } = await benchOwnFrameWhileCommitting(srv, fresh);
+      console.log(
+        `editor's own drag frame 81x159 while another editor commits (pause ${COMMIT_PAUSE_MS} ms), ${drags.length} drags at 60 Hz: ` +
+          `p50 ${fmt(pct(drags, 50))} ms, p99 ${fmt(pct(drags, 99))} ms, max ${fmt(Math.max(...drags))} ms; ` +
+          `${commits.length} commits, commit → ack p50 ${fmt(pct(commits, 50))} ms, p99 ${fmt(pct(commits, 99))} ms`,
+      );
+    }
+    for (const stream of runs('fanout') ? [false, true] : []) {
+      // Each fanout on a fresh 81 × 159 design: the same starting point.
+      const fresh = await createDesign(srv, `bench 81x159 ${stream ? 'stream' : 'full'}`, 81, 159);
+      const f = await benchFanout(srv, fresh, stream);
+      console.log(
+        `${VIEWERS} viewers on ${f.threads} thread(s) at 60 Hz on 81x159 (${f.drags} drags), ${stream ? 'drag stream' : 'full frames'}: drag → viewer frame p50 ${fmt(pct(f.lat, 50))} ms, ` +
+          `p99 ${fmt(pct(f.lat, 99))} ms over ${f.lat.length} frames; frames/s per viewer min ${fmt(Math.min(...f.fps))}, median ${fmt(pct(f.fps, 50))}; ` +
+          `bytes per frame ${Math.round(f.bytesPerFrame)}, per viewer ${fmt(f.bytesPerSecond / 1e6)} MB/s` +
+          (stream ? `; client R + ρ·d per frame p50 ${fmt(pct(f.applyMs, 50))} ms, p99 ${fmt(pct(f.applyMs, 99))} ms` : ''),
+      );
+    }
+    if (runs('soak') && SOAK_ROUNDS > 0) {
+      const rss0 = rssMiB(srv.child.pid);
+      const rounds = await benchSoak(srv);
+      console.log(`soak: ${SOAK_DESIGNS} designs, ${SOAK_CLIENTS} clients joining and leaving per round; RSS before ${fmt(rss0)} MiB`);
+      for (const r of rounds) {
+        console.log(`  round ${r.round}: RSS ${fmt(r.rss)} MiB, join p50 ${fmt(r.p50)} ms, p99 ${fmt(r.p99)} ms, ${fmt(r.seconds)} s`);
+      }
+    }
+  } finally {
+    srv.child.kill('SIGTERM');
+    await new Promise((r) => srv.child.on('exit', r));
+    rmSync(srv.data, { recursive: true, force: true });
   }
-} finally {
-  srv.child.kill('SIGTERM');
-  await new Promise((r) => srv.child.on('exit', r));
-  rmSync(srv.data, { recursive: true, force: true });
 }
