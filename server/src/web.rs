@@ -24,6 +24,10 @@
 //!   immutable; index.html itself, and any other URL, is `no-cache`,
 //!   revalidated by `ETag`. A warm visit asks for index.html and nothing
 //!   else of the page.
+//! - when the install built a bundle of the current modules
+//!   (`web-client/tools/bundle.mjs`, [`bundle`]), index.html loads it
+//!   instead: a few minified, precompressed files under
+//!   `/dist/<sources>/`, immutable, with three.js tree-shaken into them.
 
 use axum::Router;
 use axum::body::Body;
@@ -37,6 +41,8 @@ use std::sync::Arc;
 use tower_http::compression::CompressionLayer;
 use tower_http::services::ServeDir;
 use tower_http::set_header::SetResponseHeaderLayer;
+
+pub mod bundle;
 
 /// The page served at `/` when the web client cannot be served.
 pub const MISSING_CLIENT_PAGE: &str = "<!doctype html>
@@ -214,7 +220,15 @@ async fn index(
         return (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response();
     }
     let html = match tokio::fs::read_to_string(web_dir.join("index.html")).await {
-        Ok(html) => hashed_index(&versioned_index(&html, &versions), &own_files(&web_dir)),
+        Ok(html) => {
+            let own = own_files(&web_dir);
+            let three = versions.iter().find(|(name, _)| name == "three");
+            let html = match three.and_then(|(_, v)| bundle::current(&web_dir, &own, v)) {
+                Some(b) => bundle::bundled_index(&html, &b),
+                None => html,
+            };
+            hashed_index(&versioned_index(&html, &versions), &own)
+        }
         Err(e) => {
             tracing::warn!("cannot read index.html: {e}");
             return (StatusCode::SERVICE_UNAVAILABLE, Html(MISSING_CLIENT_PAGE)).into_response();
@@ -295,7 +309,19 @@ pub fn router<S: Clone + Send + Sync + 'static>(web_dir: &Path) -> Router<S> {
         let dir = dir.clone();
         get(move |request: Request| own_file(dir.clone(), request)).layer(CompressionLayer::new())
     };
+    // The bundle's files: named by the sources' hash, so they never change.
+    let dist = tower::ServiceBuilder::new()
+        .layer(SetResponseHeaderLayer::overriding(
+            header::CACHE_CONTROL,
+            HeaderValue::from_static(IMMUTABLE),
+        ))
+        .service(
+            ServeDir::new(web_dir.join("dist"))
+                .precompressed_br()
+                .precompressed_gzip(),
+        );
     router
+        .nest_service("/dist", dist)
         .route("/", get(page.clone()))
         .route("/index.html", get(page))
         .route("/src/{*file}", src)

@@ -1254,6 +1254,8 @@ view.renderer.setAnimationLoop(() => {
   if (!shellDone && pictured) {
     perf.firstPicture = performance.now();
     dismissShell();
+    // Where the browser has a headset, the VR controllers' code comes now, after the picture.
+    xr.prefetch();
   }
 });
 

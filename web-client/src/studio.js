@@ -17,7 +17,10 @@
 // small render target, each fragment black with an opacity that fades with
 // its height above the ground, blurred three times, laid on a plane under the
 // model. It is redrawn only when the shape or its bounds change (at most
-// every SHADOW_INTERVAL ms), drawn in the shaded view only.
+// every SHADOW_INTERVAL ms), drawn in the shaded view only. It is first drawn
+// a few frames after the model is (SHADOW_FIRST_FRAME): its shader programs
+// (four, on a software renderer about half a second to compile) must not
+// hold up the customer's first picture.
 
 import * as THREE from 'three';
 
@@ -29,6 +32,8 @@ const STUDIO_INTENSITY = 0.5;
 const STUDIO_DIFFUSE = 0.35;
 /** Redraw the shadow at most this often while the shape moves (ms). */
 const SHADOW_INTERVAL = 200;
+/** The first shadow is drawn on this frame of the model's being shown, not on the first: the picture comes first. */
+const SHADOW_FIRST_FRAME = 3;
 /** How far beyond the footprint the shadow plane reaches, as a fraction of the footprint's larger side. */
 const MARGIN = 0.25;
 /** The faint shade under the whole shape reaches this many times the contact darkness's height. */
@@ -260,6 +265,8 @@ export class ContactShadow {
     this.dirty = true;
     this.lastDrawn = -Infinity;
     this.box = new THREE.Box3();
+    /** Frames so far in which the shadow could be shown (the first ones go without it). */
+    this.framesShown = 0;
     /** How many times the shadow was drawn. */
     this.draws = 0;
   }
@@ -274,6 +281,10 @@ export class ContactShadow {
     const show = this.enabled && !!box && !box.isEmpty();
     this.ground.visible = show;
     if (!show) return;
+    if (++this.framesShown < SHADOW_FIRST_FRAME) {
+      this.ground.visible = false;
+      return;
+    }
     if (!this.box.equals(box)) this.dirty = true;
     if (!this.dirty || now - this.lastDrawn < SHADOW_INTERVAL) return;
     this.box.copy(box);

@@ -7,6 +7,10 @@
 // loads its glTF from our own server (/vendor/webxr-profiles, the npm
 // package @webxr-input-profiles/assets; never a CDN). Until a model has
 // loaded, or if it cannot be loaded (logged), a simple grip body stands in.
+// The loader's code (xr-controller-models.js: three's glTF loader and the
+// model factory, ≈ 30 KB compressed) is imported only when VR is entered or
+// the page finds a headset after its first picture, so a customer's first
+// picture never waits for it.
 //
 // Real scale: on entering VR the design is put on a table in front of the
 // user at its real size (View.placeOnTable: millimetres to metres, z up to
@@ -20,27 +24,10 @@
 // left thumbstick, choose in it.
 
 import * as THREE from 'three';
-import { XRControllerModelFactory } from 'three/addons/webxr/XRControllerModelFactory.js';
-import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { XRMenu } from './xr-menu.js';
 
 /** Where the server serves the input profiles and controller models (server/src/web.rs). */
 export const PROFILES_PATH = '/vendor/webxr-profiles';
-
-/** A GLTFLoader that logs a controller model that fails to load (the factory's own handler would throw) and counts it. */
-class ControllerModelLoader extends GLTFLoader {
-  constructor() {
-    super();
-    this.failures = 0;
-  }
-
-  load(url, onLoad, onProgress) {
-    super.load(url, onLoad, onProgress, (e) => {
-      this.failures++;
-      console.warn(`vsculpt: the controller model ${url} did not load (${e && e.message ? e.message : e}); drawing the simple controller`);
-    });
-  }
-}
 
 /** A grabbed icon moves this many times the hand's motion, measured in the model's own units (1: real scale). */
 const HAND_GAIN = 1;
@@ -71,36 +58,64 @@ export class XRSculpt {
     this.drags = 0;
     /** How many controller models have been loaded and shown. */
     this.modelsLoaded = 0;
-    this.modelLoader = new ControllerModelLoader();
-    this.modelFactory = new XRControllerModelFactory(this.modelLoader, (scene) => this.modelLoaded(scene));
-    this.modelFactory.setPath(PROFILES_PATH);
+    /** The controller models' loader (failures counted) once its code is loaded (loadModels), else null. */
+    this.modelLoader = null;
+    /** The import of the controller models' code, once asked for (loadModels). */
+    this.modelsReady = null;
     const xr = this.view.renderer.xr;
     for (let i = 0; i < 2; i++) {
       const ray = xr.getController(i);
       const grip = xr.getControllerGrip(i);
       ray.add(makeRay());
       const fallback = makeBody();
-      const model = this.modelFactory.createControllerModel(grip);
-      grip.add(model, fallback);
+      grip.add(fallback);
       grip.addEventListener('connected', (e) => this.connected(i, e.data));
       grip.addEventListener('disconnected', () => {
+        this.controllers[i].connected = false;
         fallback.visible = true;
       });
       ray.addEventListener('squeezestart', () => this.squeezeStart(i));
       ray.addEventListener('squeezeend', () => this.squeezeEnd(i));
       ray.addEventListener('selectstart', () => this.trigger(i));
       this.view.scene.add(ray, grip);
-      this.controllers.push({ ray, grip, model, fallback });
+      this.controllers.push({ ray, grip, model: null, fallback, connected: false, source: null });
     }
+  }
+
+  /**
+   * Loads the controller models' code once and gives each grip its model; a
+   * grip connected meanwhile is told again, so its model loads. Resolves when
+   * the models are attached (or, logged, when the code could not load: the
+   * simple controllers stay).
+   */
+  loadModels() {
+    this.modelsReady ??= import('./xr-controller-models.js')
+      .then(({ controllerModels }) => {
+        const { factory, loader } = controllerModels(PROFILES_PATH, (scene) => this.modelLoaded(scene));
+        this.modelLoader = loader;
+        for (const c of this.controllers) {
+          c.model = factory.createControllerModel(c.grip);
+          c.grip.add(c.model);
+          if (c.connected) c.grip.dispatchEvent({ type: 'connected', data: c.source });
+        }
+      })
+      .catch((e) => console.warn(`vsculpt: the controller models' code did not load (${e && e.message ? e.message : e}); drawing the simple controllers`));
+    return this.modelsReady;
+  }
+
+  /** After the first picture: where the browser has a headset, load the controller models' code ahead of entering VR. */
+  async prefetch() {
+    if (navigator.xr && (await navigator.xr.isSessionSupported('immersive-vr').catch(() => false))) await this.loadModels();
   }
 
   /** A controller connected: its model is on the way; the simple body shows until it arrives. */
   connected(i, source) {
     const c = this.controllers[i];
+    c.connected = true;
     c.source = source || null;
     if (source && source.handedness === 'left') this.menuHand = i;
     this.controllers[this.menuIndex()].grip.add(this.menu.group);
-    c.fallback.visible = !c.model.children.length;
+    c.fallback.visible = !(c.model && c.model.children.length);
     c.profiles = source && source.profiles ? [...source.profiles] : [];
     if (source && (source.targetRayMode !== 'tracked-pointer' || !source.gamepad || source.hand)) {
       console.warn(`vsculpt: input source ${i} (${c.profiles.join(', ') || 'no profile'}) has no controller model; drawing the simple controller`);
@@ -134,6 +149,7 @@ export class XRSculpt {
     if (!navigator.xr || !(await navigator.xr.isSessionSupported('immersive-vr'))) {
       throw new Error('WebXR immersive VR is not available in this browser');
     }
+    await this.loadModels();
     const session = await navigator.xr.requestSession('immersive-vr', { optionalFeatures: ['local-floor'] });
     await this.view.renderer.xr.setSession(session);
     this.view.placeOnTable();

@@ -139,7 +139,7 @@ test('editor: draws, creates by clicking, drags with the gizmo, analysis views; 
   const perf = await editor.evaluate(() => window.vsculpt.perf);
   assert.equal(perf.workerFailed, null);
   assert.ok(perf.shown > 0 && perf.shown <= perf.submitted, `worker frames shown: ${JSON.stringify(perf)}`);
-  assert.ok(editor.requests.some((u) => u.endsWith('/src/tess-worker.js')), 'the worker script was loaded');
+  assert.ok(editor.requests.some((u) => u.endsWith('/tess-worker.js')), 'the worker script was loaded');
   await editor.screenshot({ path: join(artifacts, 'editor-dragged.png') });
 
   // The viewer saw it live: same revision and control points.
@@ -413,7 +413,7 @@ test('?worker=0: geometry frames are tessellated on the main thread and shown', 
   const perf = await page.evaluate(() => window.vsculpt.perf);
   assert.equal(perf.workerFailed, null);
   assert.ok(perf.shown <= perf.submitted, JSON.stringify(perf));
-  assert.ok(!page.requests.some((u) => u.endsWith('/src/tess-worker.js')), 'no worker was started');
+  assert.ok(!page.requests.some((u) => u.endsWith('/tess-worker.js')), 'no worker was started');
   assert.deepEqual(page.errors, []);
   await page.close();
 });
