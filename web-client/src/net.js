@@ -35,8 +35,11 @@ export class Link {
   connect() {
     const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
     // drag_stream=1: a drag comes as ρ once and d per frame (protocol/README.md, "Drag stream");
-    // deflate=1: large binary messages come deflated (kind 7, "Deflated message").
-    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1&deflate=1`);
+    // deflate=1: large binary messages come deflated (kind 7, "Deflated message");
+    // pace=1: geometry at the rate this link carries ("Paced delivery"), for
+    // which the page reports the binary bytes it has received.
+    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1&deflate=1&pace=1`);
+    let received = 0;
     const stream = new DragStream();
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
@@ -97,6 +100,11 @@ export class Link {
       binary(inner);
     };
     ws.onmessage = (ev) => {
+      if (typeof ev.data !== 'string') {
+        // Reported on arrival, before inflating: what the link delivered.
+        received += ev.data.byteLength;
+        if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({ type: 'received', bytes: received }));
+      }
       if (!inbox && !isDeflated(ev.data)) {
         receive(ev.data);
         return;
