@@ -87,24 +87,31 @@ export class Link {
     // message after it wait in `inbox`, so all are handled in the order
     // they came.
     let inbox = null;
+    // pace=1: report each binary message once it is taken in (inflated and
+    // decoded), so a page that cannot keep up is paced like a slow link.
+    const taken = (data) => {
+      received += data.byteLength;
+      if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({ type: 'received', bytes: received }));
+    };
     const receive = async (data) => {
       if (typeof data === 'string') return text(data);
-      if (!isDeflated(data)) return binary(data);
+      if (!isDeflated(data)) {
+        binary(data);
+        taken(data);
+        return;
+      }
       let inner;
       try {
         inner = await inflateMessage(data, PROTOCOL_VERSION);
       } catch (e) {
         this.onStatus('error', `bad geometry frame: ${e.message}`);
+        taken(data);
         return;
       }
       binary(inner);
+      taken(data);
     };
     ws.onmessage = (ev) => {
-      if (typeof ev.data !== 'string') {
-        // Reported on arrival, before inflating: what the link delivered.
-        received += ev.data.byteLength;
-        if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({ type: 'received', bytes: received }));
-      }
       if (!inbox && !isDeflated(ev.data)) {
         receive(ev.data);
         return;

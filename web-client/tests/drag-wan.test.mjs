@@ -6,10 +6,10 @@
 // (p90, over the link's own 40 ms one way), and at rest holds exactly the
 // editor's net; at 100 Mbit/s it sees every drag frame the editor (connected
 // directly) saw, but for the 5 % either latest-wins writer may skip on a loaded machine. The editor is connected directly, without the stream (full
-// frames: the reference). Paced delivery (`pace=1`): a viewer on a 2 Mbit/s
+// frames: the reference). Paced delivery (`pace=1`): a viewer on a 1 Mbit/s
 // link that takes full frames gets complete frames all through a drag with a
-// bounded delay, while a fast viewer gets every frame, and both end on the
-// editor's frame at rest. Node 20 has WebSocket behind a flag: without it
+// bounded backlog in its link, while a fast viewer gets every frame, and both
+// end on the editor's frame at rest. Node 20 has WebSocket behind a flag: without it
 // this file runs itself again with the flag.
 
 import { test, before, after } from 'node:test';
@@ -152,15 +152,18 @@ if (typeof WebSocket === 'undefined') {
     assert.deepEqual(r.shown.points, r.rest.points);
   });
 
-  test('paced delivery: a viewer on a 2 Mbit/s link gets complete, recent frames while a fast one gets every frame, and both end exact', async (t) => {
+  test('paced delivery: a viewer on a 1 Mbit/s link gets complete, recent frames while a fast one gets every frame, and both end exact', async (t) => {
     // Two viewers of one 60 Hz drag: a fast one connected directly (drag
-    // stream, deflated, paced, as the page) and a slow one on a 2 Mbit/s
+    // stream, deflated, paced, as the page) and a slow one on a 1 Mbit/s
     // link with 40 ms one way that takes full frames (deflated and paced),
-    // so the link, not the server, is what limits it: ~40 KB a frame is
-    // 2.3 MB/s at 60 Hz against the link's 0.25 MB/s. Without pacing the
-    // server writes every frame into the link, whose queue (and delay) grows
-    // all through the drag.
-    const mbit = 2;
+    // so the link, not the server, is what limits it: ~14 KB a frame is
+    // 0.3–0.8 MB/s at the 20–60 frames a second the server solves, against
+    // the link's 0.125 MB/s. Without pacing the server writes every frame
+    // into the link, whose backlog (and delay) grows all through the drag;
+    // paced, the backlog (what the server wrote into the link and the viewer
+    // has not taken in) stays within about a window and a frame. Bytes, not
+    // times, are asserted: the delays are reported.
+    const mbit = 1;
     const capacity = (mbit * 1e6) / 8; // bytes a second
     const seconds = 4;
     const design = await createDesign(server, dataDir, { name: 'paced', nu: 81, nv: 159 });
@@ -197,10 +200,12 @@ if (typeof WebSocket === 'undefined') {
       const slowBytes0 = slow.bytes;
       const start = performance.now();
       const n = seconds * 60;
+      let backlog = 0;
       for (let k = 0; k < n; k++) {
         const z = 0.1 + 0.002 * k;
         sentAt.set(z.toFixed(6), performance.now());
         ed.send({ type: 'drag', part, icon, xyz: [0.5, 0.5, z] });
+        backlog = Math.max(backlog, link.bytes.down - (slow.bytes - slowBytes0));
         await sleep(Math.max(0, start + ((k + 1) * 1000) / 60 - performance.now()));
       }
       await sleep(500);
@@ -221,18 +226,17 @@ if (typeof WebSocket === 'undefined') {
       const delay = (a) => a.at - revisionSent.get(a.revision);
       const slowDelays = arrivals.slow.filter((a) => revisionSent.has(a.revision)).map((a) => delay(a) - 40);
       const fastDelays = arrivals.fast.filter((a) => revisionSent.has(a.revision)).map(delay);
-      t.diagnostic(`editor: ${editorFrames.length} drag frames (${(editorFrames.length / (seconds + 0.5)).toFixed(1)}/s); fast viewer: ${arrivals.fast.length} frames, missed ${missed.length}, delay p50 ${pct(fastDelays, 50).toFixed(1)} ms p90 ${pct(fastDelays, 90).toFixed(1)} ms; slow viewer: ${arrivals.slow.length} frames (${(arrivals.slow.length / (seconds + 0.5)).toFixed(1)}/s), ${slowBytesDuring} bytes during the drag (${((100 * slowBytesDuring) / (capacity * (seconds + 0.5))).toFixed(0)} % of the link), added delay p50 ${pct(slowDelays, 50).toFixed(1)} ms p90 ${pct(slowDelays, 90).toFixed(1)} ms max ${Math.max(...slowDelays).toFixed(1)} ms; the server wrote ${wrote} bytes into the slow link in ${elapsed.toFixed(2)} s`);
+      t.diagnostic(`editor: ${editorFrames.length} drag frames (${(editorFrames.length / (seconds + 0.5)).toFixed(1)}/s); fast viewer: ${arrivals.fast.length} frames, missed ${missed.length}, delay p50 ${pct(fastDelays, 50).toFixed(1)} ms p90 ${pct(fastDelays, 90).toFixed(1)} ms; slow viewer: ${arrivals.slow.length} frames (${(arrivals.slow.length / (seconds + 0.5)).toFixed(1)}/s), ${slowBytesDuring} bytes during the drag (${((100 * slowBytesDuring) / (capacity * (seconds + 0.5))).toFixed(0)} % of the link), added delay p50 ${pct(slowDelays, 50).toFixed(1)} ms p90 ${pct(slowDelays, 90).toFixed(1)} ms max ${Math.max(...slowDelays).toFixed(1)} ms; the server wrote ${wrote} bytes into the slow link in ${elapsed.toFixed(2)} s, backlog at most ${backlog} bytes`);
 
       // The fast viewer: every frame the editor saw (but for the 5 % either latest-wins writer may skip on a loaded machine).
       assert.ok(missed.length <= 0.05 * editorFrames.length, `the fast viewer missed ${missed.length} of ${editorFrames.length} drag frames`);
-      // The slow viewer: frames all through the drag, using its link …
+      // The slow viewer: complete frames all through the drag …
       assert.ok(arrivals.slow.length >= seconds, `the slow viewer got ${arrivals.slow.length} drag frames in ${seconds} s`);
-      assert.ok(slowBytesDuring >= 0.4 * capacity * (seconds + 0.5), `the slow viewer received ${slowBytesDuring} bytes during the drag: its link carries ${capacity * (seconds + 0.5)}`);
-      // … each recent: its queue stays within about a window (unpaced, the
-      // delay grows by seconds over the drag) …
-      assert.ok(Math.max(...slowDelays) <= 1000, `the slow viewer's added delay reached ${Math.max(...slowDelays).toFixed(0)} ms (p50 ${pct(slowDelays, 50).toFixed(0)} ms)`);
+      // … each recent: what waits for it in the link stays within a window
+      // and a frame (unpaced, it grows by hundreds of KB a second) …
+      assert.ok(backlog <= 256 * 1024, `${backlog} bytes were waiting in the slow viewer's link`);
       // … and the server wrote into its link about what the link carried.
-      assert.ok(wrote <= 1.25 * capacity * elapsed + 256 * 1024, `the server wrote ${wrote} bytes into a link that carried at most ${Math.round(capacity * elapsed)} in ${elapsed.toFixed(2)} s`);
+      assert.ok(wrote <= capacity * elapsed + 256 * 1024, `the server wrote ${wrote} bytes into a link that carried at most ${Math.round(capacity * elapsed)} in ${elapsed.toFixed(2)} s`);
       // Both end on the editor's frame at rest, exactly.
       for (const [name, v] of [['fast', fast], ['slow', slow]]) {
         const shown = v.frames.filter((f) => f.part === part).pop();

@@ -27,6 +27,7 @@ export function connect(base, design, token, { stream = false, deflate = false, 
   const ws = new WebSocket(url);
   ws.binaryType = 'arraybuffer';
   const c = { ws, texts: [], frames: [], onText: () => {}, onFrame: () => {}, drag: stream ? new DragStream() : null, bytes: 0, deflated: 0, kinds: {} };
+  let received = 0;
   const receive = async (data, arrived) => {
     if (typeof data === 'string') {
       const m = JSON.parse(data);
@@ -35,6 +36,7 @@ export function connect(base, design, token, { stream = false, deflate = false, 
       return;
     }
     c.bytes += data.byteLength;
+    const size = data.byteLength;
     let now = arrived;
     if (isDeflated(data)) {
       c.deflated++;
@@ -48,17 +50,16 @@ export function connect(base, design, token, { stream = false, deflate = false, 
       c.frames.push(f);
       c.onFrame(f, now, d.kind);
     }
+    // pace=1: report the binary bytes taken in, once inflated and decoded (protocol/README.md, "Paced delivery").
+    if (pace && ws.readyState === WebSocket.OPEN) {
+      received += size;
+      ws.send(JSON.stringify({ type: 'received', bytes: received }));
+    }
   };
   // As net.js: messages wait behind one that is still inflating.
   let inbox = Promise.resolve();
-  let received = 0;
   ws.onmessage = (ev) => {
     const arrived = performance.now();
-    // pace=1: report the binary bytes received, on arrival (protocol/README.md, "Paced delivery").
-    if (pace && typeof ev.data !== 'string') {
-      received += ev.data.byteLength;
-      ws.send(JSON.stringify({ type: 'received', bytes: received }));
-    }
     inbox = inbox.then(() => receive(ev.data, arrived));
   };
   c.send = (m) => ws.send(JSON.stringify(m));
