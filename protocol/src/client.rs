@@ -222,6 +222,16 @@ pub enum ClientMessage {
     },
     /// Liveness check (answered with `pong`, carrying `req`).
     Ping,
+    /// How many bytes of binary messages this client has received on this
+    /// connection, in total (their WebSocket payloads, as sent). A client
+    /// that opened `/ws?pace=1` sends it as binary messages arrive; the
+    /// server keeps the bytes it sent and the client has not reported within
+    /// a window measured from these reports (README, "Paced delivery").
+    /// Without `pace=1` it changes nothing. A stream message, like `drag`.
+    Received {
+        /// The total since the connection opened.
+        bytes: u64,
+    },
     /// Add a part to the design; answered `ack {part}` and `part_created`
     /// to everyone.
     CreatePart {
@@ -346,6 +356,14 @@ pub enum ClientMessage {
         /// The comment's or reply's id.
         comment: u64,
     },
+    /// Replace the text of a comment or reply (`comment_changed` with the
+    /// thread); its author's side or an editor, as for deleting it.
+    EditComment {
+        /// The comment's or reply's id.
+        comment: u64,
+        /// The new text (the same rules as a new comment's).
+        text: String,
+    },
 }
 
 /// The `type` tags of every client message, for telling an unknown type
@@ -377,6 +395,7 @@ pub const CLIENT_TYPES: &[&str] = &[
     "restore_version",
     "presence",
     "ping",
+    "received",
     "create_part",
     "delete_part",
     "set_part",
@@ -391,6 +410,7 @@ pub const CLIENT_TYPES: &[&str] = &[
     "reply_comment",
     "resolve_comment",
     "delete_comment",
+    "edit_comment",
 ];
 
 /// Parses and validates one text message from a client: `too_large`,

@@ -328,7 +328,9 @@ impl ClientMessage {
                 anchor.validate()?;
                 crate::comment::validate_text(text)
             }
-            ReplyComment { text, .. } => crate::comment::validate_text(text),
+            ReplyComment { text, .. } | EditComment { text, .. } => {
+                crate::comment::validate_text(text)
+            }
             Presence { pointer, camera } => {
                 if let Some(p) = pointer {
                     numbers("pointer", p)?;

@@ -27,6 +27,7 @@ fn comment_messages_round_trip() {
         json!({"type": "reply_comment", "comment": 7, "text": "done"}),
         json!({"type": "resolve_comment", "comment": 7, "resolved": false}),
         json!({"type": "delete_comment", "req": 3, "comment": 7}),
+        json!({"type": "edit_comment", "req": 4, "comment": 7, "text": "softer,\nlike v3"}),
     ];
     for m in msgs {
         let env = parse_client(&m.to_string()).unwrap();
@@ -139,6 +140,32 @@ fn bad_comments_are_refused_with_their_code() {
     );
     assert_eq!(
         code(json!({"type": "resolve_comment", "comment": 7})),
+        ErrorCode::Malformed
+    );
+    // An edit's text follows a new comment's rules; it names its comment.
+    for (text, want) in [
+        ("", ErrorCode::OutOfRange),
+        (" \n\t", ErrorCode::OutOfRange),
+        ("a\u{1b}[2J", ErrorCode::OutOfRange),
+    ] {
+        assert_eq!(
+            code(json!({"type": "edit_comment", "comment": 7, "text": text})),
+            want,
+            "{text:?}"
+        );
+    }
+    assert_eq!(
+        code(json!({"type": "edit_comment", "comment": 7, "text": "é".repeat(2049)})),
+        ErrorCode::TooLarge
+    );
+    assert!(
+        parse_client(
+            &json!({"type": "edit_comment", "comment": 7, "text": "é".repeat(2048)}).to_string()
+        )
+        .is_ok()
+    );
+    assert_eq!(
+        code(json!({"type": "edit_comment", "text": "x"})),
         ErrorCode::Malformed
     );
     // Values built in memory (JSON cannot carry NaN) are checked too.

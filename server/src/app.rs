@@ -397,6 +397,31 @@ async fn get_version(
     Ok(axum::Json(json!({ "id": id, "version": info, "design": doc })).into_response())
 }
 
+/// `GET /api/designs/{id}/comments`: every comment of the design with its
+/// replies, oldest first, as a snapshot's `comments` (protocol/README.md);
+/// any token that may join the design over `/ws` may read them.
+async fn list_comments(
+    State(s): State<AppState>,
+    Path(id): Path<DesignId>,
+    headers: HeaderMap,
+    Query(q): Q,
+) -> Result<Response, ApiError> {
+    need_role(&s, &headers, &q, id).await?;
+    let store = s.store.clone();
+    let rows = tokio::task::spawn_blocking(move || store.comments(id))
+        .await
+        .map_err(storage)?
+        .map_err(storage)?;
+    // Every stored row, whatever a server's configured limit.
+    let book = crate::design::comments::CommentBook::new(rows, usize::MAX);
+    let comments: Vec<_> = book
+        .view()
+        .iter()
+        .map(crate::convert::comments::thread_to_wire)
+        .collect();
+    Ok(axum::Json(json!({ "id": id, "comments": comments })).into_response())
+}
+
 async fn import(
     State(s): State<AppState>,
     Path(id): Path<DesignId>,
@@ -556,6 +581,7 @@ pub fn router(state: AppState) -> Router {
         .route("/api/designs/{id}", get(get_design))
         .route("/api/designs/{id}/versions", get(list_versions))
         .route("/api/designs/{id}/versions/{v}", get(get_version))
+        .route("/api/designs/{id}/comments", get(list_comments))
         .route("/api/designs/{id}/import", post(import))
         .route("/api/designs/{id}/{file}", get(export))
         .route("/api/demo-parts/spool", get(spool_spec))

@@ -308,6 +308,154 @@ async fn bad_comments_get_a_clear_error_and_change_nothing() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_text_is_edited_by_its_authors_side_or_an_editor_and_the_comments_are_listed_over_http() {
+    let data = common::data_dir("comments-edit");
+    let server = TestServer::start(data.clone()).await;
+    let d = server.demo().clone();
+    let mut editor = Client::connect(server.addr, d.id, &d.editor, "Ana").await;
+    let mut viewer = Client::connect(server.addr, d.id, &d.viewer, "Ben").await;
+    let mut device = Client::connect(server.addr, d.id, &d.device, "bridge").await;
+    let part = part_of_kind(&viewer.snapshot, "surface")["id"]
+        .as_u64()
+        .unwrap();
+    let r = viewer
+        .request(json!({"type": "add_comment", "part": part, "anchor": {"u": 0.3, "v": 0.4}, "text": "Softer here?"}))
+        .await;
+    let theirs = r["comment"].as_u64().unwrap();
+    let added = editor.wait_for("comment_added").await["comment"].clone();
+    let r = editor
+        .request(json!({"type": "add_comment", "part": part, "anchor": {"u": 0.7, "v": 0.2}, "text": "Mine"}))
+        .await;
+    let mine = r["comment"].as_u64().unwrap();
+    let r = editor
+        .request(json!({"type": "reply_comment", "comment": theirs, "text": "Will do."}))
+        .await;
+    let reply = r["comment"].as_u64().unwrap();
+
+    // The viewer's side edits its comment: every client gets the thread
+    // with the new text and everything else as it was.
+    viewer
+        .ok(json!({"type": "edit_comment", "comment": theirs, "text": "Softer here, like v3?"}))
+        .await;
+    let edited = loop {
+        let c = editor.wait_for("comment_changed").await["comment"].clone();
+        if c["text"] == "Softer here, like v3?" {
+            break c;
+        }
+    };
+    let mut want = added.clone();
+    want["text"] = json!("Softer here, like v3?");
+    want["replies"] = edited["replies"].clone();
+    assert_eq!(edited, want, "only the text changes");
+    assert_eq!(edited["replies"][0]["text"], "Will do.");
+    // Not the editor's comment or reply; a device nothing.
+    viewer
+        .refused(
+            json!({"type": "edit_comment", "comment": mine, "text": "x"}),
+            "forbidden",
+        )
+        .await;
+    viewer
+        .refused(
+            json!({"type": "edit_comment", "comment": reply, "text": "x"}),
+            "forbidden",
+        )
+        .await;
+    device
+        .refused(
+            json!({"type": "edit_comment", "comment": theirs, "text": "x"}),
+            "forbidden",
+        )
+        .await;
+    // Bad text or an unknown comment: refused as for a new comment.
+    for (text, code) in [("  ", "out_of_range"), ("a\u{7}b", "out_of_range")] {
+        viewer
+            .refused(
+                json!({"type": "edit_comment", "comment": theirs, "text": text}),
+                code,
+            )
+            .await;
+    }
+    viewer
+        .refused(
+            json!({"type": "edit_comment", "comment": theirs, "text": "x".repeat(4097)}),
+            "too_large",
+        )
+        .await;
+    viewer
+        .refused(
+            json!({"type": "edit_comment", "comment": 12345, "text": "x"}),
+            "out_of_range",
+        )
+        .await;
+    // An editor edits anyone's: here the reply, inside the viewer's thread.
+    editor
+        .ok(json!({"type": "edit_comment", "comment": reply, "text": "Done in v4."}))
+        .await;
+    let thread = loop {
+        let c = viewer.wait_for("comment_changed").await["comment"].clone();
+        if c["replies"][0]["text"] == "Done in v4." {
+            break c;
+        }
+    };
+    assert_eq!(thread["id"], json!(theirs));
+    assert_eq!(thread["text"], "Softer here, like v3?");
+
+    // Over HTTP, with any token of the design: what a joiner's snapshot has.
+    let path = format!("/api/designs/{}/comments", d.id);
+    let late = Client::connect(server.addr, d.id, &d.viewer, "late").await;
+    for token in [&d.viewer, &d.editor, &d.device] {
+        let r = common::http::request(server.addr, "GET", &path, Some(token.as_str()), b"").await;
+        assert_eq!(r.status, 200, "{}", r.text());
+        let body = r.json();
+        assert_eq!(body["id"], json!(d.id));
+        assert_eq!(body["comments"], late.snapshot["comments"]);
+    }
+    let listed = common::http::request(server.addr, "GET", &path, Some(&d.viewer), b"")
+        .await
+        .json();
+    let ids: Vec<u64> = listed["comments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["id"].as_u64().unwrap())
+        .collect();
+    assert_eq!(ids, [theirs, mine], "oldest first");
+    assert_eq!(listed["comments"][0]["text"], "Softer here, like v3?");
+    assert_eq!(listed["comments"][0]["replies"][0]["text"], "Done in v4.");
+    // No token, a bad one, another design's: refused alike.
+    let created = common::http::request(
+        server.addr,
+        "POST",
+        "/api/designs",
+        Some(&d.editor),
+        br#"{"name": "other", "nu": 6, "nv": 6}"#,
+    )
+    .await;
+    assert_eq!(created.status, 201, "{}", created.text());
+    let other = created.json()["tokens"]["viewer"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    for token in [None, Some("not-a-token"), Some(other.as_str())] {
+        let r = common::http::request(server.addr, "GET", &path, token, b"").await;
+        assert_eq!(r.status, 401, "{token:?}: {}", r.text());
+    }
+    let r = common::http::request(
+        server.addr,
+        "GET",
+        &format!("/api/designs/{}/comments", d.id + 1000),
+        Some(&d.viewer),
+        b"",
+    )
+    .await;
+    assert_eq!(r.status, 401);
+    drop(device);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_per_design_limit_and_the_rate_limit_hold() {
     let data = common::data_dir("comments-limit");
     let server = TestServer::start_configured(

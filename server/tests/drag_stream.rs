@@ -146,29 +146,6 @@ fn size(points: &[[f32; 3]]) -> f64 {
     (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt()
 }
 
-/// The editor's frame of the drag it just sent: the frame of `part` whose
-/// revision is the one its `icon_feedback` names (either may come first).
-async fn editor_frame_of_drag(ed: &mut Client, part: u64) -> GeometryFrame {
-    let mut want = None;
-    let mut got: Option<GeometryFrame> = None;
-    loop {
-        match ed.next().await {
-            Got::Text(v) if v["type"] == "icon_feedback" => {
-                want = v["revision"].as_u64();
-            }
-            Got::Frame(f) if f.part == part => got = Some(f),
-            Got::Closed => panic!("closed"),
-            _ => {}
-        }
-        if let (Some(w), Some(f)) = (want, &got)
-            && f.revision >= w
-        {
-            assert_eq!(f.revision, w, "the editor skipped the frame of its drag");
-            return got.unwrap();
-        }
-    }
-}
-
 #[tokio::test]
 async fn a_stream_viewer_follows_a_drag_to_1e6_and_ends_on_the_full_frames_bytes() {
     let dir = data_dir("drag-stream");
@@ -210,7 +187,7 @@ async fn a_stream_viewer_follows_a_drag_to_1e6_and_ends_on_the_full_frames_bytes
             let z = 0.02 * k as f64;
             ed.send(json!({"type": "drag", "part": part, "icon": icon, "xyz": [u, v, z]}))
                 .await;
-            let truth = editor_frame_of_drag(&mut ed, part).await;
+            let truth = ed.frame_of_drag(part).await;
             for viewer in &mut viewers {
                 viewer.until(part, truth.revision).await;
                 let (rev, net, _) = &viewer.shown[&part];

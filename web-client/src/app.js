@@ -292,6 +292,25 @@ function setVisible(id, visible) {
   renderPanels();
 }
 
+/** The version history, newest first; a version comments were written on is marked (a click frames the first of them). */
+function renderHistory() {
+  const editor = state.access === 'editor';
+  const commented = comments.byVersion();
+  $('history').innerHTML = state.versions
+    .slice()
+    .reverse()
+    .map((v) => {
+      const ids = commented.get(v.version) || [];
+      const mark = ids.length
+        ? ` <button class="commented" data-commented="${ids[0]}" title="${ids.length} comment${ids.length > 1 ? 's' : ''} written on v${v.version}: click to show">💬 ${ids.length}</button>`
+        : '';
+      return `<li${ids.length ? ' class="commented"' : ''}><b>v${v.version}</b>${mark} ${escape(v.message)} <small>${escape(v.author)} · ${new Date(v.time_ms).toLocaleString()}</small>
+      <button data-compare="${v.version}">${state.compare && state.compare.version === v.version ? 'comparing' : 'compare'}</button>
+      ${editor ? `<button data-restore="${v.version}"${state.online ? '' : ' disabled'}>restore</button>` : ''}</li>`;
+    })
+    .join('');
+}
+
 function renderPanels() {
   const editor = state.access === 'editor';
   document.body.classList.toggle('viewer', !editor);
@@ -301,13 +320,7 @@ function renderPanels() {
       p.camera && p.client !== state.clientId ? ` <button data-follow="${p.client}" aria-pressed="${follow.following === p.client}">${follow.following === p.client ? 'following' : 'follow'}</button>` : ''
     }</li>`)
     .join('');
-  $('history').innerHTML = state.versions
-    .slice()
-    .reverse()
-    .map((v) => `<li><b>v${v.version}</b> ${escape(v.message)} <small>${escape(v.author)} · ${new Date(v.time_ms).toLocaleString()}</small>
-      <button data-compare="${v.version}">${state.compare && state.compare.version === v.version ? 'comparing' : 'compare'}</button>
-      ${editor ? `<button data-restore="${v.version}"${state.online ? '' : ' disabled'}>restore</button>` : ''}</li>`)
-    .join('');
+  renderHistory();
   partsPanel.render({ design, selected: state.selectedPart, hidden: state.hidden, editor, online: !!state.online });
   comments.render();
   dsmPanel.render(selectedPart(), editor && !!state.online);
@@ -395,6 +408,7 @@ function onMessage(msg) {
     case 'comment_changed':
     case 'comment_deleted':
       comments.apply(msg);
+      renderHistory();
       break;
     case 'part_created':
     case 'part_deleted':
@@ -1022,6 +1036,8 @@ $('commit').addEventListener('submit', (e) => {
 $('history').addEventListener('click', (e) => {
   const v = e.target.dataset.restore;
   if (v) send({ type: 'restore_version', version: Number(v) });
+  const commented = e.target.closest('[data-commented]');
+  if (commented) comments.frame(Number(commented.dataset.commented));
   const c = e.target.dataset.compare;
   if (c) compareWith(Number(c)).catch((err) => toast(`compare with v${c}: ${err.message}`));
 });

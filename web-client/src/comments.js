@@ -8,9 +8,10 @@
 // normal with a head, drawn over the model (never hidden inside it). The
 // comments panel lists each comment with its author, time, the version it
 // was written on, its text, its resolved state and its replies; clicking an
-// entry frames its pin; resolve, reopen, delete and reply are offered where
-// this page's link may (an editor: every comment; a viewer: those written
-// through a viewer link).
+// entry frames its pin; resolve, reopen, edit, delete and reply are offered
+// where this page's link may (an editor: every comment; a viewer: those
+// written through a viewer link). `byVersion` tells the history which
+// versions were commented on.
 
 import * as THREE from 'three';
 import { surfaceDerivs } from './bspline.js';
@@ -69,6 +70,8 @@ export class Comments {
     this.pending = null;
     /** The comment whose entry was clicked last. */
     this.focused = null;
+    /** The comment or reply whose text is being edited, or null. */
+    this.editing = null;
     this.group = new THREE.Group();
     this.group.name = 'comments';
     this.view.model.add(this.group);
@@ -93,6 +96,11 @@ export class Comments {
     this.list.addEventListener('click', (e) => this.clicked(e));
     this.list.addEventListener('submit', (e) => {
       e.preventDefault();
+      const edit = e.target.closest('form[data-edit-form]');
+      if (edit) {
+        this.saveEdit(Number(edit.dataset.editForm), edit.querySelector('textarea').value);
+        return;
+      }
       const form = e.target.closest('form[data-reply]');
       const input = form && form.querySelector('input');
       if (!input || !input.value.trim()) return;
@@ -169,9 +177,46 @@ export class Comments {
     this.cancelDraft();
   }
 
-  /** Clicks in the list: resolve, reopen, delete, or an entry (frames its pin). */
+  /** Sends comment or reply `id`'s new text; the list shows it when the server has stored it. */
+  saveEdit(id, text) {
+    if (!text.trim() || new TextEncoder().encode(text).length > MAX_COMMENT_BYTES) return;
+    if (this.send({ type: 'edit_comment', comment: id, text }) === null) return;
+    this.editing = null;
+    this.render();
+  }
+
+  /**
+   * The versions comments were written on: version → the ids of the
+   * comments written on it or holding a reply written on it.
+   */
+  byVersion() {
+    const out = new Map();
+    const mark = (version, id) => {
+      if (!out.has(version)) out.set(version, []);
+      if (!out.get(version).includes(id)) out.get(version).push(id);
+    };
+    for (const c of this.comments.values()) {
+      mark(c.version, c.id);
+      for (const r of c.replies) mark(r.version, c.id);
+    }
+    return out;
+  }
+
+  /** Clicks in the list: resolve, reopen, edit, delete, or an entry (frames its pin). */
   clicked(e) {
     const b = e.target.closest('button');
+    if (b && b.dataset.edit) {
+      this.editing = Number(b.dataset.edit);
+      this.render();
+      const box = this.list.querySelector('form[data-edit-form] textarea');
+      if (box) box.focus();
+      return;
+    }
+    if (b && b.dataset.editCancel !== undefined) {
+      this.editing = null;
+      this.render();
+      return;
+    }
     if (b && b.dataset.resolve) {
       this.send({ type: 'resolve_comment', comment: Number(b.dataset.resolve), resolved: b.dataset.to === 'true' });
       return;
@@ -249,23 +294,33 @@ export class Comments {
     // Replies being typed survive the list being redrawn.
     const typing = new Map([...this.list.querySelectorAll('form[data-reply] input')].filter((i) => i.value).map((i) => [i.closest('form').dataset.reply, i.value]));
     const focus = document.activeElement && this.list.contains(document.activeElement) ? document.activeElement.closest('form[data-reply]')?.dataset.reply : null;
+    // So does an edit being typed.
+    const editBox = this.list.querySelector('form[data-edit-form] textarea');
+    const editTyped = editBox ? editBox.value : null;
     const when = (ms) => new Date(ms).toLocaleString();
+    const text = (x) =>
+      x.id === this.editing
+        ? `<form data-edit-form="${x.id}"><textarea rows="3" maxlength="${MAX_COMMENT_BYTES}" aria-label="edit comment ${x.id}">${escape(x.text)}</textarea><button>save</button> <button type="button" data-edit-cancel>cancel</button></form>`
+        : `<p>${escape(x.text)}</p>`;
+    const editButton = (x) => `<button data-edit="${x.id}" title="change its text">edit</button>`;
     const who = (x) => `<b>${escape(x.author)}</b> <small>${x.access === 'viewer' ? 'reviewer' : x.access} · ${when(x.time_ms)} · on v${x.version}</small>`;
     this.list.innerHTML = all
       .map((c) => {
         const mod = this.canModerate(c.access);
         const replies = c.replies
-          .map((r) => `<li class="reply">${who(r)}<p>${escape(r.text)}</p>${this.canModerate(r.access) ? `<button data-delete="${r.id}" title="delete this reply">delete</button>` : ''}</li>`)
+          .map((r) => `<li class="reply">${who(r)}${text(r)}${this.canModerate(r.access) ? `${editButton(r)} <button data-delete="${r.id}" title="delete this reply">delete</button>` : ''}</li>`)
           .join('');
         return `<li data-comment="${c.id}" class="${c.resolved ? 'resolved' : 'open'}${c.id === this.focused ? ' focused' : ''}" title="click to show its pin">
           ${who(c)} <span class="state">${c.resolved ? `resolved${c.resolved_by ? ` by ${escape(c.resolved_by)}` : ''}` : 'open'}</span>
-          <p>${escape(c.text)}</p>
-          ${mod ? `<button data-resolve="${c.id}" data-to="${!c.resolved}">${c.resolved ? 'reopen' : 'resolve'}</button> <button data-delete="${c.id}">delete</button>` : ''}
+          ${text(c)}
+          ${mod ? `<button data-resolve="${c.id}" data-to="${!c.resolved}">${c.resolved ? 'reopen' : 'resolve'}</button> ${editButton(c)} <button data-delete="${c.id}">delete</button>` : ''}
           ${replies ? `<ul class="replies">${replies}</ul>` : ''}
           ${this.canComment() ? `<form data-reply="${c.id}"><input placeholder="reply" aria-label="reply to comment ${c.id}" maxlength="${MAX_COMMENT_BYTES}"> <button>reply</button></form>` : ''}
         </li>`;
       })
       .join('');
+    const box = this.list.querySelector('form[data-edit-form] textarea');
+    if (box && editTyped !== null) box.value = editTyped;
     for (const form of this.list.querySelectorAll('form[data-reply]')) {
       const input = form.querySelector('input');
       if (typing.has(form.dataset.reply)) input.value = typing.get(form.dataset.reply);

@@ -35,8 +35,11 @@ export class Link {
   connect() {
     const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
     // drag_stream=1: a drag comes as ρ once and d per frame (protocol/README.md, "Drag stream");
-    // deflate=1: large binary messages come deflated (kind 7, "Deflated message").
-    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1&deflate=1`);
+    // deflate=1: large binary messages come deflated (kind 7, "Deflated message");
+    // pace=1: geometry at the rate this link carries ("Paced delivery"), for
+    // which the page reports the binary bytes it has received.
+    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1&deflate=1&pace=1`);
+    let received = 0;
     const stream = new DragStream();
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
@@ -84,17 +87,29 @@ export class Link {
     // message after it wait in `inbox`, so all are handled in the order
     // they came.
     let inbox = null;
+    // pace=1: report each binary message once it is taken in (inflated and
+    // decoded), so a page that cannot keep up is paced like a slow link.
+    const taken = (data) => {
+      received += data.byteLength;
+      if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify({ type: 'received', bytes: received }));
+    };
     const receive = async (data) => {
       if (typeof data === 'string') return text(data);
-      if (!isDeflated(data)) return binary(data);
+      if (!isDeflated(data)) {
+        binary(data);
+        taken(data);
+        return;
+      }
       let inner;
       try {
         inner = await inflateMessage(data, PROTOCOL_VERSION);
       } catch (e) {
         this.onStatus('error', `bad geometry frame: ${e.message}`);
+        taken(data);
         return;
       }
       binary(inner);
+      taken(data);
     };
     ws.onmessage = (ev) => {
       if (!inbox && !isDeflated(ev.data)) {

@@ -9,6 +9,10 @@
 // shows it resolved; clicking its entry frames its pin. After the server is
 // restarted on the same data directory, both pages reconnect and still show
 // it (resolved, at the same point), and so does a page opened afresh.
+// Editing: the reviewer edits its comment's text with real clicks and the
+// designer's page shows the new text; the edit is offered on the designer's
+// reply only to the designer; the version history marks the version the
+// comment was written on, and the mark frames its pin.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -118,6 +122,71 @@ function assertPinOnSurface(got, label) {
   assert.ok(stem > 0.01 * size, `${label}: the pin's head stands off the surface (stem ${stem})`);
   assert.ok(got.onScreen && got.visible && got.overModel, `${label}: the pin is drawn, on screen, over the model`);
 }
+
+// Runs before the restart test below, and leaves no comment behind.
+test('a reviewer edits its comment with the mouse and the designer sees it live; only the author side or an editor is offered the edit; the history marks the version commented on', async () => {
+  const editor = await openClient(browser, `${server.editor}&name=Ana`);
+  const viewer = await openClient(browser, `${server.viewer}&name=Ben`);
+  try {
+    const shell = await viewer.evaluate(() => [...window.vsculpt.design.parts.values()].find((p) => p.kind === 'surface').id);
+    // A version for the review.
+    const before = await editor.evaluate(() => window.vsculpt.state.versions.length);
+    await editor.evaluate(() => window.vsculpt.send({ type: 'commit', message: 'for review' }));
+    await viewer.waitForFunction((n) => window.vsculpt.state.versions.length > n, before, { timeout: 20000 });
+    const version = await viewer.evaluate(() => Math.max(...window.vsculpt.state.versions.map((v) => v.version)));
+    assert.equal(await editor.locator('#history button[data-commented]').count(), 0);
+    await viewer.evaluate((part) => window.vsculpt.send({ type: 'add_comment', part, anchor: { u: 0.5, v: 0.5 }, text: 'First thought' }), shell);
+    await editor.waitForFunction(() => window.vsculpt.comments.comments.size === 1, null, { timeout: 20000 });
+    const id = await editor.evaluate(() => [...window.vsculpt.comments.comments.keys()][0]);
+
+    // The history marks the version it was written on, on both pages.
+    for (const page of [editor, viewer]) {
+      const mark = page.locator(`#history li:has(b:text-is("v${version}")) button[data-commented]`);
+      await mark.waitFor({ timeout: 20000 });
+      assert.equal((await mark.textContent()).trim(), '💬 1');
+    }
+
+    // The reviewer edits it: edit, new text, save.
+    await viewer.waitForSelector(`#comments li[data-comment="${id}"] button[data-edit="${id}"]`);
+    await viewer.click(`#comments li[data-comment="${id}"] button[data-edit="${id}"]`);
+    const box = viewer.locator(`#comments form[data-edit-form="${id}"] textarea`);
+    assert.equal(await box.inputValue(), 'First thought');
+    await box.fill('Second thought: softer <edge> & lower');
+    await viewer.click(`#comments form[data-edit-form="${id}"] button:text-is("save")`);
+    await editor.waitForFunction((cid) => window.vsculpt.comments.comments.get(cid)?.text === 'Second thought: softer <edge> & lower', id, { timeout: 20000 });
+    const entry = (page) => page.locator(`#comments li[data-comment="${id}"] > p`).textContent();
+    assert.equal(await entry(editor), 'Second thought: softer <edge> & lower');
+    await viewer.waitForFunction((cid) => !document.querySelector(`form[data-edit-form="${cid}"]`) && window.vsculpt.comments.comments.get(cid)?.text === 'Second thought: softer <edge> & lower', id, { timeout: 20000 });
+    assert.equal(await entry(viewer), 'Second thought: softer <edge> & lower');
+
+    // The designer's reply: the designer may edit it, the reviewer is not offered to.
+    await editor.evaluate((cid) => window.vsculpt.send({ type: 'reply_comment', comment: cid, text: 'ok' }), id);
+    await viewer.waitForFunction((cid) => window.vsculpt.comments.comments.get(cid)?.replies.length === 1, id, { timeout: 20000 });
+    const reply = await viewer.evaluate((cid) => window.vsculpt.comments.comments.get(cid).replies[0].id, id);
+    await editor.waitForSelector(`#comments button[data-edit="${reply}"]`);
+    assert.equal(await viewer.locator(`#comments button[data-edit="${reply}"]`).count(), 0);
+    await editor.click(`#comments button[data-edit="${reply}"]`);
+    await editor.locator(`#comments form[data-edit-form="${reply}"] textarea`).fill('done in the next version');
+    await editor.click(`#comments form[data-edit-form="${reply}"] button:text-is("save")`);
+    await viewer.waitForFunction((cid) => window.vsculpt.comments.comments.get(cid)?.replies[0].text === 'done in the next version', id, { timeout: 20000 });
+
+    // The history's mark frames the comment's pin.
+    await editor.click(`#history button[data-commented="${id}"]`);
+    const target = await editor.evaluate(() => window.vsculpt.view.controls.target.toArray());
+    const foot = await editor.evaluate((cid) => window.vsculpt.comments.pins.get(cid).getWorldPosition(window.vsculpt.comments.pins.get(cid).position.clone()).toArray(), id);
+    assert.ok(Math.max(...target.map((x, k) => Math.abs(x - foot[k]))) <= 1e-6 * (1 + Math.max(...foot.map(Math.abs))), `framed at ${target}, pin at ${foot}`);
+
+    // Deleted: the mark goes with it.
+    await editor.click(`#comments li[data-comment="${id}"] > button[data-delete="${id}"]`);
+    for (const page of [editor, viewer]) {
+      await page.waitForFunction(() => window.vsculpt.comments.comments.size === 0 && !document.querySelector('#history button[data-commented]'), null, { timeout: 20000 });
+    }
+    for (const page of [editor, viewer]) assert.deepEqual(page.errors, []);
+  } finally {
+    await editor.close();
+    await viewer.close();
+  }
+});
 
 test('a reviewer pins a comment with the mouse; the designer sees it live at the surface point and resolves it; it survives a restart', async () => {
   const editor = await openClient(browser, `${server.editor}&name=Ana`);

@@ -6,7 +6,10 @@
 // (p90, over the link's own 40 ms one way), and at rest holds exactly the
 // editor's net; at 100 Mbit/s it sees every drag frame the editor (connected
 // directly) saw, but for the 5 % either latest-wins writer may skip on a loaded machine. The editor is connected directly, without the stream (full
-// frames: the reference). Node 20 has WebSocket behind a flag: without it
+// frames: the reference). Paced delivery (`pace=1`): a viewer on a 1 Mbit/s
+// link that takes full frames gets complete frames all through a drag with a
+// bounded backlog in its link, while a fast viewer gets every frame, and both
+// end on the editor's frame at rest. Node 20 has WebSocket behind a flag: without it
 // this file runs itself again with the flag.
 
 import { test, before, after } from 'node:test';
@@ -18,85 +21,7 @@ import { join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { serverBinProblem, createDesign, startServer, stopServer } from './harness.mjs';
 import { startLink } from './wan.mjs';
-import { decodeFrame, PROTOCOL_VERSION } from '../src/frame.js';
-import { DragStream } from '../src/drag-stream.js';
-import { inflateMessage, isDeflated } from '../src/deflated.js';
-
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-const pct = (xs, p) => {
-  const s = [...xs].sort((a, b) => a - b);
-  return s[Math.min(s.length - 1, Math.max(0, Math.ceil((p / 100) * s.length) - 1))];
-};
-
-/**
- * A protocol client: text and decoded frames (through a DragStream when
- * `stream`; deflated messages inflated by the page's deflated.js, in order,
- * when `deflate`).
- */
-function connect(base, design, token, { stream = false, deflate = false } = {}) {
-  const query = [stream && 'drag_stream=1', deflate && 'deflate=1'].filter(Boolean).join('&');
-  const url = `${base.replace('http', 'ws')}/ws${query ? `?${query}` : ''}`;
-  const ws = new WebSocket(url);
-  ws.binaryType = 'arraybuffer';
-  const c = { ws, texts: [], frames: [], onText: () => {}, onFrame: () => {}, drag: stream ? new DragStream() : null, bytes: 0, deflated: 0, kinds: {} };
-  const receive = async (data, arrived) => {
-    if (typeof data === 'string') {
-      const m = JSON.parse(data);
-      c.texts.push(m);
-      c.onText(m, arrived);
-      return;
-    }
-    c.bytes += data.byteLength;
-    let now = arrived;
-    if (isDeflated(data)) {
-      c.deflated++;
-      data = await inflateMessage(data, PROTOCOL_VERSION);
-      now = performance.now();
-    }
-    const d = decodeFrame(data);
-    c.kinds[d.kind] = (c.kinds[d.kind] || 0) + 1;
-    const f = c.drag ? c.drag.take(d) : d;
-    if (f) {
-      c.frames.push(f);
-      c.onFrame(f, now, d.kind);
-    }
-  };
-  // As net.js: messages wait behind one that is still inflating.
-  let inbox = Promise.resolve();
-  ws.onmessage = (ev) => {
-    const arrived = performance.now();
-    inbox = inbox.then(() => receive(ev.data, arrived));
-  };
-  c.send = (m) => ws.send(JSON.stringify(m));
-  c.waitText = (pred) =>
-    new Promise((resolve) => {
-      const prev = c.onText;
-      c.onText = (m, t) => {
-        prev(m, t);
-        if (pred(m)) {
-          c.onText = prev;
-          resolve(m);
-        }
-      };
-    });
-  c.ready = new Promise((resolve, reject) => {
-    ws.onopen = () => {
-      c.send({ type: 'hello', protocol: PROTOCOL_VERSION, token, design, client_name: stream ? 'viewer' : 'editor', client_kind: 'tool' });
-      resolve();
-    };
-    ws.onerror = (e) => reject(new Error(`websocket: ${e.message ?? e}`));
-  });
-  return c;
-}
-
-/** Waits until `c` has a frame of `part` with revision ≥ `rev`. */
-async function until(c, part, rev) {
-  const t0 = performance.now();
-  while (!c.frames.some((f) => f.part === part && f.revision >= rev)) {
-    if (performance.now() - t0 > 20000) throw new Error(`no frame of part ${part} at revision ${rev} within 20 s`);
-    await sleep(5);
-  }
-}
+import { connect, until, sleep, pct } from './ws-client.mjs';
 
 if (typeof WebSocket === 'undefined') {
   test('the drag stream over an emulated link (run again with --experimental-websocket)', () => {
@@ -225,5 +150,102 @@ if (typeof WebSocket === 'undefined') {
     // frame the other sends, so "every" is ≥ 95 % of the editor's.
     assert.ok(missed.length <= 0.05 * r.editorFrames.length, `missed ${missed.length} of the ${r.editorFrames.length} drag frames the editor got`);
     assert.deepEqual(r.shown.points, r.rest.points);
+  });
+
+  test('paced delivery: a viewer on a 1 Mbit/s link gets complete, recent frames while a fast one gets every frame, and both end exact', async (t) => {
+    // Two viewers of one 60 Hz drag: a fast one connected directly (drag
+    // stream, deflated, paced, as the page) and a slow one on a 1 Mbit/s
+    // link with 40 ms one way that takes full frames (deflated and paced),
+    // so the link, not the server, is what limits it: ~14 KB a frame is
+    // 0.3–0.8 MB/s at the 20–60 frames a second the server solves, against
+    // the link's 0.125 MB/s. Without pacing the server writes every frame
+    // into the link, whose backlog (and delay) grows all through the drag;
+    // paced, the backlog (what the server wrote into the link and the viewer
+    // has not taken in) stays within about a window and a frame. Bytes, not
+    // times, are asserted: the delays are reported.
+    const mbit = 1;
+    const capacity = (mbit * 1e6) / 8; // bytes a second
+    const seconds = 4;
+    const design = await createDesign(server, dataDir, { name: 'paced', nu: 81, nv: 159 });
+    const link = await startLink({ target: new URL(server.base).host, mbit, delayMs: 40 });
+    const ed = connect(server.base, design.id, design.tokens.editor);
+    const fast = connect(server.base, design.id, design.tokens.viewer, { stream: true, deflate: true, pace: true });
+    const slow = connect(link.url('http://x').replace(/\/$/, ''), design.id, design.tokens.viewer, { deflate: true, pace: true });
+    try {
+      await Promise.all([ed.ready, fast.ready, slow.ready]);
+      const [snap] = await Promise.all([ed.waitText((m) => m.type === 'snapshot'), fast.waitText((m) => m.type === 'snapshot'), slow.waitText((m) => m.type === 'snapshot')]);
+      const part = snap.parts[0].id;
+      const created = ed.waitText((m) => m.req === 1);
+      ed.send({ type: 'create_icon', part, req: 1, spec: { anchor: { kind: 'point', u: 0.5, v: 0.5 }, role: { kind: 'load' } } });
+      const icon = (await created).icon;
+      const grabbed = ed.waitText((m) => m.req === 2);
+      ed.send({ type: 'drag_start', part, icon, req: 2 });
+      await grabbed;
+      const restRev = Math.max(...ed.frames.filter((f) => f.part === part).map((f) => f.revision));
+      await until(fast, part, restRev);
+      await until(slow, part, restRev);
+
+      const sentAt = new Map();
+      const revisionSent = new Map();
+      ed.onText = (m) => {
+        if (m.type === 'icon_feedback' && m.icon === icon) {
+          const at = sentAt.get(m.requested[2].toFixed(6));
+          if (at !== undefined) revisionSent.set(m.revision, at);
+        }
+      };
+      const arrivals = { fast: [], slow: [] };
+      fast.onFrame = (f, at) => f.part === part && f.flags & 1 && arrivals.fast.push({ revision: f.revision, at });
+      slow.onFrame = (f, at) => f.part === part && f.flags & 1 && arrivals.slow.push({ revision: f.revision, at, bytes: slow.bytes });
+      link.reset();
+      const slowBytes0 = slow.bytes;
+      const start = performance.now();
+      const n = seconds * 60;
+      let backlog = 0;
+      for (let k = 0; k < n; k++) {
+        const z = 0.1 + 0.002 * k;
+        sentAt.set(z.toFixed(6), performance.now());
+        ed.send({ type: 'drag', part, icon, xyz: [0.5, 0.5, z] });
+        backlog = Math.max(backlog, link.bytes.down - (slow.bytes - slowBytes0));
+        await sleep(Math.max(0, start + ((k + 1) * 1000) / 60 - performance.now()));
+      }
+      await sleep(500);
+      const slowBytesDuring = slow.bytes - slowBytes0;
+      const released = ed.waitText((m) => m.req === 3);
+      ed.send({ type: 'drag_end', part, icon, req: 3 });
+      await released;
+      let rest;
+      while (!(rest = ed.frames.filter((f) => f.part === part && !(f.flags & 1) && f.revision > restRev).pop())) await sleep(5);
+      await until(fast, part, rest.revision);
+      await until(slow, part, rest.revision);
+      const elapsed = (performance.now() - start) / 1000;
+      const wrote = link.bytes.down;
+
+      const editorFrames = ed.frames.filter((f) => f.part === part && f.flags & 1 && f.revision > restRev).map((f) => f.revision);
+      const seenFast = new Set(arrivals.fast.map((a) => a.revision));
+      const missed = editorFrames.filter((r) => !seenFast.has(r));
+      const delay = (a) => a.at - revisionSent.get(a.revision);
+      const slowDelays = arrivals.slow.filter((a) => revisionSent.has(a.revision)).map((a) => delay(a) - 40);
+      const fastDelays = arrivals.fast.filter((a) => revisionSent.has(a.revision)).map(delay);
+      t.diagnostic(`editor: ${editorFrames.length} drag frames (${(editorFrames.length / (seconds + 0.5)).toFixed(1)}/s); fast viewer: ${arrivals.fast.length} frames, missed ${missed.length}, delay p50 ${pct(fastDelays, 50).toFixed(1)} ms p90 ${pct(fastDelays, 90).toFixed(1)} ms; slow viewer: ${arrivals.slow.length} frames (${(arrivals.slow.length / (seconds + 0.5)).toFixed(1)}/s), ${slowBytesDuring} bytes during the drag (${((100 * slowBytesDuring) / (capacity * (seconds + 0.5))).toFixed(0)} % of the link), added delay p50 ${pct(slowDelays, 50).toFixed(1)} ms p90 ${pct(slowDelays, 90).toFixed(1)} ms max ${Math.max(...slowDelays).toFixed(1)} ms; the server wrote ${wrote} bytes into the slow link in ${elapsed.toFixed(2)} s, backlog at most ${backlog} bytes`);
+
+      // The fast viewer: every frame the editor saw (but for the 5 % either latest-wins writer may skip on a loaded machine).
+      assert.ok(missed.length <= 0.05 * editorFrames.length, `the fast viewer missed ${missed.length} of ${editorFrames.length} drag frames`);
+      // The slow viewer: complete frames all through the drag …
+      assert.ok(arrivals.slow.length >= seconds, `the slow viewer got ${arrivals.slow.length} drag frames in ${seconds} s`);
+      // … each recent: what waits for it in the link stays within a window
+      // and a frame (unpaced, it grows by hundreds of KB a second) …
+      assert.ok(backlog <= 256 * 1024, `${backlog} bytes were waiting in the slow viewer's link`);
+      // … and the server wrote into its link about what the link carried.
+      assert.ok(wrote <= capacity * elapsed + 256 * 1024, `the server wrote ${wrote} bytes into a link that carried at most ${Math.round(capacity * elapsed)} in ${elapsed.toFixed(2)} s`);
+      // Both end on the editor's frame at rest, exactly.
+      for (const [name, v] of [['fast', fast], ['slow', slow]]) {
+        const shown = v.frames.filter((f) => f.part === part).pop();
+        assert.equal(shown.revision, rest.revision, name);
+        assert.deepEqual(shown.points, rest.points, `the ${name} viewer's shape at rest is not the editor's`);
+      }
+    } finally {
+      for (const c of [ed, fast, slow]) c.ws.close();
+      await link.close();
+    }
   });
 }

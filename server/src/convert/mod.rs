@@ -134,6 +134,11 @@ pub enum Inbound {
         /// The view camera, if any.
         camera: Option<wire::Camera>,
     },
+    /// A paced client's report of the binary bytes it has received.
+    Received {
+        /// The total since the connection opened.
+        bytes: u64,
+    },
     /// A device sample (its position becomes the bridge's pointer).
     DeviceSample {
         /// Sensor name.
@@ -432,6 +437,7 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
     let inbound = match env.msg {
         M::Hello { .. } => Inbound::Hello,
         M::Ping => Inbound::Ping,
+        M::Received { bytes } => Inbound::Received { bytes },
         M::ListDesigns => Inbound::ListDesigns,
         M::CreateDesign { name } => Inbound::CreateDesign { name },
         M::DeleteDesign { design } => Inbound::DeleteDesign { design },
@@ -536,6 +542,9 @@ pub fn decode(text: &str) -> Result<(Option<u64>, Inbound), (Option<u64>, WireEr
         }
         M::DeleteComment { comment } => {
             Inbound::Command(Command::Comment(CommentOp::Delete { comment }))
+        }
+        M::EditComment { comment, text } => {
+            Inbound::Command(Command::Comment(CommentOp::Edit { comment, text }))
         }
         M::DragStart { part, icon } => Inbound::Command(Command::Grab { part, icon }),
         M::Drag { part, icon, xyz } => Inbound::Command(Command::Drag {

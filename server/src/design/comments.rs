@@ -8,7 +8,9 @@
 //! * editors and viewers comment and reply; devices (the bridge) may not;
 //! * an editor resolves, reopens and deletes any comment or reply;
 //! * a viewer resolves, reopens and deletes only comments and replies
-//!   written through a viewer link.
+//!   written through a viewer link;
+//! * the text of a comment or reply may be changed by whoever may delete
+//!   it: its author's side or an editor.
 //!
 //! Comments are not edits: they never enter undo/redo, and undo, revert or
 //! restore leave them alone.
@@ -52,6 +54,13 @@ pub enum CommentOp {
         /// The comment's or reply's id.
         comment: u64,
     },
+    /// Replace the text of a comment or reply.
+    Edit {
+        /// The comment's or reply's id.
+        comment: u64,
+        /// The new text.
+        text: String,
+    },
 }
 
 /// A comment with its replies, oldest first.
@@ -68,7 +77,8 @@ pub struct CommentThread {
 pub enum CommentChange {
     /// A new comment.
     Added(CommentThread),
-    /// A thread changed (a reply added or deleted, resolved or reopened).
+    /// A thread changed (a reply added, edited or deleted, resolved or
+    /// reopened, a text edited).
     Changed(CommentThread),
     /// A comment was deleted with its replies.
     Deleted(u64),
@@ -91,6 +101,13 @@ pub enum Write {
         /// The id.
         comment: u64,
     },
+    /// Replace a comment's or reply's text.
+    Edit {
+        /// The id.
+        comment: u64,
+        /// The new text.
+        text: String,
+    },
 }
 
 /// What the store did.
@@ -110,6 +127,13 @@ pub enum Written {
         /// The id.
         comment: u64,
     },
+    /// A comment's or reply's text was replaced.
+    Edited {
+        /// The id.
+        comment: u64,
+        /// The new text.
+        text: String,
+    },
 }
 
 impl Write {
@@ -128,6 +152,12 @@ impl Write {
                     return Err(StoreError::UnknownComment(design, comment));
                 }
                 Written::Deleted { comment }
+            }
+            Write::Edit { comment, text } => {
+                if !store.edit_comment(design, comment, &text)? {
+                    return Err(StoreError::UnknownComment(design, comment));
+                }
+                Written::Edited { comment, text }
             }
         })
     }
@@ -329,6 +359,16 @@ impl CommentBook {
                 }
                 Ok(Write::Delete { comment })
             }
+            CommentOp::Edit { comment, text } => {
+                let (_, record) = self.find(comment).ok_or_else(|| unknown(comment))?;
+                if !may_moderate(role, record.comment.access) {
+                    return Err(forbidden(
+                        role,
+                        "edit a comment or reply written through an editor link",
+                    ));
+                }
+                Ok(Write::Edit { comment, text })
+            }
         }
     }
 
@@ -378,6 +418,23 @@ impl CommentBook {
                         }
                         None => (None, None),
                     }
+                }
+            }
+            Written::Edited { comment, text } => {
+                let t = self
+                    .threads
+                    .values_mut()
+                    .find(|t| t.head.id == comment || t.replies.iter().any(|r| r.id == comment));
+                match t {
+                    Some(t) => {
+                        for r in std::iter::once(&mut t.head).chain(t.replies.iter_mut()) {
+                            if r.id == comment {
+                                r.comment.text.clone_from(&text);
+                            }
+                        }
+                        (None, Some(CommentChange::Changed(t.clone())))
+                    }
+                    None => (None, None),
                 }
             }
         };

@@ -186,6 +186,16 @@ impl Store {
         Ok(n == 1)
     }
 
+    /// Replaces the text of comment or reply `comment` of design `id`; false
+    /// when there is no such row.
+    pub fn edit_comment(&self, id: DesignId, comment: u64, text: &str) -> Result<bool, StoreError> {
+        let n = self.conn().execute(
+            "UPDATE comments SET text = ?3 WHERE design_id = ?1 AND id = ?2",
+            params![id as i64, comment as i64, text],
+        )?;
+        Ok(n == 1)
+    }
+
     /// Deletes comment or reply `comment` of design `id` (a comment with its
     /// replies); false when there is no such row.
     pub fn delete_comment(&self, id: DesignId, comment: u64) -> Result<bool, StoreError> {

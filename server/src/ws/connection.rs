@@ -42,6 +42,8 @@ struct Session {
     handle: DesignHandle,
     out: mpsc::Sender<Out>,
     limiter: RateLimiter,
+    /// A paced client's reports of what it received, read by its writer.
+    reports: Option<tokio::sync::watch::Sender<(u64, std::time::Instant)>>,
 }
 
 /// Close code 1007: a text message that is not UTF-8 (RFC 6455 §7.4.1).
@@ -214,8 +216,10 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         .await;
     let mut sent = std::collections::BTreeMap::new();
     let mut shape = Ok(());
+    let mut joined_bytes = 0u64;
     if welcome.is_ok() && compact {
         for frame in writer::snapshot_frames(&mut joined, &mut sent, deflate, &state.metrics) {
+            joined_bytes += frame.len() as u64;
             shape = socket.send(Message::Binary(frame)).await;
             if shape.is_err() {
                 break;
@@ -243,6 +247,19 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
             .is_some_and(|v| v == "1" || v == "true");
     let (sink, stream) = socket.split();
     let (out_tx, out_rx) = mpsc::channel(REPLY_CAPACITY);
+    // A send rate matched to the client's link: it reports what it received.
+    let (reports, pace) = if query.get("pace").is_some_and(|v| v == "1" || v == "true") {
+        let (tx, rx) = tokio::sync::watch::channel((0, std::time::Instant::now()));
+        (
+            Some(tx),
+            Some(writer::Paced {
+                reports: rx,
+                joined_bytes,
+            }),
+        )
+    } else {
+        (None, None)
+    };
     let writer = tokio::spawn(writer::run(
         sink,
         out_rx,
@@ -258,6 +275,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
                 .get("drag_stream")
                 .is_some_and(|v| v == "1" || v == "true"),
             deflate,
+            pace,
         },
     ));
     let mut session = Session {
@@ -269,6 +287,7 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
         handle,
         out: out_tx,
         limiter: RateLimiter::new(std::time::Instant::now()),
+        reports,
     };
     session.read(stream).await;
     let _ = session
@@ -352,6 +371,7 @@ impl Session {
                     _,
                     Inbound::Command(crate::design::Command::Drag { .. })
                     | Inbound::Presence { .. }
+                    | Inbound::Received { .. }
                     | Inbound::DeviceSample { .. },
                 )) => rate::Class::Stream,
                 _ => rate::Class::Control,
@@ -383,6 +403,14 @@ impl Session {
                     .await;
             }
             Inbound::Ping => self.reply(convert::pong(id)).await,
+            Inbound::Received { bytes } => {
+                // A paced client's report opens its window (the writer
+                // reads it); without `pace=1` it changes nothing.
+                if let Some(r) = &self.reports {
+                    r.send_replace((bytes, std::time::Instant::now()));
+                }
+                self.ack(id).await;
+            }
             Inbound::Command(crate::design::Command::Drag { part, icon, xyz }) if id.is_none() => {
                 // Drag frames without a request number are fire-and-forget
                 // and coalesced by the actor; the role is checked here so a

@@ -1,9 +1,11 @@
 //! The WebSocket endpoint `/ws`: upgrade, then one task per connection
 //! ([`connection`]) that authenticates the hello, joins the design's actor
 //! and runs a reader and a writer ([`writer`]: latest-wins geometry,
-//! ordered events, resync on lag; [`rate`]: per-client message limits).
+//! ordered events, resync on lag; [`rate`]: per-client message limits;
+//! [`pace`]: a send rate matched to a client's link).
 
 pub mod connection;
+pub mod pace;
 pub mod rate;
 pub mod writer;
 

@@ -1,7 +1,7 @@
 //! Per-connection rate limits on `/ws` messages: token buckets refilled at a
 //! steady rate up to a burst. Control messages (edits, queries, pings) and
 //! stream messages (`drag`, `device_sample`, `presence`, which a device or
-//! a pointer sends every frame) have separate buckets, the stream one far
+//! a pointer sends every frame, and a paced client's `received`) have separate buckets, the stream one far
 //! larger; a message over its bucket is dropped and answered
 //! `rate_limited`, and those answers have their own bucket so a flood
 //! cannot turn into a flood of errors. Nothing here closes a connection.

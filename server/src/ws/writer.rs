@@ -12,7 +12,9 @@
 //! 3. this client's drag feedback, its refused drag frames and the geometry
 //!    (all `watch`): latest wins — a slow client skips intermediate frames
 //!    instead of queueing them, and a stream of refused drags yields one
-//!    error per wake-up, not one per frame.
+//!    error per wake-up, not one per frame. A paced client (`pace=1`,
+//!    [`super::pace`]) gets geometry only while its window is open; what
+//!    waits is sent, latest, when its next `received` report opens it.
 
 use crate::convert;
 use crate::design::{DesignEvent, DesignHandle, Joined};
@@ -23,8 +25,11 @@ use futures_util::SinkExt;
 use futures_util::stream::SplitSink;
 use std::collections::BTreeMap;
 use std::sync::Arc;
+use std::time::Instant;
 use tokio::sync::broadcast::error::{RecvError, TryRecvError};
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
+
+use super::pace::Pacer;
 
 /// What the reader hands the writer.
 pub enum Out {
@@ -45,11 +50,31 @@ struct Held {
     basis: Option<u64>,
 }
 
+/// Sends one binary message, counted in the metrics and, for a paced
+/// client, in its [`Pacer`].
+async fn send_binary(
+    sink: &mut Sink,
+    bytes: Bytes,
+    metrics: &Metrics,
+    pacer: Option<&mut Pacer>,
+) -> Result<(), axum::Error> {
+    let len = bytes.len();
+    metrics.frame_sent(len);
+    if let Some(p) = pacer {
+        p.on_sent(len, Instant::now());
+    }
+    sink.send(Message::Binary(bytes)).await
+}
+
 /// Sends the frames of the parts whose revision this client has not had
 /// (every part the first time), and forgets parts that are gone: latest
 /// wins per part, and a frame of one part never stands in for another's.
 /// A client of the drag stream (`held` is `Some`) gets a drag frame where
 /// there is one, preceded by the reference frame and the basis it lacks.
+/// A paced client (`pacer` is `Some`) gets a part's messages only while its
+/// window is open: `Ok(false)` says some part is still owed (the caller
+/// tries again when the client reports what it received), `Ok(true)` that
+/// the client has every part's latest frame.
 async fn send_geometry(
     sink: &mut Sink,
     joined: &mut Joined,
@@ -57,7 +82,8 @@ async fn send_geometry(
     mut held: Option<&mut BTreeMap<u64, Held>>,
     deflate: bool,
     metrics: &Metrics,
-) -> Result<(), axum::Error> {
+    mut pacer: Option<&mut Pacer>,
+) -> Result<bool, axum::Error> {
     let set = joined.geometry.borrow_and_update().clone();
     sent.retain(|part, _| set.parts.contains_key(part));
     if let Some(h) = held.as_deref_mut() {
@@ -67,6 +93,9 @@ async fn send_geometry(
         if sent.get(part) == Some(&g.rev) {
             continue;
         }
+        if pacer.as_deref().is_some_and(|p| !p.open()) {
+            return Ok(false);
+        }
         match (held.as_deref_mut(), &g.stream) {
             (Some(held), Some(s)) => {
                 let h = held.entry(*part).or_default();
@@ -75,8 +104,7 @@ async fn send_geometry(
                         .basis
                         .reference_deflated
                         .pick(&s.basis.reference_frame, deflate);
-                    metrics.frame_sent(bytes.len());
-                    sink.send(Message::Binary(bytes)).await?;
+                    send_binary(sink, bytes, metrics, pacer.as_deref_mut()).await?;
                     *h = Held {
                         full: s.basis.reference,
                         basis: None,
@@ -84,17 +112,14 @@ async fn send_geometry(
                 }
                 if h.basis != Some(s.basis.id) {
                     let bytes = s.basis.deflated.pick(&s.basis.frame, deflate);
-                    metrics.frame_sent(bytes.len());
-                    sink.send(Message::Binary(bytes)).await?;
+                    send_binary(sink, bytes, metrics, pacer.as_deref_mut()).await?;
                     h.basis = Some(s.basis.id);
                 }
-                metrics.frame_sent(s.frame.len());
-                sink.send(Message::Binary(s.frame.clone())).await?;
+                send_binary(sink, s.frame.clone(), metrics, pacer.as_deref_mut()).await?;
             }
             (held, _) => {
                 let bytes = g.deflated.pick(&g.frame, deflate);
-                metrics.frame_sent(bytes.len());
-                sink.send(Message::Binary(bytes)).await?;
+                send_binary(sink, bytes, metrics, pacer.as_deref_mut()).await?;
                 if let Some(held) = held {
                     held.insert(
                         *part,
@@ -108,7 +133,7 @@ async fn send_geometry(
         }
         sent.insert(*part, g.rev);
     }
-    Ok(())
+    Ok(true)
 }
 
 /// Sends one ordered event, if it has a wire form.
@@ -143,7 +168,8 @@ pub fn snapshot_frames(
         .collect()
 }
 
-#[derive(Clone, Debug, PartialEq, Eq)]
+/// How geometry reaches one client.
+#[derive(Debug)]
 pub struct Delivery {
     /// The compact join: the connection already sent the current frame, and
     /// snapshots go without their points.
@@ -157,6 +183,19 @@ pub struct Delivery {
     pub drag_stream: bool,
     /// The client asked for deflated messages (`deflate=1` in the URL).
     pub deflate: bool,
+    /// The client asked for a send rate matched to its link (`pace=1`).
+    pub pace: Option<Paced>,
+}
+
+/// What the writer of a paced client needs from its reader.
+#[derive(Debug)]
+pub struct Paced {
+    /// The client's latest `received` report: the bytes of binary messages
+    /// it has received, and when the reader read the report.
+    pub reports: watch::Receiver<(u64, Instant)>,
+    /// The bytes of binary messages sent before the writer started (the
+    /// compact join's frames).
+    pub joined_bytes: u64,
 }
 
 /// A client that fell too far behind its design's events.
@@ -188,6 +227,7 @@ async fn resync(
     sent: &mut BTreeMap<u64, u64>,
     held: Option<&mut BTreeMap<u64, Held>>,
     metrics: &Metrics,
+    pacer: Option<&mut Pacer>,
 ) -> Resynced {
     let Lagged {
         handle,
@@ -209,7 +249,7 @@ async fn resync(
     *joined = j;
     if sink.send(Message::Text(snap)).await.is_err()
         || (frames
-            && send_geometry(sink, joined, sent, held, deflate, metrics)
+            && send_geometry(sink, joined, sent, held, deflate, metrics, pacer)
                 .await
                 .is_err())
     {
@@ -236,7 +276,23 @@ pub async fn run(
         mut sent,
         drag_stream,
         deflate,
+        pace,
     } = delivery;
+    // A paced client: its reports and its window.
+    let (mut reports, mut pacer) = match pace {
+        Some(Paced {
+            reports,
+            joined_bytes,
+        }) => {
+            let now = Instant::now();
+            let mut p = Pacer::new(now);
+            p.on_sent(joined_bytes as usize, now);
+            (Some(reports), Some(p))
+        }
+        None => (None, None),
+    };
+    // Some part's latest frame still waits for the window to open.
+    let mut owed = false;
     // Frames sent before the writer started (the compact join's) are full.
     let mut held: Option<BTreeMap<u64, Held>> = drag_stream.then(|| {
         sent.iter()
@@ -253,19 +309,21 @@ pub async fn run(
     });
     let mut geometry_live = true;
     let mut deleted = false;
-    if frames
-        && send_geometry(
+    if frames {
+        match send_geometry(
             &mut sink,
             &mut joined,
             &mut sent,
             held.as_mut(),
             deflate,
             &metrics,
+            pacer.as_mut(),
         )
         .await
-        .is_err()
-    {
-        return;
+        {
+            Ok(all) => owed = !all,
+            Err(_) => return,
+        }
     }
     loop {
         tokio::select! {
@@ -292,8 +350,8 @@ pub async fn run(
                                 Err(TryRecvError::Lagged(n)) => {
                                     // As below: too far behind, a fresh snapshot.
                                     let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, deflate };
-                                    match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await {
-                                        Resynced::Done => {}
+                                    match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics, pacer.as_mut()).await {
+                                        Resynced::Done => owed = pacer.is_some(),
                                         Resynced::DesignGone => geometry_live = false,
                                         Resynced::SocketFailed => return,
                                     }
@@ -341,8 +399,8 @@ pub async fn run(
                     }
                     Err(RecvError::Lagged(n)) => {
                         let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, deflate };
-                        match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics).await {
-                            Resynced::Done => {}
+                        match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics, pacer.as_mut()).await {
+                            Resynced::Done => owed = pacer.is_some(),
                             Resynced::DesignGone => geometry_live = false,
                             Resynced::SocketFailed => break,
                         }
@@ -412,8 +470,31 @@ pub async fn run(
                     geometry_live = false;
                     continue;
                 }
-                if send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), deflate, &metrics).await.is_err() {
-                    break;
+                match send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), deflate, &metrics, pacer.as_mut()).await {
+                    Ok(all) => owed = !all,
+                    Err(_) => break,
+                }
+            }
+            live = async {
+                match reports.as_mut() {
+                    Some(r) => r.changed().await.is_ok(),
+                    None => std::future::pending().await,
+                }
+            }, if reports.is_some() => {
+                if !live {
+                    // The reader is gone: the connection is ending.
+                    reports = None;
+                    continue;
+                }
+                let report = reports.as_mut().map(|r| *r.borrow_and_update());
+                if let (Some((total, at)), Some(p)) = (report, pacer.as_mut()) {
+                    p.on_report(total, at);
+                }
+                if owed && geometry_live && frames {
+                    match send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), deflate, &metrics, pacer.as_mut()).await {
+                        Ok(all) => owed = !all,
+                        Err(_) => break,
+                    }
                 }
             }
         }

@@ -208,6 +208,29 @@ impl Client {
         }
     }
 
+    /// The frame of the drag just sent: the frame of `part` whose revision
+    /// is the one its `icon_feedback` names (either may come first).
+    pub async fn frame_of_drag(&mut self, part: u64) -> GeometryFrame {
+        let mut want = None;
+        let mut got: Option<GeometryFrame> = None;
+        loop {
+            match self.next().await {
+                Got::Text(v) if v["type"] == "icon_feedback" => {
+                    want = v["revision"].as_u64();
+                }
+                Got::Frame(f) if f.part == part => got = Some(f),
+                Got::Closed => panic!("closed"),
+                _ => {}
+            }
+            if let (Some(w), Some(f)) = (want, &got)
+                && f.revision >= w
+            {
+                assert_eq!(f.revision, w, "the editor skipped the frame of its drag");
+                return got.unwrap();
+            }
+        }
+    }
+
     /// The geometry frames a join sends, one per surface or curve part of the snapshot, by
     /// part id (in the snapshot's order).
     pub async fn join_frames(&mut self) -> Vec<GeometryFrame> {
