@@ -694,7 +694,7 @@ impl Solver {
         free_rows: &[ScalarRow],
         eqs: &[ScalarEq],
         loads: &[LoadCol],
-    ) -> (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>) {
+    ) -> Schur {
         let n = self.dim();
         // Z: reuse cached columns, solve for the rest in one batch.
         let old: HashMap<RowKey, usize> = self
@@ -2199,6 +2199,10 @@ fn same_group(a: &Group, b: &Group) -> bool {
             .zip(&b.loads)
             .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
 }
+
+/// What `Solver::schur` builds: Z (pending placeholders included), the
+/// pending columns and their forward halves, G (row-major) and S.
+type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
 
 /// One input of a batched refinement: σ = d − C P_ref − C δ, and per
 /// coordinate the stationarity residual ρ_k when it needs a refinement step.
