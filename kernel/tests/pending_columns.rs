@@ -183,6 +183,91 @@ fn forward_gram_equals_the_gram_of_full_solves() {
     );
 }
 
+/// A solve split in halves: the forward halves of sparse rows (on their
+/// elimination-tree reach) or of dense right-hand sides, finished together
+/// by one backward pass, equal full solves of the same right-hand sides.
+#[test]
+fn forward_and_backward_halves_equal_full_solves() {
+    let s = plate(N);
+    let k = stiffness(&s);
+    let n = k.dim();
+    let rows: Vec<ScalarRow> = vec![
+        surface_row(&s, 0.3, 0.6, 0, 0),
+        surface_row(&s, 0.8, 0.15, 1, 0),
+        surface_row(&s, 0.05, 0.95, 0, 2),
+    ];
+    let mut factor = Factor::new(k.clone()).unwrap();
+    // Independent: full solves of the scattered rows, and of a dense
+    // right-hand side (every point loaded).
+    let dense: Vec<f64> = (0..n).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+    let mut want = faer::Mat::<f64>::zeros(n, rows.len() + 1);
+    for (j, r) in rows.iter().enumerate() {
+        for (&i, &w) in r.indices.iter().zip(&r.weights) {
+            want[(i, j)] += w;
+        }
+    }
+    for (i, &v) in dense.iter().enumerate() {
+        want[(i, rows.len())] = v;
+    }
+    let mut x = want.clone();
+    factor.solve_in_place(want.as_mut());
+    let columns: Vec<(&[usize], &[f64])> = rows
+        .iter()
+        .map(|r| (r.indices.as_slice(), r.weights.as_slice()))
+        .collect();
+    let halves = factor
+        .forward_sparse(&columns)
+        .expect("the factor of a 30 × 30 plate is supernodal");
+    for (j, h) in halves.iter().enumerate() {
+        x.col_mut(j).copy_from(faer::ColRef::from_slice(h.values()));
+    }
+    let last = rows.len();
+    assert!(factor.forward_in_place(x.as_mut().subcols_mut(last, 1)));
+    let before = factor.columns_solved();
+    assert!(factor.backward_in_place(x.as_mut()));
+    assert_eq!(factor.columns_solved() - before, rows.len() as u64 + 1);
+    // Each finished column solves K x = a to round-off (componentwise
+    // against |K||x|), and agrees with the full solve as far as K's
+    // conditioning lets two backward-stable solves agree.
+    let mut kx = vec![DVec3::ZERO; n];
+    let mut bound = vec![DVec3::ZERO; n];
+    for j in 0..=last {
+        let xs: Vec<DVec3> = (0..n).map(|i| DVec3::new(x[(i, j)], 0.0, 0.0)).collect();
+        k.mul_points_with_bound(&xs, &mut kx, &mut bound);
+        let mut a = vec![0.0; n];
+        if j < last {
+            for (&i, &w) in rows[j].indices.iter().zip(&rows[j].weights) {
+                a[i] += w;
+            }
+        } else {
+            a.copy_from_slice(&dense);
+        }
+        for i in 0..n {
+            let r = (kx[i].x - a[i]).abs();
+            assert!(
+                r <= 1e-12 * (bound[i].x + a[i].abs()),
+                "column {j}, point {i}: residual {r:e} against {:e}",
+                bound[i].x
+            );
+        }
+        let scale = (0..n).fold(0.0f64, |m, i| m.max(want[(i, j)].abs()));
+        for i in 0..n {
+            assert!(
+                (x[(i, j)] - want[(i, j)]).abs() <= 1e-6 * scale,
+                "column {j}, point {i}: {} vs {}",
+                x[(i, j)],
+                want[(i, j)]
+            );
+        }
+    }
+    // A small factor is simplicial: no halves (the solver solves in full).
+    let mut small = Factor::new(stiffness(&plate(6))).unwrap();
+    assert!(small.forward_sparse(&columns[..0]).is_none());
+    let mut y = faer::Mat::<f64>::zeros(small.dim(), 1);
+    assert!(!small.forward_in_place(y.as_mut()));
+    assert!(!small.backward_in_place(y.as_mut()));
+}
+
 /// New pins where the surface is cost no full solve; the pending columns
 /// are solved when a drag needs them; a pending column dropped before it
 /// was solved is not kept as a retired column (re-adding its row and moving

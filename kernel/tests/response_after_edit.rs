@@ -274,8 +274,9 @@ impl Scene {
 
     /// The next drag frames compute the response again, exactly; when it
     /// is symmetric (uniform), from one input: the frame solves the
-    /// `pending` new columns and at most one right-hand side per
-    /// refinement step (three inputs would take three).
+    /// `pending` new columns (unless a solve already did), the one combined
+    /// right-hand side of the x input, and at most one right-hand side per
+    /// refinement step (three inputs would take three of each).
     fn expect_response(&mut self, problem: &Problem, key: u64, pending: u64) {
         let counts = self.solver.response_counts();
         let columns = self.solver.columns_solved();
@@ -287,8 +288,8 @@ impl Scene {
         let steps = now.refinement_steps - counts.refinement_steps;
         let solved = self.solver.columns_solved() - columns;
         assert!(
-            (pending..=pending + steps).contains(&solved),
-            "{solved} columns for {pending} pending and {steps} steps"
+            (1..=pending + 1 + steps).contains(&solved),
+            "{solved} columns for {pending} pending, one input and {steps} steps"
         );
         frames_match(&mut self.solver, problem, &self.p, key, Some(&self.k));
     }

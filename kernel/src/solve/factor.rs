@@ -8,12 +8,15 @@
 //!
 //! [`Factor::forward_gram`] answers aᵀK⁻¹b for sparse a, b without a full
 //! solve: with K = Pᵀ L Lᵀ P it is (L⁻¹Pa)·(L⁻¹Pb), and the forward solve of a
-//! sparse right-hand side only visits the supernodes on the paths from its
-//! nonzeros to the root of the elimination tree.
+//! sparse right-hand side ([`Factor::forward_sparse`]) only visits the
+//! supernodes on the paths from its nonzeros to the root of the elimination
+//! tree. [`Factor::backward_in_place`] finishes such solves later with the
+//! backward half alone (one pass over L for every column at once).
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::mat::MatMut;
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky,
@@ -22,6 +25,23 @@ use faer::{Conj, Par, Side};
 
 use super::SolveError;
 use crate::energy::Stiffness;
+
+/// A forward half y = L⁻¹Pa of a sparse vector a (see
+/// [`Factor::forward_sparse`]).
+#[derive(Clone, Debug)]
+pub struct Forward {
+    /// y, in the factor's (permuted) order: zero outside `reach`.
+    values: Vec<f64>,
+    /// The supernodes the forward solve visited, in increasing order.
+    reach: Vec<usize>,
+}
+
+impl Forward {
+    /// y in the factor's (permuted) order.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+}
 
 /// K = L Lᵀ, ready for batched solves.
 pub struct Factor {
@@ -173,12 +193,13 @@ impl Factor {
         self.stiffness.dim()
     }
 
-    /// The Gram matrix aᵢᵀ K⁻¹ aⱼ (row-major, k × k) of k sparse vectors
-    /// (`(indices, weights)`, indices below [`Self::dim`]), by forward
-    /// solves that visit only the elimination-tree paths of their nonzeros:
-    /// a fraction of one full solve each. `None` when the factor is not
-    /// supernodal (small problems: the caller solves in full).
-    pub fn forward_gram(&self, columns: &[(&[usize], &[f64])]) -> Option<Vec<f64>> {
+    /// The forward halves y = L⁻¹Pa of sparse vectors a (`(indices,
+    /// weights)`, indices below [`Self::dim`]): each a dense vector in the
+    /// factor's (permuted) order, zero outside its reach — the supernodes on
+    /// the elimination-tree paths from a's non-zeros to the root, the only
+    /// ones the forward solve visits — with that reach. `None` when the
+    /// factor is not supernodal (small problems).
+    pub fn forward_sparse(&self, columns: &[(&[usize], &[f64])]) -> Option<Vec<Forward>> {
         let tree = self.tree.as_ref()?;
         let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
             return None;
@@ -191,7 +212,7 @@ impl Factor {
         let val_ptr = sym.col_ptr_for_val();
         let rows = sym.row_idx();
         let mut marked = vec![false; tree.parent.len()];
-        let mut solved: Vec<(Vec<f64>, Vec<usize>)> = Vec::with_capacity(columns.len());
+        let mut solved: Vec<Forward> = Vec::with_capacity(columns.len());
         for (indices, weights) in columns {
             let mut x = vec![0.0; n];
             let mut reach: Vec<usize> = Vec::new();
@@ -229,16 +250,38 @@ impl Factor {
                     }
                 }
             }
-            solved.push((x, reach));
+            solved.push(Forward { values: x, reach });
         }
-        let k = columns.len();
+        Some(solved)
+    }
+
+    /// The Gram matrix aᵢᵀ K⁻¹ aⱼ (row-major, k × k) of k sparse vectors
+    /// (`(indices, weights)`, indices below [`Self::dim`]), by forward
+    /// solves that visit only the elimination-tree paths of their nonzeros:
+    /// a fraction of one full solve each. `None` when the factor is not
+    /// supernodal (small problems: the caller solves in full).
+    pub fn forward_gram(&self, columns: &[(&[usize], &[f64])]) -> Option<Vec<f64>> {
+        Some(self.gram_of(&self.forward_sparse(columns)?))
+    }
+
+    /// The Gram matrix aᵢᵀ K⁻¹ aⱼ (row-major, k × k) of the sparse vectors
+    /// whose forward halves are `forward` ([`Self::forward_sparse`]): with
+    /// K = Pᵀ L Lᵀ P it is (L⁻¹Paᵢ)·(L⁻¹Paⱼ).
+    pub fn gram_of(&self, forward: &[Forward]) -> Vec<f64> {
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            // Forward halves come only from a supernodal factor.
+            return vec![0.0; forward.len() * forward.len()];
+        };
+        let begin = sym.supernode_begin();
+        let end = sym.supernode_end();
+        let k = forward.len();
         let mut gram = vec![0.0; k * k];
         for a in 0..k {
             for b in a..k {
-                // x_b is zero outside its reach.
-                let (xa, xb) = (&solved[a].0, &solved[b].0);
-                let v: f64 = solved[b]
-                    .1
+                // y_b is zero outside its reach.
+                let (xa, xb) = (&forward[a].values, &forward[b].values);
+                let v: f64 = forward[b]
+                    .reach
                     .iter()
                     .flat_map(|&s| begin[s]..end[s])
                     .map(|i| xa[i] * xb[i])
@@ -247,7 +290,80 @@ impl Factor {
                 gram[b * k + a] = v;
             }
         }
-        Some(gram)
+        gram
+    }
+
+    /// The forward halves of dense right-hand sides: every column a of `x`
+    /// (dim × k, original order) becomes y = L⁻¹Pa in the factor's order,
+    /// to be finished by [`Self::backward_in_place`] (with other columns:
+    /// one backward pass for all). Returns `false` (and leaves `x`) when the
+    /// factor is not supernodal.
+    pub fn forward_in_place(&mut self, mut x: MatMut<'_, f64>) -> bool {
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            return false;
+        };
+        let k = x.ncols();
+        if k > self.solve_cols {
+            self.solve_mem =
+                MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq));
+            self.solve_cols = k;
+        }
+        if let Some(perm) = self.symbolic.perm() {
+            let inv = perm.arrays().1;
+            let mut column = vec![0.0; self.dim()];
+            for j in 0..k {
+                for (i, &p) in inv.iter().enumerate() {
+                    column[p] = x[(i, j)];
+                }
+                for (i, &c) in column.iter().enumerate() {
+                    x[(i, j)] = c;
+                }
+            }
+        }
+        SupernodalLltRef::<usize, f64>::new(sym, &self.l_vals).l_solve_with_conj(
+            Conj::No,
+            x.as_mut(),
+            Par::Seq,
+            MemStack::new(&mut self.solve_mem),
+        );
+        true
+    }
+
+    /// Finishes solves begun by [`Self::forward_sparse`]: every column of
+    /// `x` (dim × k), a forward half y = L⁻¹Pa in the factor's order,
+    /// becomes K⁻¹a = Pᵀ L⁻ᵀ y in the original order — the backward half
+    /// only, one pass over L for all k columns. Returns `false` (and leaves
+    /// `x`) when the factor is not supernodal.
+    pub fn backward_in_place(&mut self, mut x: MatMut<'_, f64>) -> bool {
+        let SymbolicCholeskyRaw::Supernodal(sym) = self.symbolic.raw() else {
+            return false;
+        };
+        let k = x.ncols();
+        self.solved += k as u64;
+        if k > self.solve_cols {
+            self.solve_mem =
+                MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(k, Par::Seq));
+            self.solve_cols = k;
+        }
+        SupernodalLltRef::<usize, f64>::new(sym, &self.l_vals).l_transpose_solve_with_conj(
+            Conj::No,
+            x.as_mut(),
+            Par::Seq,
+            MemStack::new(&mut self.solve_mem),
+        );
+        if let Some(perm) = self.symbolic.perm() {
+            let inv = perm.arrays().1;
+            let mut column = vec![0.0; self.dim()];
+            for j in 0..k {
+                for (c, &p) in column.iter_mut().zip(inv) {
+                    *c = x[(p, j)];
+                }
+                for (i, &c) in column.iter().enumerate() {
+                    x[(i, j)] = c;
+                }
+            }
+        }
+        true
     }
 
     /// Overwrites every column of `rhs` (dim × k) with K⁻¹ times it. The

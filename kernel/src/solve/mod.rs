@@ -8,6 +8,6 @@ mod problem;
 mod solver;
 
 pub use error::SolveError;
-pub use factor::Factor;
+pub use factor::{Factor, Forward};
 pub use problem::{Equation, Group, GroupKey, Load, Problem, ScalarRow};
 pub use solver::{RESIDUAL_TOLERANCE, ResponseCounts, SolveReport, SolveWarning, Solver};

@@ -44,7 +44,8 @@ use std::sync::Arc;
 use faer::Mat;
 use glam::DVec3;
 
-use super::factor::Factor;
+use super::factor::{Factor, Forward};
+
 use super::{Equation, Group, GroupKey, Problem, ScalarRow, SolveError};
 use crate::energy::Stiffness;
 
@@ -323,6 +324,9 @@ pub struct Solver {
     /// [`Self::solve_pending`] before anything reads them: a new icon that
     /// holds the shape where it is costs no full sparse solve.
     pending: Vec<usize>,
+    /// The forward halves L⁻¹Pa of the pending columns' rows (from the
+    /// Gram's forward solves): a pending column costs only the backward half.
+    pending_forward: Vec<Forward>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -356,6 +360,7 @@ impl Solver {
             z: Vec::new(),
             retired: VecDeque::new(),
             pending: Vec::new(),
+            pending_forward: Vec::new(),
             g: Vec::new(),
             eqs: Vec::new(),
             loads: Vec::new(),
@@ -431,6 +436,7 @@ impl Solver {
         self.free_rows.clear();
         self.z.clear();
         self.pending.clear();
+        self.pending_forward.clear();
         self.retired.clear();
         self.response = None;
     }
@@ -588,7 +594,7 @@ impl Solver {
             foldable.clone()
         };
         let mut refactored = false;
-        let (z, pending, g, s_pinv, rank_deficiency, s_exact) = loop {
+        let (z, pending, forward, g, s_pinv, rank_deficiency, s_exact) = loop {
             if pinned != self.pinned || !same_folds(&fold, &self.folded) {
                 if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
                     if refactored {
@@ -598,7 +604,7 @@ impl Solver {
                 }
                 refactored = true;
             }
-            let (z, pending, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
+            let (z, pending, forward, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
             // Same factor: S⁻¹ by block updates of the current one when
             // they are exact enough, else from scratch.
             let updated = if refactored {
@@ -616,7 +622,7 @@ impl Solver {
                     // the factor and try again.
                     fold = foldable.clone();
                 }
-                Ok((p, dropped, exact)) => break (z, pending, g, p, dropped, exact),
+                Ok((p, dropped, exact)) => break (z, pending, forward, g, p, dropped, exact),
                 Err(e) => {
                     if refactored {
                         self.restore_factor(old);
@@ -661,6 +667,7 @@ impl Solver {
         self.free_rows = free_rows;
         self.z = z;
         self.pending = pending;
+        self.pending_forward = forward;
         self.g = g;
         self.eqs = eqs;
         self.loads = loads;
@@ -687,7 +694,7 @@ impl Solver {
         free_rows: &[ScalarRow],
         eqs: &[ScalarEq],
         loads: &[LoadCol],
-    ) -> (Vec<Column>, Vec<usize>, Vec<f64>, Mat<f64>) {
+    ) -> Schur {
         let n = self.dim();
         // Z: reuse cached columns, solve for the rest in one batch.
         let old: HashMap<RowKey, usize> = self
@@ -720,7 +727,7 @@ impl Solver {
         for l in loads {
             is_load[l.col] = true;
         }
-        let gram = if !missing.is_empty()
+        let forward = if !missing.is_empty()
             && missing.len() <= LAZY_COLUMNS
             && missing.iter().all(|&c| !is_load[c])
         {
@@ -733,10 +740,11 @@ impl Solver {
                     )
                 })
                 .collect();
-            self.factor.forward_gram(&columns)
+            self.factor.forward_sparse(&columns)
         } else {
             None
         };
+        let gram = forward.as_ref().map(|f| self.factor.gram_of(f));
         let pending = if gram.is_some() {
             for &c in &missing {
                 z[c] = Some(Column::pending());
@@ -805,7 +813,7 @@ impl Solver {
                 s[(f, e)] = v;
             }
         }
-        (z, pending, g, s)
+        (z, pending, forward.unwrap_or_default(), g, s)
     }
 
     /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
@@ -813,18 +821,43 @@ impl Solver {
         if self.pending.is_empty() {
             return;
         }
+        self.solve_batch(Mat::zeros(self.dim(), 0));
+    }
+
+    /// K̃⁻¹ of every column of `extra` (dense right-hand sides over the
+    /// free points), with the pending columns of Z solved in the same
+    /// batch: the pending ones need only their backward half (their forward
+    /// halves were kept from the Gram), the extra ones both, and one
+    /// backward pass over the factor serves them all.
+    fn solve_batch(&mut self, extra: Mat<f64>) -> Mat<f64> {
+        let n = self.dim();
         let pending = std::mem::take(&mut self.pending);
-        let mut rhs = Mat::<f64>::zeros(self.dim(), pending.len());
-        for (m, &c) in pending.iter().enumerate() {
-            let row = &self.free_rows[c];
-            for (&i, &w) in row.indices.iter().zip(&row.weights) {
-                rhs[(i, m)] += w;
+        let forward = std::mem::take(&mut self.pending_forward);
+        let e = extra.ncols();
+        let k = e + pending.len();
+        let mut x = Mat::<f64>::zeros(n, k);
+        x.as_mut().subcols_mut(0, e).copy_from(extra.as_ref());
+        let halves = forward.len() == pending.len()
+            && self.factor.forward_in_place(x.as_mut().subcols_mut(0, e));
+        if halves {
+            for (m, f) in forward.iter().enumerate() {
+                x.col_mut(e + m)
+                    .copy_from(faer::ColRef::from_slice(f.values()));
             }
+            self.factor.backward_in_place(x.as_mut());
+        } else {
+            for (m, &c) in pending.iter().enumerate() {
+                let row = &self.free_rows[c];
+                for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                    x[(i, e + m)] += w;
+                }
+            }
+            self.factor.solve_in_place(x.as_mut());
         }
-        self.factor.solve_in_place(rhs.as_mut());
         for (m, &c) in pending.iter().enumerate() {
-            self.z[c] = Column::new(rhs.col_as_slice(m));
+            self.z[c] = Column::new(x.col_as_slice(e + m));
         }
+        x
     }
 
     /// S⁻¹ for the new equations `eqs` (over `rows`, S = `s`) from the
@@ -1230,9 +1263,8 @@ impl Solver {
             .iter()
             .position(|g| g.key == key)
             .ok_or(SolveError::UnknownGroup(key))?;
-        // Nothing pending on the fast path (a solve or an earlier frame
-        // solved it): only the first frame pays.
-        self.solve_pending();
+        // Pending columns are solved where a frame first reads Z (the
+        // base's solve, the response's batch): only the first frame pays.
         if !cached {
             let inputs = self.inputs(None, DVec3::ZERO);
             let start = if self.at_rest(&inputs, reference) {
@@ -1273,7 +1305,10 @@ impl Solver {
 
     /// The drag response of group `group` (index) computed from scratch:
     /// δ per unit of drag input along x, y and z, refined to convergence
-    /// (along x only when the problem is [`Self::symmetric`]).
+    /// (along x only when the problem is [`Self::symmetric`]). Its first
+    /// answer is solved from the combined rows, not summed from Z: a unit
+    /// load's column leans on K's soft modes and the sum cancels them, which
+    /// cost refinement solves (see [`Self::add_rows_solved`]).
     fn fresh_response(&mut self, group: usize) -> Response {
         let symmetric = self.symmetric();
         let axes: &[DVec3] = if symmetric {
@@ -1286,7 +1321,7 @@ impl Solver {
         let mut solved = self
             // A response is δ per unit of drag input, from a zero
             // reference: its scale is 1.
-            .refined_deltas(&inputs, &vec![None; inputs.len()], &extents)
+            .refined_deltas(&inputs, &vec![None; inputs.len()], &extents, true)
             .into_iter();
         let mut next = || solved.next().map(|(delta, _, _)| delta).unwrap_or_default();
         let [r0, r1, r2] = [next(), next(), next()];
@@ -1515,6 +1550,49 @@ impl Solver {
         }
     }
 
+    /// δ += K̃⁻¹ Σ_c w_c a_c per input and coordinate, as one batched sparse
+    /// solve of the combined rows (with the pending columns of Z in the same
+    /// batch): the same answer as [`Self::add_columns`], but without its
+    /// cancellation. Each column z_c = K̃⁻¹a_c carries the soft modes of K
+    /// (a small `rest`: the affine ones) at full size, and Σ w_c z_c cancels
+    /// them, leaving a stationarity residual far above round-off that costs
+    /// refinement solves; the combined right-hand side cancels them before
+    /// the solve, whose residual is the solve's own round-off.
+    fn add_rows_solved(&mut self, deltas: &mut [Vec<DVec3>], weights: &[Vec<DVec3>]) {
+        let n = self.dim();
+        let columns: Vec<(usize, usize)> = weights
+            .iter()
+            .enumerate()
+            .flat_map(|(p, w)| {
+                (0..3)
+                    .filter(move |&k| w.iter().any(|wc| wc[k] != 0.0))
+                    .map(move |k| (p, k))
+            })
+            .collect();
+        if columns.is_empty() && self.pending.is_empty() {
+            return;
+        }
+        let mut rhs = Mat::<f64>::zeros(n, columns.len());
+        for (j, &(p, k)) in columns.iter().enumerate() {
+            for (c, wc) in weights[p].iter().enumerate() {
+                let f = wc[k];
+                if f == 0.0 {
+                    continue;
+                }
+                let row = &self.free_rows[c];
+                for (&i, &a) in row.indices.iter().zip(&row.weights) {
+                    rhs[(i, j)] += f * a;
+                }
+            }
+        }
+        let rhs = self.solve_batch(rhs);
+        for (j, &(p, k)) in columns.iter().enumerate() {
+            for (d, &v) in deltas[p].iter_mut().zip(rhs.col_as_slice(j)) {
+                d[k] += v;
+            }
+        }
+    }
+
     /// Whether δ = 0, λ = 0 solves the problem exactly: no load pulls and
     /// the reference already meets every equation (to 1e-12 of its scale).
     /// That is the state after every bake (a released load), so a grab
@@ -1542,6 +1620,7 @@ impl Solver {
             std::slice::from_ref(inputs),
             &[Some(reference)],
             &[max_extent(reference)],
+            false,
         )
         .pop()
         .map(|(delta, lambda, _)| (delta, lambda))
@@ -1611,6 +1690,10 @@ impl Solver {
     /// steps batched into one sparse solve per step (it streams the factor
     /// once, so 9 right-hand sides cost far less than three solves of 3).
     ///
+    /// The first answer is δ = Z w (a pass over the cached columns) or, when
+    /// `direct`, one batched solve of the combined rows K̃⁻¹(Σ_c w_c a_c)
+    /// (see [`Self::add_rows_solved`]; the pending columns ride along).
+    ///
     /// Iterative refinement on the KKT conditions, repeated while it still
     /// gains (at most [`MAX_REFINEMENT_STEPS`]). Per step, input and
     /// coordinate k:
@@ -1635,6 +1718,7 @@ impl Solver {
         inputs: &[Inputs],
         references: &[Option<&[DVec3]>],
         extents: &[f64],
+        direct: bool,
     ) -> Vec<Refined> {
         let n = self.dim();
         let m = self.eqs.len();
@@ -1647,10 +1731,12 @@ impl Solver {
             .collect();
         let cxs: Vec<&[f64]> = cx_owned.iter().map(Vec::as_slice).collect();
         let pinned = self.pin_displacements(inputs, references);
+        let mut weights: Vec<Vec<DVec3>> = Vec::with_capacity(inputs.len());
+        let mut pin_reaches: Vec<DVec3> = Vec::with_capacity(inputs.len());
         for ((inputs, cx), pin) in inputs.iter().zip(&cxs).zip(pinned) {
             // The pinned points and the free points' answer to them act as
             // a moved reference: C (P_ref + δ_pin + u).
-            let (mut delta, cx_moved, pin_reach) = match pin {
+            let (delta, cx_moved, pin_reach) = match pin {
                 Some((d, u)) => {
                     let mut moved = d;
                     for (a, b) in moved.iter_mut().zip(&u) {
@@ -1668,14 +1754,25 @@ impl Solver {
                 None => (vec![DVec3::ZERO; n], None, DVec3::ZERO),
             };
             let (lambda, w) = self.lambda_weights(inputs, cx_moved.as_deref().unwrap_or(cx));
+            deltas.push(delta);
+            lambdas.push(lambda);
+            weights.push(w);
+            pin_reaches.push(pin_reach);
+        }
+        if direct {
+            self.add_rows_solved(&mut deltas, &weights);
+        } else {
+            self.solve_pending();
+            for (delta, w) in deltas.iter_mut().zip(&weights) {
+                self.add_columns(delta, w);
+            }
+        }
+        for (w, pin_reach) in weights.iter().zip(pin_reaches) {
             // How strongly each coordinate's δ = Σ w_c z_c leans on Z.
             let reach = w
                 .iter()
                 .zip(&self.z)
                 .fold(pin_reach, |m, (wc, col)| m + wc.abs() * col.norm);
-            self.add_columns(&mut delta, &w);
-            deltas.push(delta);
-            lambdas.push(lambda);
             reaches.push(reach);
         }
         self.refine(inputs, &cxs, &mut deltas, &mut lambdas, &reaches, extents);
@@ -2102,6 +2199,10 @@ fn same_group(a: &Group, b: &Group) -> bool {
             .zip(&b.loads)
             .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
 }
+
+/// What `Solver::schur` builds: Z (pending placeholders included), the
+/// pending columns and their forward halves, G (row-major) and S.
+type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
 
 /// One input of a batched refinement: σ = d − C P_ref − C δ, and per
 /// coordinate the stationarity residual ρ_k when it needs a refinement step.
