@@ -238,7 +238,7 @@ fn a_body_inside_another_adds_nothing_and_bad_input_is_refused() {
     assert!((mesh.area() - 24.0).abs() < 1e-12);
     assert!((mesh.enclosed_volume() - 8.0).abs() < 1e-12);
     assert!(matches!(
-        union(&[outer.clone()], 0),
+        union(std::slice::from_ref(&outer), 0),
         Err(BodyError::Mismatch(_))
     ));
     assert_eq!(union(&[], 3).unwrap().triangles.len(), 0);
