@@ -347,6 +347,7 @@ async fn the_spool_morph_streams_frames_to_viewers() {
     let mut vw = Peer::connect(addr, design, &server.demo().viewer).await;
     let mut spec = get(addr, "/api/demo-parts/spool", None).await.json();
     assert_eq!(spec["shape"]["kind"], "body");
+    // The demo design has a "spool" already; part names are unique.
     spec["name"] = json!("spool 2");
     let r = ed.ok(json!({"type": "create_part", "spec": spec})).await;
     let part = r["part"].as_u64().unwrap();
@@ -402,6 +403,111 @@ async fn the_spool_morph_streams_frames_to_viewers() {
         "out_of_range",
     )
     .await;
+    drop(ed);
+    drop(vw);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// The axis-aligned box around `points`.
+fn bounds(points: impl IntoIterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
+    points
+        .into_iter()
+        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
+            (
+                [0, 1, 2].map(|a| lo[a].min(p[a])),
+                [0, 1, 2].map(|a| hi[a].max(p[a])),
+            )
+        })
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_first_start_demo_has_the_spool_clear_of_the_mouse_and_its_morph_plays_to_viewers() {
+    let data = data_dir("body-demo");
+    let server = TestServer::start(data.clone()).await;
+    let (addr, design) = (server.addr, server.demo().id);
+    let token = server.demo().editor.clone();
+    let doc = stored(addr, design, &token).await;
+    let bodies: Vec<&Value> = doc["parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["body"]["kind"] == "body")
+        .collect();
+    assert_eq!(bodies.len(), 1, "the demo has one body part");
+    let spool = bodies[0];
+    let part = spool["id"].as_u64().unwrap();
+    assert_eq!(spool["name"], "spool");
+    assert!(spool["visible"].as_bool().unwrap());
+    let cube = stored_volume(&spool["body"]["lattice"]);
+    let target = stored_volume(&spool["body"]["morph_target"]);
+    // Stored as the cube of side 60 (figure 10 starts from it), its target
+    // the spool: interior volume 60³ exactly (an affine map).
+    assert!((interior::volume(&cube) - 216_000.0).abs() < 1e-6 * 216_000.0);
+    // Clear of the mouse: every B-spline lies in the convex hull of its
+    // control points, and every morph frame's control points lie between
+    // the cube's and the spool's (the eased path blends them), so the boxes
+    // around the control points bound everything ever drawn.
+    let body_box = bounds(
+        cube.points()
+            .iter()
+            .chain(target.points())
+            .map(|p| p.to_array()),
+    );
+    let mut others = Vec::new();
+    for p in doc["parts"].as_array().unwrap() {
+        let b = &p["body"];
+        let pts = match b["kind"].as_str().unwrap() {
+            "surface" => &b["surface"]["points"],
+            "curve" => &b["curve"]["points"],
+            "body" => continue,
+            other => panic!("unexpected demo part kind {other}"),
+        };
+        others.extend(lattice_points(&json!({ "points": pts })));
+    }
+    assert!(others.len() > 100, "the mouse's control points");
+    let mouse_box = bounds(others);
+    let gap = (0..3)
+        .map(|a| (body_box.0[a] - mouse_box.1[a]).max(mouse_box.0[a] - body_box.1[a]))
+        .fold(f64::MIN, f64::max);
+    assert!(
+        gap > 20.0,
+        "the spool is {gap} mm clear of the mouse: {body_box:?} {mouse_box:?}"
+    );
+
+    // A viewer sees the cube, then the spool when the editor plays the
+    // morph to t = 1: the flange radius about the spool's axis is 45.
+    let mut ed = Peer::connect(addr, design, &token).await;
+    let mut vw = Peer::connect(addr, design, &server.demo().viewer).await;
+    let axis = [
+        (body_box.0[0] + body_box.1[0]) / 2.0,
+        (body_box.0[1] + body_box.1[1]) / 2.0,
+    ];
+    let radius = |f: &BodyFrame| {
+        f.positions
+            .iter()
+            .map(|p| ((p[0] as f64 - axis[0]).powi(2) + (p[1] as f64 - axis[1]).powi(2)).sqrt())
+            .fold(0.0f64, f64::max)
+    };
+    let first = vw.body_frame(part, 0).await;
+    assert_eq!(first.t, 0.0);
+    assert!(
+        (radius(&first) - 30.0 * 2f64.sqrt()).abs() < 1e-3,
+        "{}",
+        radius(&first)
+    );
+    let mut last = first.revision;
+    for k in 1..=10 {
+        let t = k as f64 / 10.0;
+        ed.ok(json!({"type": "body_morph", "part": part, "t": t}))
+            .await;
+        let f = vw.body_frame(part, last + 1).await;
+        assert_eq!(f.t, t as f32);
+        last = f.revision;
+        if k == 10 {
+            assert!((radius(&f) - 45.0).abs() < 0.5, "flange {}", radius(&f));
+        }
+    }
     drop(ed);
     drop(vw);
     server.stop().await;
@@ -632,7 +738,7 @@ async fn exports_the_interior_as_vtu_read_by_vtkio_and_the_boundary_as_iges_and_
     ed.ok(json!({"type": "body_edit", "part": part, "edit": {"select": {"point": [2, 2, 2]}, "delta": [0.3, -0.2, 0.25]}}))
         .await;
     let mut spec = get(addr, "/api/demo-parts/spool", None).await.json();
-    spec["name"] = json!("spool 2");
+    spec["name"] = json!("spool 2"); // the demo design has a "spool" already
     let spool = ed.ok(json!({"type": "create_part", "spec": spec})).await["part"]
         .as_u64()
         .unwrap();
@@ -676,7 +782,8 @@ async fn exports_the_interior_as_vtu_read_by_vtkio_and_the_boundary_as_iges_and_
         "the stored spool part is the cube at t = 0: {total} vs {exact}"
     );
     assert!((exact - 216_000.0).abs() < 1e-6 * exact);
-    // Every body at once (no part named): both grids.
+    // Every body at once (no part named): the three grids (the block, the
+    // spool added here and the demo design's own spool, also a cube).
     let all = get(
         addr,
         &format!("/api/designs/{design}/export.vtu"),
@@ -684,8 +791,8 @@ async fn exports_the_interior_as_vtu_read_by_vtkio_and_the_boundary_as_iges_and_
     )
     .await;
     let (cells_all, total_all, _, _) = read_vtu(&all.text());
-    assert_eq!(cells_all, 512 + cells);
-    assert!((total_all - 8.0 - exact).abs() < 1e-6 * exact);
+    assert_eq!(cells_all, 512 + 2 * cells);
+    assert!((total_all - 8.0 - 2.0 * exact).abs() < 1e-6 * exact);
     // Not a body: refused.
     let r = get(
         addr,

@@ -376,6 +376,105 @@ async fn a_local_lattice_edit_moves_only_the_control_points_in_its_support() {
     server.stop().await;
 }
 
+/// The stored icons of part `part`, by id: (role, xyz, target).
+fn icons_of(doc: &Value, part: u64) -> Vec<(u64, Value, DVec3, DVec3)> {
+    stored_part(doc, part)["body"]["icons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| {
+            let v =
+                |k: &str| DVec3::from(serde_json::from_value::<[f64; 3]>(i[k].clone()).unwrap());
+            (
+                i["id"].as_u64().unwrap(),
+                i["role"].clone(),
+                v("xyz"),
+                v("target"),
+            )
+        })
+        .collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tangent_and_normal_targets_of_a_bound_surface_follow_the_lattice_s_derivative() {
+    let data = data_dir("body-ffd-vectors");
+    let server = TestServer::start(data.clone()).await;
+    let (addr, design) = (server.addr, server.demo().id);
+    let editor = server.demo().editor.clone();
+    let mut ed = Client::connect(addr, design, &editor, "ffd").await;
+    let (degree, n) = (2, 3);
+    let body = create(
+        &mut ed,
+        "box",
+        "body",
+        json!({"lattice": box_lattice(degree, n)}),
+    )
+    .await;
+    let surf = create(&mut ed, "skin", "surface", patch(0.3, 0.4, 1.2, 0.9)).await;
+    for (u, v, role) in [
+        (0.4, 0.6, json!({"kind": "derivative", "which": "R"})),
+        (0.7, 0.3, json!({"kind": "derivative", "which": "V"})),
+        (0.55, 0.35, json!({"kind": "normal"})),
+        (0.3, 0.3, json!({"kind": "derivative", "which": "R2"})),
+    ] {
+        let spec =
+            json!({"anchor": {"kind": "point", "u": u, "v": v}, "role": role, "state": "passive"});
+        ok(
+            &mut ed,
+            json!({"type": "create_icon", "req": 2, "part": surf, "spec": spec}),
+        )
+        .await;
+    }
+    ok(
+        &mut ed,
+        json!({"type": "relate", "req": 3, "relation": {"kind": "ffd", "body": body, "part": surf}}),
+    )
+    .await;
+    let before = icons_of(&stored(addr, design, &editor).await, surf);
+    assert_eq!(before.len(), 4);
+
+    // One lattice point moved: a non-affine change φ(y) = y + B_new(p) −
+    // B_old(p) with p = y / 2 (the box's closed-form inverse), whose
+    // derivative is taken here by central differences of that formula.
+    let delta = DVec3::new(0.15, -0.1, 0.12);
+    move_point(&mut ed, body, [1, 1, 1], delta).await;
+    let old_pts = box_points(degree, n);
+    let mut new_pts = old_pts.clone();
+    let centre = (n / 2 * n + n / 2) * n + n / 2;
+    new_pts[centre] = (DVec3::from(new_pts[centre]) + delta).to_array();
+    let (old, new) = (volume(degree, n, &old_pts), volume(degree, n, &new_pts));
+    let phi = |y: DVec3| {
+        let p = y / 2.0;
+        y + new.point(p.x, p.y, p.z) - old.point(p.x, p.y, p.z)
+    };
+    let dphi = |x: DVec3| {
+        let h = 1e-5;
+        let col = |e: DVec3| (phi(x + e * h) - phi(x - e * h)) / (2.0 * h);
+        DMat3::from_cols(col(DVec3::X), col(DVec3::Y), col(DVec3::Z))
+    };
+    let after = icons_of(&stored(addr, design, &editor).await, surf);
+    for ((id, role, xyz, t0), (id2, _, _, t1)) in before.iter().zip(&after) {
+        assert_eq!(id, id2);
+        let d = dphi(*xyz);
+        let want = match role["kind"].as_str().unwrap() {
+            "normal" => (d.inverse().transpose() * *t0).normalize() * t0.length(),
+            _ if role["which"] == "R2" => *t0,
+            _ => d * *t0,
+        };
+        assert!(
+            (*t1 - want).length() <= 1e-8 * want.length().max(1.0),
+            "{role}: target {t0} became {t1}, want {want}"
+        );
+        assert!(
+            role["which"] == "R2" || (*t1 - *t0).length() > 1e-3,
+            "{role}: the target did not change"
+        );
+    }
+    drop(ed);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn binding_geometry_outside_the_body_or_of_the_wrong_kind_is_refused_and_changes_nothing() {
     let data = data_dir("body-ffd-refused");
@@ -566,22 +665,30 @@ fn a_local_lattice_edit_recomputes_only_the_dsm_vertices_in_its_support() {
         }
     }
     assert!(moved > 50 && kept > 50, "{moved} moved, {kept} kept");
-    // The normals (recomputed only around what moved) are the area-weighted
-    // normals of the deformed triangles everywhere.
-    let mesh = m.dsm_mesh(2).unwrap();
-    let mut want = vec![DVec3::ZERO; mesh.positions.len()];
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-        for i in t {
-            want[*i as usize] += (b - a).cross(c - a);
+    // The normals (recomputed only around what moved, from triangle cross
+    // products kept between moves) are the area-weighted normals of the
+    // deformed triangles everywhere, after each of several moves.
+    let normals_hold = |m: &DesignModel, when: &str| {
+        let mesh = m.dsm_mesh(2).unwrap();
+        let mut want = vec![DVec3::ZERO; mesh.positions.len()];
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            for i in t {
+                want[*i as usize] += (b - a).cross(c - a);
+            }
         }
-    }
-    for (k, (n, w)) in mesh.normals.iter().zip(&want).enumerate() {
-        assert!(
-            (*n - w.normalize()).length() < 1e-12,
-            "normal {k}: {n} vs {w}"
-        );
-    }
+        for (k, (n, w)) in mesh.normals.iter().zip(&want).enumerate() {
+            assert!(
+                (*n - w.normalize()).length() < 1e-12,
+                "{when}: normal {k}: {n} vs {w}"
+            );
+        }
+    };
+    normals_hold(&m, "first move");
+    lattice_move(&mut m, [3, 2, 3], DVec3::new(-0.04, 0.06, 0.05));
+    normals_hold(&m, "second move, another point");
+    lattice_move(&mut m, [1, 1, 1], DVec3::new(-0.05, -0.04, 0.03));
+    normals_hold(&m, "the first point back");
 }
 
 #[test]

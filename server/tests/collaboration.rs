@@ -36,7 +36,7 @@ async fn two_editors_and_a_viewer_share_state_and_drags() {
             assert_eq!(c.snapshot[key], a.snapshot[key], "{key} differs");
         }
     }
-    assert_eq!(parts::part_ids(&a.snapshot), vec![1, 2, 3, 4]);
+    assert_eq!(parts::part_ids(&a.snapshot), vec![1, 2, 3, 4, 5]);
     assert_eq!(parts::surface(&a.snapshot, SHELL)["nu"], 16);
     assert_eq!(parts::surface(&a.snapshot, SHELL)["nv"], 12);
     assert_eq!(parts::icons(&a.snapshot, SHELL).len(), 4);

@@ -73,7 +73,10 @@ async fn mesh_exports_keep_to_the_vertex_budget_and_stream() {
     // their knot spans — the shell 13 × 9 = 117, each side panel 13 × 1 =
     // 13, of 143: the shell gets 409 vertices (one sample per span, 140;
     // two would be 27 × 19 = 513), each side 45 (14 × 2 = 28; two per span
-    // would be 27 × 3 = 81). The feature line is a curve: no mesh.
+    // would be 27 × 3 = 81). The feature line is a curve: no mesh. The
+    // spool body (a tricubic 5 × 5 × 7 cube: 2, 2 and 4 spans) adds its six
+    // faces at one sample per span: four of 3 × 5 and two of 3 × 3
+    // vertices (78), 4 · 2 · 8 + 2 · 2 · 4 = 80 triangles.
     let obj = get(server.addr, &path("obj"), Some(&d.viewer)).await;
     assert_eq!(obj.status, 200);
     assert_eq!(obj.header("transfer-encoding"), Some("chunked"));
@@ -81,8 +84,8 @@ async fn mesh_exports_keep_to_the_vertex_budget_and_stream() {
     let v = text.lines().filter(|l| l.starts_with("v ")).count();
     let f = text.lines().filter(|l| l.starts_with("f ")).count();
     assert!(v <= budget, "{v} vertices");
-    assert_eq!(v, 14 * 10 + 2 * 14 * 2);
-    assert_eq!(f, 2 * 13 * 9 + 2 * (2 * 13));
+    assert_eq!(v, 14 * 10 + 2 * 14 * 2 + 78);
+    assert_eq!(f, 2 * 13 * 9 + 2 * (2 * 13) + 80);
     let stl = get(server.addr, &path("stl"), Some(&d.viewer)).await;
     let n = u32::from_le_bytes(stl.body[80..84].try_into().unwrap()) as usize;
     assert_eq!((n, stl.body.len()), (f, 84 + 50 * f));
@@ -93,12 +96,12 @@ async fn mesh_exports_keep_to_the_vertex_budget_and_stream() {
 
     let igs = get(server.addr, &path("igs"), Some(&d.viewer)).await;
     assert_eq!(igs.status, 200);
-    // Every part: three surfaces and the feature line.
+    // Every part: three surfaces, the feature line and the spool's six faces.
     assert_eq!(
         vsculpt_server::cad::read_iges_parts(&igs.text())
             .unwrap()
             .len(),
-        4
+        10
     );
     server.stop().await;
 }

@@ -313,8 +313,14 @@ async fn iges_export_import_round_trip() {
         .filter(|id| parts::part(&state["design"], *id)["body"]["kind"] == "surface")
         .collect();
     assert_eq!(surfaces, vec![1, 2, 3]);
+    // The demo's body part (the spool, last) adds its six boundary faces.
+    let bodies = parts::part_ids(&state["design"])
+        .into_iter()
+        .filter(|id| parts::part(&state["design"], *id)["body"]["kind"] == "body")
+        .count();
+    assert_eq!(bodies, 1);
     let parsed = vsculpt_server::cad::read_iges(&text).unwrap();
-    assert_eq!(parsed.len(), surfaces.len());
+    assert_eq!(parsed.len(), surfaces.len() + 6 * bodies);
     for (surface, id) in parsed.iter().zip(&surfaces) {
         let points: Vec<[f64; 3]> = surface.points.iter().map(|p| p.to_array()).collect();
         let original: Vec<[f64; 3]> =
@@ -388,12 +394,17 @@ async fn iges_export_import_round_trip() {
     let r = http::request(server.addr, "POST", &p, Some(editor), text.as_bytes()).await;
     assert_eq!(r.status, 200, "{}", r.text());
     let added: Vec<u64> = serde_json::from_value(r.json()["parts"].clone()).unwrap();
-    let originals = parts::part_ids(&state["design"]);
-    assert_eq!(added.len(), originals.len(), "{}", r.text());
+    // Surface and curve parts come back as they were; a body comes back as
+    // its six faces (surface parts), after them.
+    let originals: Vec<u64> = parts::part_ids(&state["design"])
+        .into_iter()
+        .filter(|id| parts::part(&state["design"], *id)["body"]["kind"] != "body")
+        .collect();
+    assert_eq!(added.len(), originals.len() + 6 * bodies, "{}", r.text());
     let copy = get(server.addr, &format!("/api/designs/{id}"), Some(viewer))
         .await
         .json();
-    assert_eq!(parts::part_ids(&copy["design"]).len(), 1 + originals.len());
+    assert_eq!(parts::part_ids(&copy["design"]).len(), 1 + added.len());
     for (new, old) in added.iter().zip(&originals) {
         let (n, o) = (
             &parts::part(&copy["design"], *new)["body"],

@@ -31,6 +31,9 @@ fn points(design: &Value) -> Vec<[f64; 3]> {
     let mut out = Vec::new();
     for id in common::parts::part_ids(doc) {
         let body = &common::parts::part(doc, id)["body"];
+        if body["kind"] == "body" {
+            continue; // the demo's spool: a lattice, no icons
+        }
         let shape = &body[body["kind"].as_str().unwrap()];
         out.extend(
             shape["points"]

@@ -168,6 +168,19 @@ function partShownHere(id) {
   return !!p && p.visible && !state.hidden.has(id);
 }
 
+// The first framing waits until every part drawn here is drawn: a surface's
+// or curve's drawing filled, a body's frame, a network's curves, a DSM
+// part's mesh. (It used to frame whatever was drawn first: a body frame is
+// drawn as it arrives, before the surfaces' tessellation, so the first-start
+// demo was framed on its spool alone with the mouse off to the side.)
+view.ready = () => design.joined && [...design.parts.values()].every((p) => {
+  if (!partShownHere(p.id)) return true;
+  if (p.kind === 'body') return !!bodyView.bodies.get(p.id)?.frame;
+  if (p.kind === 'network') return networkView.parts.has(p.id);
+  if (p.kind === 'dsm') return dsmView.drawings.has(p.id);
+  return !!partsView.drawings.get(p.id)?.filled;
+});
+
 /** The icons of the parts drawn here. */
 function drawnIcons() {
   const out = new Map();
@@ -966,7 +979,10 @@ $('mode').addEventListener('change', (e) => {
 });
 $('range').addEventListener('input', (e) => setRange(Number(e.target.value)));
 $('net').addEventListener('change', (e) => partsView.setShowNet(e.target.checked));
-$('fit').addEventListener('click', () => view.fit());
+$('fit').addEventListener('click', () => {
+  view.userMoved = true;
+  view.fit();
+});
 $('create').addEventListener('change', (e) => {
   state.create = e.target.value;
   state.pending = [];
@@ -1186,6 +1202,7 @@ document.addEventListener('keydown', (e) => {
 /** Centres the view on the selected icon at a close distance, or fits the whole design. */
 function frameSelection() {
   const icon = state.icons.get(state.selected);
+  view.userMoved = true;
   if (!icon) {
     view.fit();
     return;
@@ -1266,8 +1283,10 @@ view.renderer.setAnimationLoop(() => {
   }
   xr.update();
   view.controls.update();
+  view.settle();
   view.render();
-  if (!shellDone && pictured) {
+  // The shell stays until the first picture is framed (view.settle).
+  if (!shellDone && pictured && (view.fitted || !view.boundingSphere())) {
     perf.firstPicture = performance.now();
     dismissShell();
     // Where the browser has a headset, the VR controllers' code comes now, after the picture.

@@ -45,6 +45,9 @@ export function curvatureColor(value, range, out, o) {
   }
 }
 
+/** How long the first framing waits for parts still missing after the first drawing (ms). */
+export const FRAME_WAIT_MS = 5000;
+
 export class View {
   constructor(container) {
     this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -78,7 +81,23 @@ export class View {
     this.groundShadow = false;
     this.mode = 'shaded';
     this.range = 1;
+    /**
+     * Whether everything the design holds is drawn (app.js sets it): the
+     * first framing waits for it, so the view frames the whole design and
+     * not whichever part happened to be drawn first.
+     */
+    this.ready = () => true;
+    /** Whether the camera has framed the design (the whole of it, or what was drawn FRAME_WAIT_MS after the first drawing). */
     this.fitted = false;
+    /** Whether that framing had the whole design (then it is final). */
+    this.framedWhole = false;
+    /** When something was first drawn (performance.now()), or null. */
+    this.firstDrawn = null;
+    /** Whether the person has turned or moved the view themselves (a late framing then leaves it alone). */
+    this.userMoved = false;
+    this.controls.addEventListener('start', () => {
+      this.userMoved = true;
+    });
     /** The axis-aligned bounds of what is drawn (a THREE.Box3, or null when nothing is): set by the part drawings. */
     this.bounds = () => null;
     window.addEventListener('resize', () => {
@@ -94,13 +113,27 @@ export class View {
     return box && !box.isEmpty() ? box.getBoundingSphere(new THREE.Sphere()) : null;
   }
 
-  /** The first time something is drawn, the camera frames it. */
+  /** Something was drawn: the camera frames the design once it is all drawn (settle). */
   drawn() {
     this.shadow.invalidate();
-    if (!this.fitted && this.boundingSphere()) {
-      this.fit();
-      this.fitted = true;
-    }
+    if (this.firstDrawn === null && this.boundingSphere()) this.firstDrawn = performance.now();
+    this.settle();
+  }
+
+  /**
+   * The first framing (called per drawing and per frame until it is final):
+   * once every part is drawn (`ready`) the camera frames them all; if some
+   * part is still missing FRAME_WAIT_MS after the first drawing, it frames
+   * what is drawn, and frames the whole again when the rest comes unless
+   * the person has moved the view by then.
+   */
+  settle() {
+    if (this.framedWhole || this.firstDrawn === null || !this.boundingSphere()) return;
+    const ready = this.ready();
+    if (!ready && (this.fitted || performance.now() - this.firstDrawn < FRAME_WAIT_MS)) return;
+    if (!this.fitted || !this.userMoved) this.fit();
+    this.fitted = true;
+    this.framedWhole = ready;
   }
 
   /** Called when the mode, the range or the values to colour by change (parts-view.js listens). */

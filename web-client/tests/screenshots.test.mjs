@@ -84,7 +84,9 @@ test('the README shows the designer’s and the reviewer’s pages as these test
   const shots = { 'editor.png': editor, 'viewer.png': viewer };
   for (const [name, page] of Object.entries(shots)) {
     const f = await drawn(page);
-    assert.ok(f > 0.1, `${name}: the design covers ${f} of the view`);
+    // The demo is the mouse with the spool body beside it (the view frames both: 0.052 of the
+    // view measured at 1280 × 720); an empty view covers none.
+    assert.ok(f > 0.03, `${name}: the design covers ${f} of the view`);
     await page.screenshot({ path: join(artifacts, name) });
     assert.deepEqual(pngSize(join(artifacts, name)), SIZE);
     if (process.env.VSCULPT_UPDATE_SCREENSHOTS === '1') {

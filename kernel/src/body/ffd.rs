@@ -340,6 +340,32 @@ impl Ffd {
         emb: &Embedding,
         out: &mut [DVec3],
     ) -> Result<usize, BodyError> {
+        self.move_support(index, p, emb, out, None)
+    }
+
+    /// [`Ffd::move_point`], appending the indices of the points it
+    /// recomputed to `listed` (each once per call): what a caller must
+    /// update after the move (normals around them, say) — no other point
+    /// changed.
+    pub fn move_point_listed(
+        &mut self,
+        index: usize,
+        p: DVec3,
+        emb: &Embedding,
+        out: &mut [DVec3],
+        listed: &mut Vec<u32>,
+    ) -> Result<usize, BodyError> {
+        self.move_support(index, p, emb, out, Some(listed))
+    }
+
+    fn move_support(
+        &mut self,
+        index: usize,
+        p: DVec3,
+        emb: &Embedding,
+        out: &mut [DVec3],
+        mut listed: Option<&mut Vec<u32>>,
+    ) -> Result<usize, BodyError> {
         self.check(emb, out)?;
         self.current.set_point(index, p)?;
         let ijk = self.current.ijk(index);
@@ -356,8 +382,12 @@ impl Ffd {
                 for c in range[2].0..=range[2].1 {
                     let id = (a * emb.cells[1] + b) * emb.cells[2] + c;
                     let (s, e) = (emb.cell_start[id] as usize, emb.cell_start[id + 1] as usize);
-                    for &v in &emb.cell_points[s..e] {
+                    let cell = &emb.cell_points[s..e];
+                    for &v in cell {
                         out[v as usize] = self.deform_one(emb, v as usize);
+                    }
+                    if let Some(l) = listed.as_deref_mut() {
+                        l.extend_from_slice(cell);
                     }
                     n += e - s;
                 }

@@ -13,6 +13,7 @@
 //! * [`ffd`] — free-form deformation of points, meshes, curves and surfaces.
 //! * [`lattice`] — several bodies sharing faces; continuity across them.
 //! * [`morph`] — metamorphosis: grid correspondence, paths, the body at t.
+//! * [`union`] — union of bodies as a set operation on their boundaries.
 //! * [`display`] — boundary and isoparametric surface meshes for viewers.
 //! * [`demo`] — the paper's cube, spool, cube-to-spool morph and chair.
 
@@ -29,6 +30,7 @@ pub mod lattice;
 pub mod morph;
 pub mod refine;
 pub mod space;
+pub mod union;
 pub mod volume;
 
 pub use coons::{Body0, Body1, Body2, Edges, coons_patch, trilinear};

@@ -2,8 +2,8 @@
 //! as a tricubic 5 × 5 × 7 lattice whose morph target is the spool made
 //! from it (the kernel's `body::demo`), scaled to model units (mm). At
 //! t = 0 it is the cube, at t = 1 the spool; the frames between are the
-//! metamorphosis. [`DEMO_SPOOL_AT`] is a place beside the demo mouse where
-//! it can stand clear of it.
+//! metamorphosis. The first-start demo design places it beside the mouse
+//! ([`DEMO_SPOOL_AT`]).
 
 use super::body_part::{BodyPart, LatticeDoc};
 use super::error::{CommandError, ErrorKind};
@@ -12,7 +12,8 @@ use vsculpt_kernel::body::{BSplineVolume, demo};
 /// Model units per unit of the kernel's demo (the cube is 60 mm wide).
 pub const SPOOL_SCALE: f64 = 30.0;
 
-/// A place for the spool's centre (mm) beside the demo mouse (x ∈ [−60, 60], |y| ≤ 45), so the flanges (radius 45 mm) keep
+/// Where the first-start demo design puts the spool's centre (mm): beside
+/// the mouse (x ∈ [−60, 60], |y| ≤ 45), so the flanges (radius 45 mm) keep
 /// 45 mm clear of it: the body spans x ∈ [105, 195].
 pub const DEMO_SPOOL_AT: [f64; 3] = [150.0, 0.0, 0.0];
 

@@ -1,8 +1,9 @@
 //! Starter designs: the demo product created on first start — a computer
 //! mouse: a bicubic 16 × 12 top shell (two position constraints, a load and
 //! a normal constraint), two side panels joined to it G1 along its long
-//! edges, and a feature curve on the top that the shell follows — and the
-//! flat plate new designs begin from.
+//! edges, and a feature curve on the top that the shell follows — beside it
+//! the paper 002 spool body (a cube that morphs into the spool made from it,
+//! figures 7 and 10), and the flat plate new designs begin from.
 
 use super::doc::{
     AnchorDoc, DOC_FORMAT, DesignDoc, IconDoc, IconRoleDoc, IconStateDoc, MaterialDoc, SurfaceDoc,
@@ -198,8 +199,11 @@ fn iso_v(shell: &SurfaceDoc, v: f64) -> Result<CurveDoc, CommandError> {
 
 /// The demo product, a computer mouse: the top shell, a left and a right
 /// side panel joined G1 to its long edges, and a feature line along the
-/// shell's parameter line v = 0.75 that the shell follows (a binding). The
-/// parts and relations are all made the way a designer would make them.
+/// shell's parameter line v = 0.75 that the shell follows (a binding); and
+/// beside it (clear of it) the paper 002 body, the cube whose morph target
+/// is the spool made from it (`body_demo`), shown as the cube until its
+/// metamorphosis is played. The parts and relations are all made the way a
+/// designer would make them.
 pub fn demo() -> Result<DesignDoc, CommandError> {
     let shell = shell_part()?;
     let left = side_part(&shell.surface, true);
@@ -230,6 +234,14 @@ pub fn demo() -> Result<DesignDoc, CommandError> {
                     icons: Vec::new(),
                     kappa: None,
                 }),
+            ),
+            part(
+                5,
+                "spool",
+                3,
+                PartBody::Body(super::body_demo::spool_part_at(
+                    super::body_demo::DEMO_SPOOL_AT,
+                )?),
             ),
         ],
         relations: vec![
@@ -268,7 +280,7 @@ pub fn demo() -> Result<DesignDoc, CommandError> {
             },
         ],
         next_icon: 5,
-        next_part: 5,
+        next_part: 6,
         next_relation: 4,
     };
     doc.validate()?;

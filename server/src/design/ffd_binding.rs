@@ -27,7 +27,9 @@
 //!   (Sederberg–Parry's convention).
 //! * **Icons of a bound surface or curve**: the FFD moves the part's shape
 //!   (its rest shape for the solver) and the targets of its position and
-//!   load icons with the same map; derivative and normal targets are kept.
+//!   load icons with the same map; first-derivative (tangent) targets by
+//!   its derivative Dφ and normal targets by Dφ⁻ᵀ, both at the icon's
+//!   point ([`follow_vectors`]); second-derivative targets are kept.
 //!   The part is then rebuilt and solved with its icons and relations.
 //! * **DSM parts** are derived from their DSM data, so the deformation is
 //!   applied to the mesh, from the body's lattice when the part was bound
@@ -35,8 +37,9 @@
 //!   B(u, v, w) + (x − B_rest(u, v, w)), which is B(u, v, w) up to the
 //!   inversion residual (zero for an affine box), exactly x for the
 //!   identity lattice. A change of one lattice point recomputes only the
-//!   vertices in its support ([`Ffd::move_point`]); the normals are
-//!   recomputed from the deformed triangles. A DSM edit re-meshes and
+//!   vertices in its support ([`Ffd::move_point_listed`]); the normals are
+//!   recomputed from the deformed triangles around them only (each
+//!   triangle's cross product once, kept per triangle). A DSM edit re-meshes and
 //!   re-embeds; vertices outside the rest body then keep their positions.
 //! * **Morph playback** carries bound parts along for display
 //!   (`morph_follow`); the document keeps them as the body's lattice left
@@ -49,11 +52,11 @@
 //!   shape again. A part follows one body at most.
 
 use super::body_part::LatticeDoc;
-use super::doc::{DesignDoc, IconRoleDoc};
+use super::doc::{DerivativeDoc, DesignDoc, IconDoc, IconRoleDoc};
 use super::dsm_engine::DsmEngine;
 use super::error::{CommandError, ErrorKind};
 use super::part::{PartBody, RelationKind};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::collections::BTreeMap;
 use vsculpt_kernel::body::{BSplineVolume, Embedding, Ffd, Inverter};
 use vsculpt_kernel::dsm::Mesh;
@@ -164,8 +167,9 @@ pub fn bound_bspline_parts(doc: &DesignDoc, body: u64) -> Vec<u64> {
 }
 
 /// After body `body`'s lattice changed from `old` to what `doc` holds:
-/// moves the control points (and position and load icon targets) of the
-/// surface and curve parts bound to it. Returns their ids.
+/// moves the control points (and position and load icon targets, and the
+/// tangent and normal targets: [`follow_vectors`]) of the surface and curve
+/// parts bound to it. Returns their ids.
 pub fn follow_body(
     doc: &mut DesignDoc,
     body: u64,
@@ -203,8 +207,73 @@ pub fn follow_body(
         for (i, x) in icons.iter_mut().filter(|i| moves(i.role)).zip(&xs[n..]) {
             i.target = x.to_array();
         }
+        follow_vectors(&old, &new, icons);
     }
     Ok(parts)
+}
+
+/// The derivative of the lattice change φ(x) = x + B_new(p) − B_old(p),
+/// p = B_old⁻¹(x), at `x`: Dφ = J_new(p) · J_old(p)⁻¹. None when `x` is
+/// outside the old body or J_old is singular there (its vectors are kept,
+/// as a point outside keeps its position).
+fn change_jacobian(
+    old: &BSplineVolume,
+    new: &BSplineVolume,
+    inverter: &Inverter,
+    x: DVec3,
+) -> Option<DMat3> {
+    let inv = inverter.invert(x, 1e-3 * tolerance(old)).ok()?;
+    if inv.distance > tolerance(old) {
+        return None;
+    }
+    let [u, v, w] = inv.uvw;
+    let j_old = old.jacobian(u, v, w);
+    let det = j_old.determinant();
+    let scale = j_old.x_axis.length() * j_old.y_axis.length() * j_old.z_axis.length();
+    if !det.is_finite() || det.abs() <= 1e-12 * scale {
+        return None;
+    }
+    Some(new.jacobian(u, v, w) * j_old.inverse())
+}
+
+/// Maps the vector targets of `icons` (on a bound surface or curve) through
+/// the lattice change from `old` to `new`, at the point where each icon
+/// sits: a first-derivative target (w_u, w_v) is a tangent vector, so
+/// t ↦ Dφ t (the chain rule: (φ∘S)_u = Dφ S_u); a normal target is a
+/// normal, so n ↦ Dφ⁻ᵀ n, scaled back to its length (the deformed
+/// tangents stay orthogonal to it). Second-derivative targets (w_uu, w_vv,
+/// w_uv) would need D²φ and the surface's first derivatives there, and
+/// are kept.
+fn follow_vectors(old: &BSplineVolume, new: &BSplineVolume, icons: &mut [IconDoc]) {
+    // Some(true): a normal; Some(false): a tangent; None: not a vector mapped.
+    let kind = |r: IconRoleDoc| match r {
+        IconRoleDoc::Derivative {
+            which: DerivativeDoc::R | DerivativeDoc::V,
+        } => Some(false),
+        IconRoleDoc::Normal => Some(true),
+        _ => None,
+    };
+    if icons.iter().all(|i| kind(i.role).is_none()) {
+        return;
+    }
+    let inverter = Inverter::new(old);
+    for icon in icons {
+        let Some(normal) = kind(icon.role) else {
+            continue;
+        };
+        let Some(d) = change_jacobian(old, new, &inverter, DVec3::from(icon.xyz)) else {
+            continue;
+        };
+        let t = DVec3::from(icon.target);
+        let mapped = if normal {
+            (d.inverse().transpose() * t).normalize_or_zero() * t.length()
+        } else {
+            d * t
+        };
+        if mapped.is_finite() && (mapped != DVec3::ZERO || t == DVec3::ZERO) {
+            icon.target = mapped.to_array();
+        }
+    }
 }
 
 /// Checks a new `ffd` relation of `part` to `body` in `doc` (kinds, one
@@ -270,11 +339,18 @@ struct DsmFfd {
     /// The triangles around each vertex (CSR: `around[start[v]..start[v + 1]]`).
     start: Vec<u32>,
     around: Vec<u32>,
-    /// The positions before the last update (to find what moved).
-    previous: Vec<DVec3>,
-    /// Per vertex, the update that last listed it (`stamp`).
+    /// Per triangle, (b − a) × (c − a) of the deformed mesh (kept current:
+    /// a vertex normal sums these).
+    cross: Vec<DVec3>,
+    /// Per vertex and per triangle, the update that last listed it (`stamp`).
     mark: Vec<u32>,
+    tri_mark: Vec<u32>,
     stamp: u32,
+    /// Scratch lists of one update: recomputed vertices, their triangles,
+    /// the vertices of those triangles.
+    listed: Vec<u32>,
+    tris: Vec<u32>,
+    verts: Vec<u32>,
 }
 
 impl DsmFfd {
@@ -314,15 +390,27 @@ impl DsmFfd {
                 fill[v as usize] += 1;
             }
         }
+        let cross = out
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| out.positions[i as usize]);
+                (b - a).cross(c - a)
+            })
+            .collect();
         Ok(Self {
             body,
             rest: rest.clone(),
             data: data.clone(),
             ffd,
             emb,
-            previous: out.positions.clone(),
+            cross,
             mark: vec![0; n],
+            tri_mark: vec![0; out.triangles.len()],
             stamp: 0,
+            listed: Vec::new(),
+            tris: Vec::new(),
+            verts: Vec::new(),
             mesh: out,
             start,
             around,
@@ -331,8 +419,8 @@ impl DsmFfd {
 
     /// Moves to lattice `current` (same knots as the rest): only the moved
     /// lattice points' supports are recomputed, and the normals of the
-    /// vertices that moved and of their neighbours. Returns how many
-    /// lattice points moved.
+    /// vertices that share a triangle with a recomputed vertex. Returns how
+    /// many lattice points moved.
     fn update(&mut self, current: &BSplineVolume) -> Result<usize, CommandError> {
         let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
         let moved: Vec<(usize, DVec3)> = current
@@ -343,54 +431,69 @@ impl DsmFfd {
             .filter(|(_, (a, b))| a != b)
             .map(|(i, (a, _))| (i, *a))
             .collect();
+        self.listed.clear();
         for &(i, p) in &moved {
             self.ffd
-                .move_point(i, p, &self.emb, &mut self.mesh.positions)
+                .move_point_listed(i, p, &self.emb, &mut self.mesh.positions, &mut self.listed)
                 .map_err(kernel)?;
         }
         if !moved.is_empty() {
-            self.renormal_moved();
+            self.renormal_listed();
         }
         Ok(moved.len())
     }
 }
 
 impl DsmFfd {
-    /// Recomputes the normals of the vertices sharing a triangle with a
-    /// vertex that moved since the last call (the others cannot change).
-    fn renormal_moved(&mut self) {
+    /// Recomputes the normals around the vertices the last update listed
+    /// (the others cannot change): each triangle touching one gets its
+    /// cross product once, then each vertex of those triangles sums its
+    /// triangles' (in triangle order, as [`renormal`] does: the same
+    /// numbers).
+    fn renormal_listed(&mut self) {
         let m = &mut self.mesh;
         self.stamp = self.stamp.wrapping_add(1);
         if self.stamp == 0 {
             self.mark.fill(0);
+            self.tri_mark.fill(0);
             self.stamp = 1;
         }
-        let mut touched: Vec<u32> = Vec::new();
-        for (v, (p, q)) in m.positions.iter().zip(&self.previous).enumerate() {
-            if p != q {
-                let (s, e) = (self.start[v] as usize, self.start[v + 1] as usize);
-                for &t in &self.around[s..e] {
-                    for &w in &m.triangles[t as usize] {
-                        if self.mark[w as usize] != self.stamp {
-                            self.mark[w as usize] = self.stamp;
-                            touched.push(w);
-                        }
-                    }
+        let stamp = self.stamp;
+        self.tris.clear();
+        for &v in &self.listed {
+            let (s, e) = (
+                self.start[v as usize] as usize,
+                self.start[v as usize + 1] as usize,
+            );
+            for &t in &self.around[s..e] {
+                if self.tri_mark[t as usize] != stamp {
+                    self.tri_mark[t as usize] = stamp;
+                    self.tris.push(t);
                 }
             }
         }
-        for &v in &touched {
+        self.verts.clear();
+        for &t in &self.tris {
+            let tri = m.triangles[t as usize];
+            let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+            self.cross[t as usize] = (b - a).cross(c - a);
+            for w in tri {
+                if self.mark[w as usize] != stamp {
+                    self.mark[w as usize] = stamp;
+                    self.verts.push(w);
+                }
+            }
+        }
+        for &v in &self.verts {
             let (s, e) = (
                 self.start[v as usize] as usize,
                 self.start[v as usize + 1] as usize,
             );
             let mut n = DVec3::ZERO;
             for &t in &self.around[s..e] {
-                let [a, b, c] = m.triangles[t as usize].map(|i| m.positions[i as usize]);
-                n += (b - a).cross(c - a);
+                n += self.cross[t as usize];
             }
             m.normals[v as usize] = n.normalize_or_zero();
-            self.previous[v as usize] = m.positions[v as usize];
         }
     }
 }
