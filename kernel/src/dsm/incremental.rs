@@ -5,9 +5,11 @@
 //! cell vertices and the crossing edges) is made of samples taken at points
 //! within one cell of the leaf, and each sample ([`Model::sample`],
 //! [`Model::piece_gradient`]) is a function of the point and of the primitives
-//! that *reach* it (those whose ball holds it, in model order), D_e, τ, the
-//! groups' incorporations, the terms of eq. (7) and each group's Φ scale (its
-//! largest reducing factor) — not of the leaf's culled active set.
+//! that *reach* it (those whose ball, grown by the grid's reach margin of two
+//! cells, holds it, in model order), D_e, τ, the groups' incorporations, the
+//! terms of eq. (7) and each group's Φ scale (its largest reducing factor) —
+//! not of the leaf's culled active set. An edit's support is therefore grown
+//! by the same margin.
 //!
 //! The support of an edit, derived from the density functions:
 //! * A geometric primitive (eq. 2) contributes ±D_e inside itself and exactly 0
@@ -159,7 +161,10 @@ impl LeafTree {
         }
         let c = grid.origin + (o.as_dvec3() + DVec3::splat(s as f64 * 0.5)) * grid.h;
         let r = s as f64 * grid.h * 0.5 * 3f64.sqrt();
-        if !fresh && !touches(changed, c, r) {
+        // A leaf samples up to one cell beyond itself (a border cell's
+        // projection), so an edit within (½√3 + 1) cells of a cell reaches it:
+        // a node is walked again if the edit comes within two cells of its ball.
+        if !fresh && !touches(changed, c, r + 2.0 * grid.h) {
             return;
         }
         let key = morton(o / LEAF);
@@ -241,8 +246,9 @@ pub struct IncrementalMesh {
     tree: LeafTree,
 }
 
-/// The balls outside which `new` samples and classifies exactly as `old` (see
-/// the module doc), or None when everything may differ.
+/// The balls outside which `new` classifies exactly as `old` and, grown by
+/// a sample's reach margin, samples exactly as `old` (see the module doc), or
+/// None when everything may differ.
 pub fn edit_support(old: &Model, new: &Model) -> Option<Vec<Ball>> {
     if old.de() != new.de()
         || old.tau() != new.tau()
@@ -305,8 +311,16 @@ impl IncrementalMesh {
     /// support when the grid and the model's structure are unchanged,
     /// everything otherwise. The result equals [`super::mesh_on`]`(model, grid)`.
     pub fn update(&mut self, model: Model, grid: Grid) -> UpdateStats {
+        // The mesher's samples reach the grid's margin beyond a primitive's
+        // ball (`Grid::reach_margin`): so does an edit's support.
         let support = if grid == self.tree.grid {
-            edit_support(&self.model, &model)
+            edit_support(&self.model, &model).map(|balls| {
+                let m = grid.reach_margin();
+                balls
+                    .into_iter()
+                    .map(|(c, r)| (c, r + m))
+                    .collect::<Vec<Ball>>()
+            })
         } else {
             None
         };

@@ -162,6 +162,33 @@ impl Grid {
     pub fn corner(&self, c: IVec3) -> DVec3 {
         self.origin + c.as_dvec3() * self.h
     }
+
+    /// The reach margin of the mesher's samples ([`Model::sample`]): two
+    /// cells. Every bracket the mesher searches (a cell edge, a projection of
+    /// at most one cell) is shorter than the margin, so within it Φ is the
+    /// distance estimate of every boundary piece nearby, unclamped.
+    pub fn reach_margin(&self) -> f64 {
+        2.0 * self.h
+    }
+}
+
+/// The field the mesher samples: a model, the primitives active in a leaf and
+/// the grid's reach margin.
+#[derive(Clone, Copy)]
+struct Field<'a> {
+    model: &'a Model,
+    act: &'a Active,
+    margin: f64,
+}
+
+impl Field<'_> {
+    fn sample(&self, p: DVec3, scratch: &mut Vec<bool>) -> super::model::Sample {
+        self.model.sample(p, self.act, self.margin, scratch)
+    }
+
+    fn normal(&self, p: DVec3) -> DVec3 {
+        self.model.piece_gradient(p, self.act, self.margin)
+    }
 }
 
 /// Meshes S at the resolution of `opts`.
@@ -175,13 +202,14 @@ pub fn mesh_on(model: &Model, grid: &Grid) -> (Mesh, MeshStats) {
     super::incremental::LeafTree::build(model, grid).assemble()
 }
 
-/// The primitives that may reach any point the leaf at `origin` samples: its
-/// corners and edges, and the projections of its cells' vertices (up to one
-/// cell beyond the leaf), with a cell to spare.
+/// The primitives that may reach (with the grid's reach margin) any point
+/// the leaf at `origin` samples: its corners and edges, and the projections
+/// of its cells' vertices (up to one cell beyond the leaf), with a cell to
+/// spare.
 fn leaf_active(model: &Model, grid: &Grid, origin: IVec3) -> Active {
     let half = LEAF as f64 * 0.5;
     let c = grid.corner(origin) + DVec3::splat(half * grid.h);
-    let r = grid.h * (half * 3f64.sqrt() + 2.0);
+    let r = grid.h * (half * 3f64.sqrt() + 2.0) + grid.reach_margin();
     model.cull(&model.all_active(), c, r)
 }
 
@@ -190,6 +218,11 @@ fn leaf_active(model: &Model, grid: &Grid, origin: IVec3) -> Active {
 /// per mixed cell, and the leaf's crossing edges for step 5.
 pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3) -> LeafMesh {
     let act = leaf_active(model, grid, origin);
+    let field = Field {
+        model,
+        act: &act,
+        margin: grid.reach_margin(),
+    };
     let n = (LEAF + 1) as usize;
     let mut scratch = Vec::new();
     let mut inside = Vec::with_capacity(n * n * n);
@@ -197,17 +230,13 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3) -> LeafMesh {
     for z in 0..=LEAF {
         for y in 0..=LEAF {
             for x in 0..=LEAF {
-                let smp = model.sample(
-                    grid.corner(origin + IVec3::new(x, y, z)),
-                    &act,
-                    &mut scratch,
-                );
+                let smp = field.sample(grid.corner(origin + IVec3::new(x, y, z)), &mut scratch);
                 inside.push(smp.inside);
                 phi.push(smp.phi);
             }
         }
     }
-    contour(model, grid, &act, origin, inside, phi, None).0
+    contour(&field, grid, origin, inside, phi, None).0
 }
 
 /// Whether a ball (c, r) meets one of `balls` (the test of [`Model::cull`]).
@@ -231,6 +260,11 @@ pub(crate) fn update_leaf(
 ) -> (LeafMesh, usize) {
     let origin = leaf.origin;
     let act = leaf_active(model, grid, origin);
+    let field = Field {
+        model,
+        act: &act,
+        margin: grid.reach_margin(),
+    };
     // Rounding slack of the reach tests (the QEF point may leave its cell by
     // 1e-9 of a cell).
     let eps = 1e-6 * grid.h;
@@ -243,7 +277,7 @@ pub(crate) fn update_leaf(
                 let l = IVec3::new(x, y, z);
                 let p = grid.corner(origin + l);
                 if touches(changed, p, eps) {
-                    let smp = model.sample(p, &act, &mut scratch);
+                    let smp = field.sample(p, &mut scratch);
                     inside[corner_index(l)] = smp.inside;
                     phi[corner_index(l)] = smp.phi;
                 }
@@ -255,17 +289,15 @@ pub(crate) fn update_leaf(
         let c = grid.corner(origin + lc) + DVec3::splat(0.5 * grid.h);
         touches(changed, c, reach)
     };
-    contour(model, grid, &act, origin, inside, phi, Some((leaf, &redo)))
+    contour(&field, grid, origin, inside, phi, Some((leaf, &redo)))
 }
 
 /// Steps 3–4 on sampled corners; with `old`, a cell that `redo` does not name
 /// keeps its vertex from the old leaf. Returns the leaf and the number of
 /// mixed cells contoured.
-#[allow(clippy::too_many_arguments)]
 fn contour(
-    model: &Model,
+    field: &Field,
     grid: &Grid,
-    act: &Active,
     origin: IVec3,
     inside: Vec<bool>,
     phi: Vec<f64>,
@@ -324,9 +356,8 @@ fn contour(
                         }
                         let (p, n) = *edges.entry((a0, axis)).or_insert_with(|| {
                             hermite(
-                                model,
+                                field,
                                 grid,
-                                act,
                                 origin + a0,
                                 e,
                                 phi[corner_index(a0)],
@@ -351,10 +382,10 @@ fn contour(
                 let mut normal = nsum;
                 let projected = sol.rank <= 1;
                 if projected {
-                    if let Some(pv) = project(model, grid, act, v, nsum) {
+                    if let Some(pv) = project(field, grid, v, nsum) {
                         v = pv;
                     }
-                    let g = model.piece_gradient(v, act);
+                    let g = field.normal(v);
                     normal = if g.dot(nsum) < 0.0 { -g } else { g };
                 }
                 leaf.cell_vert[cell_index(lc)] = verts.len() as u32;
@@ -470,11 +501,9 @@ pub(crate) fn assemble<'a>(
 
 /// The Hermite sample of the grid edge from corner `a` along `e`: the crossing and
 /// the outward unit normal there.
-#[allow(clippy::too_many_arguments)]
 fn hermite(
-    model: &Model,
+    field: &Field,
     grid: &Grid,
-    act: &Active,
     a: IVec3,
     e: IVec3,
     phi0: f64,
@@ -483,9 +512,9 @@ fn hermite(
 ) -> (DVec3, DVec3) {
     let p0 = grid.corner(a);
     let d = e.as_dvec3() * grid.h;
-    let t = root(model, act, p0, d, phi0, phi1, 1e-10);
+    let t = root(field, p0, d, phi0, phi1, 1e-10);
     let p = p0 + d * t;
-    let g = model.piece_gradient(p, act);
+    let g = field.normal(p);
     // Outward: from the inside end to the outside end.
     let out = if inside0 { d } else { -d };
     let n = if g.dot(out) < 0.0 { -g } else { g };
@@ -494,7 +523,7 @@ fn hermite(
 
 /// The parameter t ∈ [0, 1] where Φ(p0 + t d) changes sign (Illinois method with a
 /// bisection guard), to `tol` in t.
-fn root(model: &Model, act: &Active, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol: f64) -> f64 {
+fn root(field: &Field, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol: f64) -> f64 {
     let mut scratch = Vec::new();
     let (mut a, mut b) = (0.0, 1.0);
     let (mut fa, mut fb) = (f0, f1);
@@ -513,7 +542,7 @@ fn root(model: &Model, act: &Active, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol:
         if !(t > a + 0.01 * w && t < b - 0.01 * w) {
             t = 0.5 * (a + b);
         }
-        let s = model.sample(p0 + d * t, act, &mut scratch);
+        let s = field.sample(p0 + d * t, &mut scratch);
         let ft = s.phi;
         if s.inside == ina {
             a = t;
@@ -536,18 +565,18 @@ fn root(model: &Model, act: &Active, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol:
 
 /// Moves v along ±n onto the boundary (bracketed within one cell); None if no
 /// sign change is found.
-fn project(model: &Model, grid: &Grid, act: &Active, v: DVec3, n: DVec3) -> Option<DVec3> {
+fn project(field: &Field, grid: &Grid, v: DVec3, n: DVec3) -> Option<DVec3> {
     if n == DVec3::ZERO {
         return None;
     }
     let mut scratch = Vec::new();
-    let s0 = model.sample(v, act, &mut scratch);
+    let s0 = field.sample(v, &mut scratch);
     let dir = if s0.inside { n } else { -n };
     for step in [0.25, 0.5, 1.0] {
         let p1 = v + dir * (step * grid.h);
-        let s1 = model.sample(p1, act, &mut scratch);
+        let s1 = field.sample(p1, &mut scratch);
         if s1.inside != s0.inside {
-            let t = root(model, act, v, p1 - v, s0.phi, s1.phi, 1e-12);
+            let t = root(field, v, p1 - v, s0.phi, s1.phi, 1e-12);
             return Some(v + (p1 - v) * t);
         }
     }
