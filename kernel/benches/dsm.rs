@@ -137,7 +137,9 @@ fn surface_nets_dense(m: &Model, cells: usize) -> usize {
         let [x, y, z] = shape.delinearize(i as u32);
         let c = glam::IVec3::new(x as i32, y as i32, z as i32);
         // surface nets wants negative inside.
-        *v = -(m.sample(grid.corner(c), &act, &mut scratch).phi as f32);
+        *v = -(m
+            .sample(grid.corner(c), &act, grid.reach_margin(), &mut scratch)
+            .phi as f32);
     }
     let mut buf = SurfaceNetsBuffer::default();
     surface_nets(&sdf, &shape, [0; 3], [d.x - 1, d.y - 1, d.z - 1], &mut buf);

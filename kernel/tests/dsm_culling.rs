@@ -159,7 +159,10 @@ fn interval_classification_is_sound() {
                 "classification {t:?} wrong at {p}"
             );
             // The culled active set gives the same answer as the whole model.
-            assert_eq!(m.sample(p, &act, &mut scratch).inside, inside);
+            assert_eq!(
+                m.sample(p, &act, f64::INFINITY, &mut scratch).inside,
+                inside
+            );
         }
     }
     assert!(decided > 500, "only {decided} balls decided");

@@ -115,7 +115,7 @@ fn random_sequence(seed: u64, cells: usize, edits: usize) {
     let grid = Grid::for_model(&model, cells).unwrap();
     let mut inc = IncrementalMesh::new(model, grid);
     let (mut last, _) = inc.mesh();
-    let (mut incremental, mut changed, mut reused) = (0, 0, 0);
+    let (mut incremental, mut changed, mut reused, mut partial) = (0, 0, 0, 0);
     for e in 0..edits {
         let what = random_edit(&mut spec, &mut rng);
         let model = spec.model();
@@ -131,6 +131,10 @@ fn random_sequence(seed: u64, cells: usize, edits: usize) {
         if !st.full {
             incremental += 1;
             reused += st.leaves - st.recomputed.min(st.leaves);
+            // Leaves met by the edit but meshed before: updated in part.
+            if st.recomputed > st.fresh_leaves && st.cells < 512 * st.recomputed {
+                partial += 1;
+            }
         }
         if got != last {
             changed += 1;
@@ -143,6 +147,7 @@ fn random_sequence(seed: u64, cells: usize, edits: usize) {
         "{incremental} of {edits} incremental"
     );
     assert!(reused > 0, "no leaf was ever reused");
+    assert!(partial > 0, "no leaf was ever updated in part");
     assert!(
         changed * 2 >= edits,
         "only {changed} of {edits} edits changed the mesh"

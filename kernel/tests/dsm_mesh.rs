@@ -255,6 +255,70 @@ fn box_with_a_negative_cylinder_is_a_torus() {
     assert_closed_manifold(&mesh);
 }
 
+/// Every vertex of `mesh` lies on one of the spheres (centre, radius) to
+/// `tol`, its normal is that sphere's outward normal to 1e-9, and every
+/// sphere has a vertex.
+fn assert_on_spheres(mesh: &Mesh, spheres: &[(DVec3, f64)], tol: f64) {
+    let mut hit = vec![false; spheres.len()];
+    for (v, n) in mesh.positions.iter().zip(&mesh.normals) {
+        let (k, dev) = spheres
+            .iter()
+            .map(|&(c, r)| ((*v - c).length() - r).abs())
+            .enumerate()
+            .fold(
+                (0, f64::INFINITY),
+                |b, (k, d)| if d < b.1 { (k, d) } else { b },
+            );
+        assert!(dev <= tol, "vertex {v} is {dev} off the spheres");
+        let radial = (*v - spheres[k].0).normalize();
+        assert!(
+            n.dot(radial) > 1.0 - 1e-9,
+            "normal {n} at {v}, not {radial}"
+        );
+        hit[k] = true;
+    }
+    assert!(hit.iter().all(|&h| h), "a sphere has no vertex: {hit:?}");
+}
+
+#[test]
+fn geometric_spheres_reproduce_themselves_alone_and_beside_a_charge() {
+    // The geometric sphere's surface is its bounding ball's: a crossing on it
+    // lies on the edge of the ball where the sphere reaches. Alone, and in a
+    // union with a point charge in its own group whose influence covers it
+    // (the server's dsm_parts scene: r = ln(e²)/2 = 1), every vertex must be
+    // on a sphere with the sphere's normal.
+    let centre = DVec3::new(0.5, -0.25, 0.0);
+    let sphere = GeometricPrimitive::new(
+        GeometricShape::Sphere { radius: 1.0 },
+        Placement::at(centre),
+    )
+    .unwrap();
+    let mut alone = Model::new(1.0, DEFAULT_TAU).unwrap();
+    alone
+        .add(Group {
+            geometric: vec![sphere],
+            ..Default::default()
+        })
+        .unwrap();
+    let charge = DVec3::new(4.0, 0.0, 0.0);
+    let mut both = alone.clone();
+    both.add(Group {
+        density: vec![DensityPrimitive::sphere(charge, std::f64::consts::E.powi(2), 2.0).unwrap()],
+        ..Default::default()
+    })
+    .unwrap();
+    for cells in [16, 23, 40] {
+        let (m, _) = mesh(&alone, MeshOptions { cells }).unwrap();
+        assert_eq!(m.euler_characteristic(), 2, "alone at {cells}");
+        assert_closed_manifold(&m);
+        assert_on_spheres(&m, &[(centre, 1.0)], 1e-9 * 2.0);
+        let (m, _) = mesh(&both, MeshOptions { cells }).unwrap();
+        assert_eq!(m.euler_characteristic(), 4, "beside a charge at {cells}");
+        assert_closed_manifold(&m);
+        assert_on_spheres(&m, &[(centre, 1.0), (charge, 1.0)], 1e-9 * 5.5);
+    }
+}
+
 #[test]
 fn bad_mesh_requests_are_refused() {
     let m = Model::new(1.0, DEFAULT_TAU).unwrap();

@@ -52,6 +52,21 @@ fn index_bytes(vertices: usize) -> usize {
     if vertices <= u16::MAX as usize { 2 } else { 4 }
 }
 
+/// As many normals as positions, all finite.
+fn check_vertices(positions: &[[f64; 3]], normals: &[[f64; 3]]) -> Result<(), ProtocolError> {
+    if positions.len() != normals.len() {
+        return Err(bad("positions and normals differ in number"));
+    }
+    let finite = |p: &[f64; 3]| p.iter().all(|x| x.is_finite());
+    if !positions.iter().all(finite) || !normals.iter().all(finite) {
+        return Err(ProtocolError::new(
+            ErrorCode::NotFinite,
+            "mesh has a non-finite coordinate",
+        ));
+    }
+    Ok(())
+}
+
 impl MeshFrame {
     /// Quantises a mesh: positions on its bounding cube at 65 535 steps along
     /// the longest side (the error is at most half a step), normals to i16.
@@ -63,16 +78,7 @@ impl MeshFrame {
         normals: &[[f64; 3]],
         triangles: &[[u32; 3]],
     ) -> Result<Self, ProtocolError> {
-        if positions.len() != normals.len() {
-            return Err(bad("positions and normals differ in number"));
-        }
-        let finite = |p: &[f64; 3]| p.iter().all(|x| x.is_finite());
-        if !positions.iter().all(finite) || !normals.iter().all(finite) {
-            return Err(ProtocolError::new(
-                ErrorCode::NotFinite,
-                "mesh has a non-finite coordinate",
-            ));
-        }
+        check_vertices(positions, normals)?;
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for p in positions {
@@ -86,17 +92,78 @@ impl MeshFrame {
             hi = [0.0; 3];
         }
         let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
-        let origin = lo.map(|x| x as f32);
+        Self::on_cube(
+            ids,
+            flags,
+            (lo, extent),
+            false,
+            (positions, normals, triangles),
+        )
+    }
+
+    /// Quantises a mesh on a given cube (`origin`, `extent`): 65 535 steps of
+    /// extent / 65 535 along each axis from the origin, normals to i16. With
+    /// a cube fixed per part (a DSM part's meshing grid), a vertex that did
+    /// not move keeps its quantised position from one frame to the next. A
+    /// position more than a step outside the cube is refused
+    /// (`out_of_range`), non-finite input too (`not_finite`).
+    pub fn quantise_in(
+        ids: (u64, u64, u64),
+        flags: u16,
+        (origin, extent): ([f64; 3], f64),
+        positions: &[[f64; 3]],
+        normals: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+    ) -> Result<Self, ProtocolError> {
+        check_vertices(positions, normals)?;
+        Self::on_cube(
+            ids,
+            flags,
+            (origin, extent),
+            true,
+            (positions, normals, triangles),
+        )
+    }
+
+    /// The frame of checked vertices on the cube; `strict`: refuse a
+    /// position more than a step outside it, else clamp it.
+    #[allow(clippy::type_complexity)]
+    fn on_cube(
+        ids: (u64, u64, u64),
+        flags: u16,
+        (origin, extent): ([f64; 3], f64),
+        strict: bool,
+        (positions, normals, triangles): (&[[f64; 3]], &[[f64; 3]], &[[u32; 3]]),
+    ) -> Result<Self, ProtocolError> {
+        if !(origin.iter().all(|x| x.is_finite()) && extent.is_finite()) {
+            return Err(ProtocolError::new(
+                ErrorCode::NotFinite,
+                "mesh cube is not finite",
+            ));
+        }
+        if extent < 0.0 {
+            return Err(bad("mesh cube extent is negative"));
+        }
+        let origin = origin.map(|x| x as f32);
         let step = (extent / 65535.0) as f32;
-        let q = |x: f64, a: usize| -> u16 {
-            if step == 0.0 {
-                0
-            } else {
-                ((x - origin[a] as f64) / step as f64)
-                    .round()
-                    .clamp(0.0, 65535.0) as u16
+        let mut quantised = Vec::with_capacity(positions.len());
+        for p in positions {
+            let mut q = [0u16; 3];
+            for a in 0..3 {
+                if step == 0.0 {
+                    continue;
+                }
+                let t = (p[a] - origin[a] as f64) / step as f64;
+                if strict && !(-1.0..=65536.0).contains(&t) {
+                    return Err(ProtocolError::new(
+                        ErrorCode::OutOfRange,
+                        "mesh position outside the frame's cube",
+                    ));
+                }
+                q[a] = t.round().clamp(0.0, 65535.0) as u16;
             }
-        };
+            quantised.push(q);
+        }
         let frame = Self {
             design: ids.0,
             part: ids.1,
@@ -104,10 +171,7 @@ impl MeshFrame {
             flags,
             origin,
             step,
-            positions: positions
-                .iter()
-                .map(|p| [q(p[0], 0), q(p[1], 1), q(p[2], 2)])
-                .collect(),
+            positions: quantised,
             normals: normals
                 .iter()
                 .map(|n| {

@@ -152,6 +152,40 @@ fn quantised_positions_are_within_half_a_step() {
 }
 
 #[test]
+fn a_fixed_cube_keeps_an_unmoved_vertex_quantised_alike() {
+    // Two meshes sharing vertex 0, the second reaching further: on their
+    // bounding cubes vertex 0 quantises differently, on one fixed cube alike
+    // (what a delta between frames needs), and within half a step.
+    let n = [[0.0, 0.0, 1.0]; 2];
+    let a = [[0.3, -0.2, 0.7], [1.0, 1.0, 1.0]];
+    let b = [[0.3, -0.2, 0.7], [-0.5, 1.0, 1.0]];
+    let tri: [[u32; 3]; 0] = [];
+    let fa = MeshFrame::quantise((1, 2, 3), 0, &a, &n, &tri).unwrap();
+    let fb = MeshFrame::quantise((1, 2, 4), 0, &b, &n, &tri).unwrap();
+    assert_ne!(fa.positions[0], fb.positions[0]);
+    let cube = ([-1.0, -1.0, -1.0], 3.0);
+    let fa = MeshFrame::quantise_in((1, 2, 3), 0, cube, &a, &n, &tri).unwrap();
+    let fb = MeshFrame::quantise_in((1, 2, 4), 0, cube, &b, &n, &tri).unwrap();
+    assert_eq!(fa.positions[0], fb.positions[0]);
+    assert_eq!((fa.origin, fa.step), (fb.origin, fb.step));
+    assert_eq!(fa.origin, [-1.0; 3]);
+    let step = 3.0 / 65535.0;
+    // Vertex 0 by hand: (p − origin) / step, rounded.
+    let hand = [1.3f64, 0.8, 1.7].map(|x| (x / step).round() as u16);
+    for a in 0..3 {
+        assert!(fa.positions[0][a].abs_diff(hand[a]) <= 1, "{a}");
+        assert!((fa.position(0)[a] - [0.3, -0.2, 0.7][a]).abs() <= 0.5 * step + 1e-6);
+    }
+    // Outside the cube: refused, not clamped.
+    let out = [[0.3, -0.2, 0.7], [2.5, 1.0, 1.0]];
+    let e = MeshFrame::quantise_in((1, 2, 5), 0, cube, &out, &n, &tri).unwrap_err();
+    assert_eq!(e.code, ErrorCode::OutOfRange);
+    let e = MeshFrame::quantise_in((1, 2, 5), 0, ([f64::NAN, 0.0, 0.0], 1.0), &a, &n, &tri)
+        .unwrap_err();
+    assert_eq!(e.code, ErrorCode::NotFinite);
+}
+
+#[test]
 fn large_meshes_use_u32_indices() {
     let n = 70_000;
     let positions: Vec<[f64; 3]> = (0..n).map(|i| [i as f64, 0.0, 0.0]).collect();

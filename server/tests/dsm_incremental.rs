@@ -128,3 +128,85 @@ async fn edits_through_the_websocket_mesh_as_a_fresh_part_of_the_final_doc() {
     server.stop().await;
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// A box with a small box bump on its +x face: the bump's bounding ball
+/// stays inside the box's, so moving the bump outwards changes the mesh's
+/// extent (x: 2.05 → 2.08) but not the model's bounds or its grid.
+fn bumped_box(bump_x: f64) -> Value {
+    json!({"de": 1.0, "cells": 32, "groups": [
+        {"op": "add", "primitives": [
+            {"id": 1, "at": [0.0, 0.0, 0.0], "shape": {"type": "box", "half": [1.0, 0.5, 0.3]}},
+            {"id": 2, "at": [bump_x, 0.0, 0.0], "shape": {"type": "box", "half": [0.1, 0.1, 0.1]}}
+        ]}
+    ]})
+}
+
+/// The sorted (quantised position, normal) pairs of the frame's vertices
+/// farther than `r` from every point of `away`.
+fn far_vertices(m: &MeshFrame, away: &[[f64; 3]], r: f64) -> Vec<([u16; 3], [i16; 3])> {
+    let mut v: Vec<_> = (0..m.positions.len())
+        .filter(|&i| {
+            let p = m.position(i);
+            away.iter()
+                .all(|c| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>().sqrt() > r)
+        })
+        .map(|i| (m.positions[i], m.normals[i]))
+        .collect();
+    v.sort_unstable();
+    v
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_drag_inside_the_bounds_keeps_every_far_vertex_quantum_for_quantum() {
+    let data = data_dir("dsm-fixed-quanta");
+    let server = TestServer::start(data.clone()).await;
+    let d = server.demo().clone();
+    let (addr, design) = (server.addr, d.id);
+    let mut ed = Client::connect(addr, design, &d.editor, "ann").await;
+    let mut viewer = Client::connect(addr, design, &d.viewer, "bob").await;
+    let r = ed.request(create("bumped", bumped_box(0.95))).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let part = r["part"].as_u64().unwrap();
+    let before = viewer.mesh_of_after(part, 0).await;
+    ed.ok(json!({"type": "dsm_edit", "part": part,
+                 "edit": {"op": "move_primitive", "id": 2, "at": [0.98, 0.0, 0.0]}}))
+        .await;
+    let after = viewer.mesh_of_after(part, before.revision).await;
+    // The frames' quantisation is the part's grid: the same in both.
+    assert_eq!((before.origin, before.step), (after.origin, after.step));
+    // The grid spans the box's bounding ball (radius |half|) with 1.5 cells
+    // to spare: the frame's origin.
+    let radius = (1.0f64 + 0.25 + 0.09).sqrt();
+    let h = 2.0 * radius / 32.0;
+    for a in 0..3 {
+        let o = before.origin[a] as f64;
+        assert!(
+            (o + radius + 1.5 * h).abs() < 1e-6,
+            "origin {:?}",
+            before.origin
+        );
+    }
+    // Away from the bump (its ball 0.17, the mesher's reach margin of two
+    // cells and a cell's own reach of two more) nothing moved: the same
+    // quanta, so a delta frame could leave those vertices out.
+    let away = [[0.95, 0.0, 0.0], [0.98, 0.0, 0.0]];
+    let r = 0.18 + 6.0 * h;
+    let (fb, fa) = (
+        far_vertices(&before, &away, r),
+        far_vertices(&after, &away, r),
+    );
+    assert!(fb.len() > before.positions.len() / 2, "{} far", fb.len());
+    assert_eq!(fb, fa);
+    // The bump did move.
+    let xmax = |m: &MeshFrame| {
+        (0..m.positions.len())
+            .map(|i| m.position(i)[0])
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    assert!((xmax(&before) - 1.05).abs() < 1e-4, "{}", xmax(&before));
+    assert!((xmax(&after) - 1.08).abs() < 1e-4, "{}", xmax(&after));
+    drop(ed);
+    drop(viewer);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
+}

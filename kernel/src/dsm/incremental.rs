@@ -2,11 +2,14 @@
 //! edits, and re-sampled only where an edit can change it.
 //!
 //! What a leaf holds ([`super::mesh`] steps 2–4: corner membership and Φ, the
-//! Hermite data, the cell vertices and the crossing edges) is a function of the
-//! leaf's origin, its *active* primitives (those whose influence ball reaches the
-//! leaf's ball, in model order), D_e, τ, the groups' incorporations, the terms of
-//! eq. (7) and each group's Φ scale (its largest reducing factor). Nothing else
-//! enters [`Model::sample`] or [`Model::classify`].
+//! cell vertices and the crossing edges) is made of samples taken at points
+//! within one cell of the leaf, and each sample ([`Model::sample`],
+//! [`Model::piece_gradient`]) is a function of the point and of the primitives
+//! that *reach* it (those whose ball, grown by the grid's reach margin of two
+//! cells, holds it, in model order), D_e, τ, the groups' incorporations, the
+//! terms of eq. (7) and each group's Φ scale (its largest reducing factor) —
+//! not of the leaf's culled active set. An edit's support is therefore grown
+//! by the same margin.
 //!
 //! The support of an edit, derived from the density functions:
 //! * A geometric primitive (eq. 2) contributes ±D_e inside itself and exactly 0
@@ -44,11 +47,15 @@
 //! then assembled from every leaf in Morton order, exactly as a fresh mesh of
 //! the same model on the same grid ([`super::mesh_on`], which is this walk
 //! from an empty tree): the same vertices, bit for bit, and the same triangles.
-//! The re-meshed region is the leaves (8³ cells) that meet the support: a leaf's
-//! active set, and with it Φ at all its corners, changes as a whole.
+//! In a leaf the walk reaches that was meshed before, only the corners inside
+//! a changed ball are sampled again and only the cells within one cell of a
+//! changed ball contoured again ([`super::mesh`]'s `update_leaf`): samples being
+//! pointwise, every other corner and cell vertex is what a fresh leaf computes.
 
 use super::interval::Tri;
-use super::mesh::{Grid, LEAF, LeafMesh, Mesh, MeshStats, assemble, mesh_leaf};
+use super::mesh::{
+    Grid, LEAF, LeafMesh, Mesh, MeshStats, assemble, mesh_leaf, touches, update_leaf,
+};
 use super::model::{Active, Model};
 use glam::{DVec3, IVec3};
 use std::collections::{BTreeMap, BTreeSet};
@@ -77,12 +84,6 @@ fn morton(l: IVec3) -> u64 {
     m
 }
 
-fn touches(balls: &[Ball], c: DVec3, r: f64) -> bool {
-    // The test of `Model::cull`, so that a node outside every ball is one from
-    // whose active set every changed primitive was culled.
-    balls.iter().any(|&(bc, br)| (bc - c).length() <= br + r)
-}
-
 impl LeafTree {
     /// A fresh walk of `model` over `grid`.
     pub(crate) fn build(model: &Model, grid: &Grid) -> Self {
@@ -96,7 +97,7 @@ impl LeafTree {
             leaves: BTreeMap::new(),
             expanded: BTreeSet::new(),
         };
-        let mut n = 0;
+        let mut n = Redone::default();
         tree.visit(
             model,
             IVec3::ZERO,
@@ -111,13 +112,14 @@ impl LeafTree {
 
     /// The mesh of every leaf.
     pub(crate) fn assemble(&self) -> (Mesh, MeshStats) {
-        assemble(self.leaves.values())
+        assemble(&self.grid, self.leaves.values())
     }
 
     /// Re-walks the tree for `model`, which differs from the model of the
-    /// previous walk only inside `changed`; returns the leaves re-sampled.
-    fn update(&mut self, model: &Model, changed: &[Ball]) -> usize {
-        let mut n = 0;
+    /// previous walk only inside `changed`; returns the leaves reached and the
+    /// cells contoured again.
+    fn update(&mut self, model: &Model, changed: &[Ball]) -> Redone {
+        let mut n = Redone::default();
         let act = model.all_active();
         self.visit(model, IVec3::ZERO, self.size, &act, changed, false, &mut n);
         n
@@ -151,7 +153,7 @@ impl LeafTree {
         parent: &Active,
         changed: &[Ball],
         fresh: bool,
-        recomputed: &mut usize,
+        redone: &mut Redone,
     ) {
         let grid = self.grid;
         if o.cmpge(grid.dims).any() {
@@ -159,7 +161,10 @@ impl LeafTree {
         }
         let c = grid.origin + (o.as_dvec3() + DVec3::splat(s as f64 * 0.5)) * grid.h;
         let r = s as f64 * grid.h * 0.5 * 3f64.sqrt();
-        if !fresh && !touches(changed, c, r) {
+        // A leaf samples up to one cell beyond itself (a border cell's
+        // projection), so an edit within (½√3 + 1) cells of a cell reaches it:
+        // a node is walked again if the edit comes within two cells of its ball.
+        if !fresh && !touches(changed, c, r + 2.0 * grid.h) {
             return;
         }
         let key = morton(o / LEAF);
@@ -183,14 +188,36 @@ impl LeafTree {
                     &act,
                     changed,
                     fresh || !was_expanded,
-                    recomputed,
+                    redone,
                 );
             }
             return;
         }
-        self.leaves.insert(key, mesh_leaf(model, &grid, o, &act));
-        *recomputed += 1;
+        redone.leaves += 1;
+        let leaf = match self.leaves.get(&key) {
+            Some(old) if !fresh => {
+                let (leaf, cells) = update_leaf(model, &grid, old, changed);
+                redone.cells += cells;
+                leaf
+            }
+            _ => {
+                redone.fresh += 1;
+                mesh_leaf(model, &grid, o)
+            }
+        };
+        self.leaves.insert(key, leaf);
     }
+}
+
+/// What one re-walk did.
+#[derive(Clone, Copy, Debug, Default)]
+struct Redone {
+    /// Leaves reached (sampled afresh or in part).
+    leaves: usize,
+    /// Of those, leaves sampled afresh (new to the tree).
+    fresh: usize,
+    /// Mixed cells contoured again in the leaves updated in part.
+    cells: usize,
 }
 
 /// What one [`IncrementalMesh::update`] did.
@@ -200,8 +227,13 @@ pub struct UpdateStats {
     pub full: bool,
     /// Primitives found changed (old and new counted apart).
     pub changed: usize,
-    /// Leaves sampled and contoured again.
+    /// Leaves reached by the edit: sampled afresh, or, when the leaf was
+    /// meshed before, sampled again only within the edit's reach.
     pub recomputed: usize,
+    /// Of those, leaves new to the tree (sampled and contoured whole).
+    pub fresh_leaves: usize,
+    /// Mixed cells contoured again in the leaves updated in part.
+    pub cells: usize,
     /// Leaves in the tree after the update.
     pub leaves: usize,
 }
@@ -214,8 +246,9 @@ pub struct IncrementalMesh {
     tree: LeafTree,
 }
 
-/// The balls outside which `new` samples and classifies exactly as `old` (see
-/// the module doc), or None when everything may differ.
+/// The balls outside which `new` classifies exactly as `old` and, grown by
+/// a sample's reach margin, samples exactly as `old` (see the module doc), or
+/// None when everything may differ.
 pub fn edit_support(old: &Model, new: &Model) -> Option<Vec<Ball>> {
     if old.de() != new.de()
         || old.tau() != new.tau()
@@ -278,18 +311,28 @@ impl IncrementalMesh {
     /// support when the grid and the model's structure are unchanged,
     /// everything otherwise. The result equals [`super::mesh_on`]`(model, grid)`.
     pub fn update(&mut self, model: Model, grid: Grid) -> UpdateStats {
+        // The mesher's samples reach the grid's margin beyond a primitive's
+        // ball (`Grid::reach_margin`): so does an edit's support.
         let support = if grid == self.tree.grid {
-            edit_support(&self.model, &model)
+            edit_support(&self.model, &model).map(|balls| {
+                let m = grid.reach_margin();
+                balls
+                    .into_iter()
+                    .map(|(c, r)| (c, r + m))
+                    .collect::<Vec<Ball>>()
+            })
         } else {
             None
         };
         let stats = match support {
             Some(balls) => {
-                let recomputed = self.tree.update(&model, &balls);
+                let redone = self.tree.update(&model, &balls);
                 UpdateStats {
                     full: false,
                     changed: balls.len(),
-                    recomputed,
+                    recomputed: redone.leaves,
+                    fresh_leaves: redone.fresh,
+                    cells: redone.cells,
                     leaves: self.tree.leaves.len(),
                 }
             }
@@ -299,6 +342,8 @@ impl IncrementalMesh {
                     full: true,
                     changed: 0,
                     recomputed: self.tree.leaves.len(),
+                    fresh_leaves: self.tree.leaves.len(),
+                    cells: 0,
                     leaves: self.tree.leaves.len(),
                 }
             }

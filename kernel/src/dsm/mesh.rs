@@ -83,22 +83,37 @@ pub struct MeshStats {
 }
 
 /// One sampled and contoured leaf (8³ cells): what the mesher keeps per leaf
-/// between edits. It depends only on the leaf's origin, its active primitives
-/// (in order) and the model's group structure, never on other leaves, so a leaf
-/// the edit cannot reach is reused as it is.
+/// between edits. Every sample it took is a function of the point and the
+/// model alone ([`Model::sample`]), never of other leaves or of its active
+/// set, so a leaf the edit cannot reach is reused as it is, and in a leaf the
+/// edit reaches only the corners and cells within the edit's reach are sampled
+/// again ([`update_leaf`]).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct LeafMesh {
     /// Grid corner of the leaf's first cell.
     pub(crate) origin: IVec3,
+    /// Membership at the (LEAF + 1)³ corners (x fastest).
+    inside: Vec<bool>,
+    /// Φ at the corners.
+    phi: Vec<f64>,
     /// Per cell (x fastest): index into `verts`, or u32::MAX.
     cell_vert: Vec<u32>,
-    /// (position, unit normal) of each mixed cell's vertex, in cell order.
-    verts: Vec<(DVec3, DVec3)>,
+    /// Each mixed cell's vertex, in cell order.
+    verts: Vec<CellVertex>,
     /// Crossing edges from the leaf's own corners (0..8 per axis): (cell, axis,
     /// whether the lower end is inside), in the order quads are emitted.
     crossings: Vec<(IVec3, u8, bool)>,
     projected: usize,
     features: usize,
+}
+
+/// A mixed cell's vertex.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct CellVertex {
+    position: DVec3,
+    normal: DVec3,
+    /// Projected onto the level set (QEF rank ≤ 1), else a feature point.
+    projected: bool,
 }
 
 fn corner_index(l: IVec3) -> usize {
@@ -147,6 +162,33 @@ impl Grid {
     pub fn corner(&self, c: IVec3) -> DVec3 {
         self.origin + c.as_dvec3() * self.h
     }
+
+    /// The reach margin of the mesher's samples ([`Model::sample`]): two
+    /// cells. Every bracket the mesher searches (a cell edge, a projection of
+    /// at most one cell) is shorter than the margin, so within it Φ is the
+    /// distance estimate of every boundary piece nearby, unclamped.
+    pub fn reach_margin(&self) -> f64 {
+        2.0 * self.h
+    }
+}
+
+/// The field the mesher samples: a model, the primitives active in a leaf and
+/// the grid's reach margin.
+#[derive(Clone, Copy)]
+struct Field<'a> {
+    model: &'a Model,
+    act: &'a Active,
+    margin: f64,
+}
+
+impl Field<'_> {
+    fn sample(&self, p: DVec3, scratch: &mut Vec<bool>) -> super::model::Sample {
+        self.model.sample(p, self.act, self.margin, scratch)
+    }
+
+    fn normal(&self, p: DVec3) -> DVec3 {
+        self.model.piece_gradient(p, self.act, self.margin)
+    }
 }
 
 /// Meshes S at the resolution of `opts`.
@@ -160,11 +202,27 @@ pub fn mesh_on(model: &Model, grid: &Grid) -> (Mesh, MeshStats) {
     super::incremental::LeafTree::build(model, grid).assemble()
 }
 
-/// Steps 2–4 for the leaf at `origin` with active primitives `act`: corner
-/// samples, Hermite data (per leaf: a crossing on a leaf face is computed by
-/// each leaf that has it, with its own active set), one vertex per mixed cell,
-/// and the leaf's crossing edges for step 5.
-pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active) -> LeafMesh {
+/// The primitives that may reach (with the grid's reach margin) any point
+/// the leaf at `origin` samples: its corners and edges, and the projections
+/// of its cells' vertices (up to one cell beyond the leaf), with a cell to
+/// spare.
+fn leaf_active(model: &Model, grid: &Grid, origin: IVec3) -> Active {
+    let half = LEAF as f64 * 0.5;
+    let c = grid.corner(origin) + DVec3::splat(half * grid.h);
+    let r = grid.h * (half * 3f64.sqrt() + 2.0) + grid.reach_margin();
+    model.cull(&model.all_active(), c, r)
+}
+
+/// Steps 2–4 for the leaf at `origin`: corner samples, Hermite data (per leaf:
+/// a crossing on a leaf face is computed by each leaf that has it), one vertex
+/// per mixed cell, and the leaf's crossing edges for step 5.
+pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3) -> LeafMesh {
+    let act = leaf_active(model, grid, origin);
+    let field = Field {
+        model,
+        act: &act,
+        margin: grid.reach_margin(),
+    };
     let n = (LEAF + 1) as usize;
     let mut scratch = Vec::new();
     let mut inside = Vec::with_capacity(n * n * n);
@@ -172,21 +230,92 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active)
     for z in 0..=LEAF {
         for y in 0..=LEAF {
             for x in 0..=LEAF {
-                let smp =
-                    model.sample(grid.corner(origin + IVec3::new(x, y, z)), act, &mut scratch);
+                let smp = field.sample(grid.corner(origin + IVec3::new(x, y, z)), &mut scratch);
                 inside.push(smp.inside);
                 phi.push(smp.phi);
             }
         }
     }
+    contour(&field, grid, origin, inside, phi, None).0
+}
+
+/// Whether a ball (c, r) meets one of `balls` (the test of [`Model::cull`]).
+pub(crate) fn touches(balls: &[(DVec3, f64)], c: DVec3, r: f64) -> bool {
+    balls.iter().any(|&(bc, br)| (bc - c).length() <= br + r)
+}
+
+/// `leaf` after an edit of the model that changed nothing outside the balls
+/// `changed` (see [`super::incremental`]): only the corners inside a ball are
+/// sampled again, and only the cells whose samples can reach a ball (the cell
+/// and one cell around it, where its crossings, vertex and projection are
+/// found) are contoured again; every other corner and cell vertex is kept.
+/// Returns the leaf and the number of cells contoured again. Equals
+/// [`mesh_leaf`] of the edited model, bit for bit, because every sample is a
+/// function of the point and the model alone.
+pub(crate) fn update_leaf(
+    model: &Model,
+    grid: &Grid,
+    leaf: &LeafMesh,
+    changed: &[(DVec3, f64)],
+) -> (LeafMesh, usize) {
+    let origin = leaf.origin;
+    let act = leaf_active(model, grid, origin);
+    let field = Field {
+        model,
+        act: &act,
+        margin: grid.reach_margin(),
+    };
+    // Rounding slack of the reach tests (the QEF point may leave its cell by
+    // 1e-9 of a cell).
+    let eps = 1e-6 * grid.h;
+    let mut scratch = Vec::new();
+    let mut inside = leaf.inside.clone();
+    let mut phi = leaf.phi.clone();
+    for z in 0..=LEAF {
+        for y in 0..=LEAF {
+            for x in 0..=LEAF {
+                let l = IVec3::new(x, y, z);
+                let p = grid.corner(origin + l);
+                if touches(changed, p, eps) {
+                    let smp = field.sample(p, &mut scratch);
+                    inside[corner_index(l)] = smp.inside;
+                    phi[corner_index(l)] = smp.phi;
+                }
+            }
+        }
+    }
+    let reach = grid.h * (0.5 * 3f64.sqrt() + 1.0) + eps;
+    let redo = |lc: IVec3| {
+        let c = grid.corner(origin + lc) + DVec3::splat(0.5 * grid.h);
+        touches(changed, c, reach)
+    };
+    contour(&field, grid, origin, inside, phi, Some((leaf, &redo)))
+}
+
+/// Steps 3–4 on sampled corners; with `old`, a cell that `redo` does not name
+/// keeps its vertex from the old leaf. Returns the leaf and the number of
+/// mixed cells contoured.
+fn contour(
+    field: &Field,
+    grid: &Grid,
+    origin: IVec3,
+    inside: Vec<bool>,
+    phi: Vec<f64>,
+    old: Option<(&LeafMesh, &dyn Fn(IVec3) -> bool)>,
+) -> (LeafMesh, usize) {
     let mut leaf = LeafMesh {
         origin,
+        inside,
+        phi,
         cell_vert: vec![u32::MAX; (LEAF * LEAF * LEAF) as usize],
         verts: Vec::new(),
         crossings: Vec::new(),
         projected: 0,
         features: 0,
     };
+    let (inside, phi) = (&leaf.inside, &leaf.phi);
+    let mut verts = Vec::new();
+    let mut contoured = 0;
     let mut edges: HashMap<(IVec3, u8), (DVec3, DVec3)> = HashMap::new();
     for z in 0..LEAF {
         for y in 0..LEAF {
@@ -202,6 +331,15 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active)
                 if mask == 0 || mask == 255 {
                     continue;
                 }
+                if let Some((old, redo)) = old {
+                    let v = old.cell_vert[cell_index(lc)];
+                    if v != u32::MAX && !redo(lc) {
+                        leaf.cell_vert[cell_index(lc)] = verts.len() as u32;
+                        verts.push(old.verts[v as usize]);
+                        continue;
+                    }
+                }
+                contoured += 1;
                 let mut qef = Qef::default();
                 for axis in 0..3u8 {
                     let e = [IVec3::X, IVec3::Y, IVec3::Z][axis as usize];
@@ -218,9 +356,8 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active)
                         }
                         let (p, n) = *edges.entry((a0, axis)).or_insert_with(|| {
                             hermite(
-                                model,
+                                field,
                                 grid,
-                                act,
                                 origin + a0,
                                 e,
                                 phi[corner_index(a0)],
@@ -243,21 +380,24 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active)
                 };
                 let nsum = sol.normal_sum.normalize_or_zero();
                 let mut normal = nsum;
-                if sol.rank <= 1 {
-                    if let Some(pv) = project(model, grid, act, v, nsum) {
+                let projected = sol.rank <= 1;
+                if projected {
+                    if let Some(pv) = project(field, grid, v, nsum) {
                         v = pv;
                     }
-                    let g = model.piece_gradient(v, act);
+                    let g = field.normal(v);
                     normal = if g.dot(nsum) < 0.0 { -g } else { g };
-                    leaf.projected += 1;
-                } else {
-                    leaf.features += 1;
                 }
-                leaf.cell_vert[cell_index(lc)] = leaf.verts.len() as u32;
-                leaf.verts.push((v, normal));
+                leaf.cell_vert[cell_index(lc)] = verts.len() as u32;
+                verts.push(CellVertex {
+                    position: v,
+                    normal,
+                    projected,
+                });
             }
         }
     }
+    let mut crossings = Vec::new();
     for z in 0..LEAF {
         for y in 0..LEAF {
             for x in 0..LEAF {
@@ -266,31 +406,44 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3, act: &Active)
                 for axis in 0..3u8 {
                     let e = [IVec3::X, IVec3::Y, IVec3::Z][axis as usize];
                     if i0 != inside[corner_index(lc + e)] {
-                        leaf.crossings.push((lc, axis, i0));
+                        crossings.push((lc, axis, i0));
                     }
                 }
             }
         }
     }
-    leaf
+    leaf.projected = verts.iter().filter(|v| v.projected).count();
+    leaf.features = verts.len() - leaf.projected;
+    leaf.verts = verts;
+    leaf.crossings = crossings;
+    (leaf, contoured)
 }
 
-/// Step 5 over `leaves` (in the order their vertices are numbered): the
-/// vertices, then one quad per crossing edge owned by a leaf, oriented outwards
-/// and split along its shorter diagonal.
-pub(crate) fn assemble<'a>(leaves: impl Iterator<Item = &'a LeafMesh>) -> (Mesh, MeshStats) {
+/// Step 5 over `leaves` of a walk over `grid` (in the order their vertices
+/// are numbered): the vertices, then one quad per crossing edge owned by a
+/// leaf, oriented outwards and split along its shorter diagonal.
+pub(crate) fn assemble<'a>(
+    grid: &Grid,
+    leaves: impl Iterator<Item = &'a LeafMesh>,
+) -> (Mesh, MeshStats) {
     let mut stats = MeshStats::default();
     let mut mesh = Mesh::default();
-    let mut index: HashMap<IVec3, (usize, u32)> = HashMap::new();
+    // Leaf slot → (index in `list`, first vertex), dense over the leaf grid.
+    let nl = (grid.dims + IVec3::splat(LEAF - 1)) / LEAF;
+    let slot = |l: IVec3| -> Option<usize> {
+        (l.cmpge(IVec3::ZERO).all() && l.cmplt(nl).all())
+            .then(|| ((l.z * nl.y + l.y) * nl.x + l.x) as usize)
+    };
+    let mut index: Vec<(u32, u32)> = vec![(u32::MAX, 0); (nl.x * nl.y * nl.z) as usize];
     let mut list: Vec<&LeafMesh> = Vec::new();
     for leaf in leaves {
         let base = mesh.positions.len() as u32;
-        index.insert(leaf.origin / LEAF, (list.len(), base));
-        list.push(leaf);
-        for &(p, n) in &leaf.verts {
-            mesh.positions.push(p);
-            mesh.normals.push(n);
+        if let Some(sl) = slot(leaf.origin / LEAF) {
+            index[sl] = (list.len() as u32, base);
         }
+        list.push(leaf);
+        mesh.positions.extend(leaf.verts.iter().map(|v| v.position));
+        mesh.normals.extend(leaf.verts.iter().map(|v| v.normal));
         stats.leaves += 1;
         stats.projected += leaf.projected;
         stats.features += leaf.features;
@@ -302,11 +455,13 @@ pub(crate) fn assemble<'a>(leaves: impl Iterator<Item = &'a LeafMesh>) -> (Mesh,
             cell.y.div_euclid(LEAF),
             cell.z.div_euclid(LEAF),
         );
-        let &(li, base) = index.get(&lk)?;
-        let leaf = list[li];
+        let (li, base) = index[slot(lk)?];
+        let leaf = list.get(li as usize)?;
         let v = leaf.cell_vert[cell_index(cell - leaf.origin)];
         (v != u32::MAX).then(|| base + v)
     };
+    mesh.triangles
+        .reserve(list.iter().map(|l| 2 * l.crossings.len()).sum());
     for leaf in &list {
         for &(lc, axis, i0) in &leaf.crossings {
             let axis = axis as usize;
@@ -346,11 +501,9 @@ pub(crate) fn assemble<'a>(leaves: impl Iterator<Item = &'a LeafMesh>) -> (Mesh,
 
 /// The Hermite sample of the grid edge from corner `a` along `e`: the crossing and
 /// the outward unit normal there.
-#[allow(clippy::too_many_arguments)]
 fn hermite(
-    model: &Model,
+    field: &Field,
     grid: &Grid,
-    act: &Active,
     a: IVec3,
     e: IVec3,
     phi0: f64,
@@ -359,9 +512,9 @@ fn hermite(
 ) -> (DVec3, DVec3) {
     let p0 = grid.corner(a);
     let d = e.as_dvec3() * grid.h;
-    let t = root(model, act, p0, d, phi0, phi1, 1e-10);
+    let t = root(field, p0, d, phi0, phi1, 1e-10);
     let p = p0 + d * t;
-    let g = model.piece_gradient(p, act);
+    let g = field.normal(p);
     // Outward: from the inside end to the outside end.
     let out = if inside0 { d } else { -d };
     let n = if g.dot(out) < 0.0 { -g } else { g };
@@ -370,7 +523,7 @@ fn hermite(
 
 /// The parameter t ∈ [0, 1] where Φ(p0 + t d) changes sign (Illinois method with a
 /// bisection guard), to `tol` in t.
-fn root(model: &Model, act: &Active, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol: f64) -> f64 {
+fn root(field: &Field, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol: f64) -> f64 {
     let mut scratch = Vec::new();
     let (mut a, mut b) = (0.0, 1.0);
     let (mut fa, mut fb) = (f0, f1);
@@ -389,7 +542,7 @@ fn root(model: &Model, act: &Active, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol:
         if !(t > a + 0.01 * w && t < b - 0.01 * w) {
             t = 0.5 * (a + b);
         }
-        let s = model.sample(p0 + d * t, act, &mut scratch);
+        let s = field.sample(p0 + d * t, &mut scratch);
         let ft = s.phi;
         if s.inside == ina {
             a = t;
@@ -412,18 +565,18 @@ fn root(model: &Model, act: &Active, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol:
 
 /// Moves v along ±n onto the boundary (bracketed within one cell); None if no
 /// sign change is found.
-fn project(model: &Model, grid: &Grid, act: &Active, v: DVec3, n: DVec3) -> Option<DVec3> {
+fn project(field: &Field, grid: &Grid, v: DVec3, n: DVec3) -> Option<DVec3> {
     if n == DVec3::ZERO {
         return None;
     }
     let mut scratch = Vec::new();
-    let s0 = model.sample(v, act, &mut scratch);
+    let s0 = field.sample(v, &mut scratch);
     let dir = if s0.inside { n } else { -n };
     for step in [0.25, 0.5, 1.0] {
         let p1 = v + dir * (step * grid.h);
-        let s1 = model.sample(p1, act, &mut scratch);
+        let s1 = field.sample(p1, &mut scratch);
         if s1.inside != s0.inside {
-            let t = root(model, act, v, p1 - v, s0.phi, s1.phi, 1e-12);
+            let t = root(field, v, p1 - v, s0.phi, s1.phi, 1e-12);
             return Some(v + (p1 - v) * t);
         }
     }

@@ -70,6 +70,10 @@ pub struct Model {
     ranges: Vec<Vec<f64>>,
     cuts: Vec<Vec<bool>>,
     scales: Vec<f64>,
+    /// Per group: each geometric primitive's bounding ball (centre, radius).
+    gballs: Vec<Vec<(DVec3, f64)>>,
+    /// Per group: each density primitive's influence ball (centre, radius).
+    dballs: Vec<Vec<(DVec3, f64)>>,
 }
 
 /// Which primitives may be non-zero in a region: per group, the indices of its
@@ -114,6 +118,8 @@ impl Model {
             ranges: Vec::new(),
             cuts: Vec::new(),
             scales: Vec::new(),
+            gballs: Vec::new(),
+            dballs: Vec::new(),
         })
     }
 
@@ -145,6 +151,8 @@ impl Model {
         self.ranges.push(Vec::new());
         self.cuts.push(Vec::new());
         self.scales.push(0.0);
+        self.gballs.push(Vec::new());
+        self.dballs.push(Vec::new());
         self.refresh(k);
         Ok(k)
     }
@@ -212,6 +220,27 @@ impl Model {
             .collect();
         self.cuts[k] = g.density.iter().map(|d| d.has_cuts()).collect();
         self.scales[k] = g.density.iter().map(|d| d.reducing).fold(0.0, f64::max);
+        self.gballs[k] = g.geometric.iter().map(|gp| gp.bounds()).collect();
+        self.dballs[k] = g
+            .density
+            .iter()
+            .zip(&self.ranges[k])
+            .map(|(d, &r)| d.influence_ball(r))
+            .collect();
+    }
+
+    /// Whether geometric primitive j of group k reaches p with reach margin
+    /// `margin` (p in its bounding ball grown by `margin`): outside the ball
+    /// it is not inside, and beyond the margin it is no piece of Φ.
+    fn geometric_reaches(&self, k: usize, j: usize, p: DVec3, margin: f64) -> bool {
+        within(self.gballs[k][j], p, margin)
+    }
+
+    /// Whether density primitive i of group k reaches p with reach margin
+    /// `margin` (p in its influence ball grown by `margin`): outside the
+    /// ball F = 0, and beyond the margin its cuts are no pieces of Φ.
+    fn density_reaches(&self, k: usize, i: usize, p: DVec3, margin: f64) -> bool {
+        within(self.dballs[k][i], p, margin)
     }
 
     /// Group k's largest reducing factor: the scale of Φ's density-sum terms
@@ -298,7 +327,7 @@ impl Model {
         let mut q = Vec::with_capacity(self.groups.len());
         let act = self.all_active();
         for k in 0..self.groups.len() {
-            let (e, _, _) = self.group_eval(k, p, &act, &q);
+            let (e, _, _) = self.group_eval(k, p, &act, &q, f64::INFINITY, None);
             q.push(e >= 0.0);
         }
         q
@@ -310,7 +339,7 @@ impl Model {
         let mut q = Vec::with_capacity(k + 1);
         let mut e = 0.0;
         for m in 0..=k {
-            let (em, _, _) = self.group_eval(m, p, &act, &q);
+            let (em, _, _) = self.group_eval(m, p, &act, &q, f64::INFINITY, None);
             q.push(em >= 0.0);
             e = em;
         }
@@ -336,23 +365,54 @@ impl Model {
     }
 
     /// (E_k, f_k, whether any density primitive is non-zero) with the given active set
-    /// and the earlier groups' solids `q`.
-    fn group_eval(&self, k: usize, p: DVec3, act: &Active, q: &[bool]) -> (f64, f64, bool) {
+    /// and the earlier groups' solids `q`; the pieces of Φ at p of the
+    /// primitives that reach p with reach margin `margin` folded into `d`
+    /// when it is given.
+    fn group_eval(
+        &self,
+        k: usize,
+        p: DVec3,
+        act: &Active,
+        q: &[bool],
+        margin: f64,
+        mut d: Option<&mut f64>,
+    ) -> (f64, f64, bool) {
         let g = &self.groups[k];
         let mut f = 0.0;
         let mut any = false;
         for &i in &act.density[k] {
-            let v = g.density[i as usize].value(p, self.ranges[k][i as usize]);
+            let i = i as usize;
+            if !self.density_reaches(k, i, p, margin) {
+                continue;
+            }
+            let dp = &g.density[i];
+            let v = dp.value(p, self.ranges[k][i]);
             if v != 0.0 {
                 any = true;
                 f += v;
             }
+            // Without cuts of its own (`has_cuts`) the only cut is the
+            // culling range, where F jumps by less than τ D_e: no boundary of
+            // S and no piece of Φ (as in `piece_gradient`).
+            if let Some(d) = d.as_deref_mut()
+                && self.cuts[k][i]
+            {
+                *d = d.min(dp.cut_distance(p, self.ranges[k][i]).0);
+            }
         }
         let mut count = 0i32;
         for &j in &act.geometric[k] {
-            let gp = &g.geometric[j as usize];
-            if gp.contains(p) {
+            let j = j as usize;
+            if !self.geometric_reaches(k, j, p, margin) {
+                continue;
+            }
+            let gp = &g.geometric[j];
+            let v = gp.value(p);
+            if v >= 0.0 {
                 count += if gp.negative { -1 } else { 1 };
+            }
+            if let Some(d) = d.as_deref_mut() {
+                *d = d.min(v.abs());
             }
         }
         for &m in &g.incorporated {
@@ -364,24 +424,25 @@ impl Model {
         (f + h - self.de, f, any)
     }
 
-    /// Membership and Φ at p with the active set `act`; `q` is scratch.
-    pub fn sample(&self, p: DVec3, act: &Active, q: &mut Vec<bool>) -> Sample {
+    /// Membership and Φ at p with the active set `act` and reach margin
+    /// `margin` (> 0); `q` is scratch.
+    ///
+    /// Only the primitives that reach p enter: p lies in a geometric
+    /// primitive's bounding ball, or in a density primitive's influence ball,
+    /// grown by `margin`. The sample is then the same for every active set
+    /// that holds them: a function of p, the model and the margin alone, which
+    /// [`super::incremental`] relies on. Φ is clamped to ±`margin`, so it is
+    /// continuous: a piece that ends at its primitive's grown ball is at least
+    /// `margin` there (the pieces are 1-Lipschitz and no closer to p than the
+    /// primitive's ball). Every boundary piece within `margin` of p is in Φ.
+    /// A margin of `f64::INFINITY` gives the unclamped Φ of every primitive
+    /// in `act`.
+    pub fn sample(&self, p: DVec3, act: &Active, margin: f64, q: &mut Vec<bool>) -> Sample {
         q.clear();
-        let mut d = f64::INFINITY;
+        let mut d = margin;
         for k in 0..self.groups.len() {
-            let (e, f, any) = self.group_eval(k, p, act, q);
+            let (e, f, any) = self.group_eval(k, p, act, q, margin, Some(&mut d));
             q.push(e >= 0.0);
-            let g = &self.groups[k];
-            for &j in &act.geometric[k] {
-                d = d.min(g.geometric[j as usize].value(p).abs());
-            }
-            for &i in &act.density[k] {
-                d = d.min(
-                    g.density[i as usize]
-                        .cut_distance(p, self.ranges[k][i as usize])
-                        .0,
-                );
-            }
             if any {
                 let s = 1.0 / (self.scales[k] * self.de);
                 d = d.min(f.abs() * s).min((f - self.de).abs() * s);
@@ -398,8 +459,10 @@ impl Model {
     }
 
     /// The unit gradient of the boundary piece nearest to p (the Hermite normal up
-    /// to orientation; the caller orients it from inside to outside).
-    pub fn piece_gradient(&self, p: DVec3, act: &Active) -> DVec3 {
+    /// to orientation; the caller orients it from inside to outside); like
+    /// [`Self::sample`], only the primitives that reach p with reach margin
+    /// `margin` enter.
+    pub fn piece_gradient(&self, p: DVec3, act: &Active, margin: f64) -> DVec3 {
         let mut best = (f64::INFINITY, DVec3::ZERO);
         let mut take = |v: f64, g: DVec3| {
             if v.abs() < best.0 {
@@ -408,12 +471,18 @@ impl Model {
         };
         for (k, g) in self.groups.iter().enumerate() {
             for &j in &act.geometric[k] {
+                if !self.geometric_reaches(k, j as usize, p, margin) {
+                    continue;
+                }
                 let jet = g.geometric[j as usize].jet(p);
                 take(jet.value, jet.grad);
             }
             let mut f = super::jet::Jet::constant(0.0);
             let mut any = false;
             for &i in &act.density[k] {
+                if !self.density_reaches(k, i as usize, p, margin) {
+                    continue;
+                }
                 let dp = &g.density[i as usize];
                 let r = self.ranges[k][i as usize];
                 if self.cuts[k][i as usize] {
@@ -511,6 +580,12 @@ impl Model {
             None
         }
     }
+}
+
+/// Whether p lies in the ball (c, r) grown by `margin` (∞: everywhere).
+fn within((c, r): (DVec3, f64), p: DVec3, margin: f64) -> bool {
+    let r = r + margin;
+    (p - c).length_squared() <= r * r
 }
 
 fn check_group(k: usize, g: &Group) -> Result<(), DsmError> {

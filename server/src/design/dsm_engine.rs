@@ -459,22 +459,39 @@ impl DsmEngine {
         self.mesh(id).map(mesh_data)
     }
 
-    /// Part `id`'s mesh frame (kind 3) at revision `rev` of `design`.
+    /// Part `id`'s mesh frame (kind 3) at revision `rev` of `design`,
+    /// quantised on the part's meshing grid ([`grid_cube`]).
     pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
-        mesh_frame(self.mesh(id)?, design, id, rev, drag)
+        let shape = self.parts.get(&id)?;
+        let cube = shape.sampled.as_ref().map(|inc| grid_cube(inc.grid()));
+        mesh_frame(&shape.mesh, design, id, rev, drag, cube)
     }
 }
 
+/// The cube (origin, extent) a DSM part's mesh frame is quantised on: its
+/// meshing grid's, which holds every vertex (the grid spans the model's
+/// bounds with 1.5 cells to spare). The grid changes only when the model's
+/// bounds do, so across a drag inside them a vertex the mesher kept keeps
+/// its quantised position, and a frame could be sent as a delta.
+pub fn grid_cube(grid: &Grid) -> ([f64; 3], f64) {
+    (
+        grid.origin.to_array(),
+        grid.dims.max_element() as f64 * grid.h,
+    )
+}
+
 /// `m` as the mesh frame (kind 3) of part `id` at revision `rev` of
-/// `design` (flagged as a drag frame if `drag`). The kernel's meshes are
-/// finite and in range, so quantising cannot fail; if it ever did, the part
-/// would send no frame rather than a bad one.
+/// `design` (flagged as a drag frame if `drag`), quantised on `cube` when
+/// given ([`grid_cube`]), else on the mesh's bounding cube. The kernel's
+/// meshes are finite and in their grid, so quantising cannot fail; if it
+/// ever did, the part would send no frame rather than a bad one.
 pub fn mesh_frame(
     m: &Mesh,
     design: u64,
     id: u64,
     rev: u64,
     drag: bool,
+    cube: Option<([f64; 3], f64)>,
 ) -> Option<axum::body::Bytes> {
     let positions: Vec<[f64; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
     let normals: Vec<[f64; 3]> = m.normals.iter().map(|n| n.to_array()).collect();
@@ -483,8 +500,13 @@ pub fn mesh_frame(
     } else {
         0
     };
-    let frame =
-        MeshFrame::quantise((design, id, rev), flags, &positions, &normals, &m.triangles).ok()?;
+    let ids = (design, id, rev);
+    let frame = match cube {
+        Some(cube) => {
+            MeshFrame::quantise_in(ids, flags, cube, &positions, &normals, &m.triangles).ok()?
+        }
+        None => MeshFrame::quantise(ids, flags, &positions, &normals, &m.triangles).ok()?,
+    };
     frame.encode().ok().map(axum::body::Bytes::from)
 }
 

@@ -580,7 +580,7 @@ impl DsmFfds {
 
     /// Part `id`'s deformed mesh frame (kind 3) at revision `rev`.
     pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
-        super::dsm_engine::mesh_frame(self.mesh(id)?, design, id, rev, drag)
+        super::dsm_engine::mesh_frame(self.mesh(id)?, design, id, rev, drag, None)
     }
 }
 

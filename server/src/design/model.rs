@@ -515,7 +515,7 @@ impl DesignModel {
         if let Some(frame) = self
             .morphs
             .mesh(part)
-            .and_then(|m| super::dsm_engine::mesh_frame(m, design, part, rev, drag))
+            .and_then(|m| super::dsm_engine::mesh_frame(m, design, part, rev, drag, None))
             .or_else(|| self.ffds.frame(design, part, rev, drag))
             .or_else(|| self.engine.dsm().frame(design, part, rev, drag))
         {
