@@ -505,7 +505,12 @@ test('the page reconnects by itself after the server restarts', async () => {
   await page.waitForFunction(() => document.getElementById('status').className.includes('reconnecting'), null, { timeout: 10000 });
   server = await startServer({ listen: `127.0.0.1:${port}`, dataDir });
   await page.waitForFunction(() => document.getElementById('status').className.includes('connected') && !document.getElementById('status').className.includes('re'), null, { timeout: 20000 });
-  assert.ok(await page.evaluate(() => window.vsculpt.design.parts.size > 0 && [...window.vsculpt.design.parts.values()].every((p) => p.geometry)));
+  // Every part has its shape: a surface or curve its geometry, a body (drawn by the body view from its frames) its frame.
+  const shapeless = await page.evaluate(() =>
+    [...window.vsculpt.design.parts.values()].filter((p) => (p.kind === 'body' ? !(window.vsculpt.bodyView.bodies.get(p.id) || {}).frame : !p.geometry)).map((p) => `${p.kind} ${p.id}`),
+  );
+  assert.ok(await page.evaluate(() => window.vsculpt.design.parts.size > 0));
+  assert.deepEqual(shapeless, [], 'every part has its shape after reconnecting');
   await page.close();
 });
 
