@@ -100,7 +100,7 @@ fn parts_round_trip_exactly_with_their_names() {
         .iter()
         .filter_map(|p| match &p.entity {
             IgesEntity::Surface(s) => Some(s.clone()),
-            IgesEntity::Curve(_) => None,
+            IgesEntity::Curve(_) | IgesEntity::Trimmed(_) => None,
         })
         .collect();
     assert_eq!(read_iges(&text).unwrap(), surfaces);
@@ -219,6 +219,7 @@ fn export_follows_the_iges_record_layout() {
         let ty = match part.entity {
             IgesEntity::Surface(_) => "128",
             IgesEntity::Curve(_) => "126",
+            IgesEntity::Trimmed(_) => "144",
         };
         assert_eq!(field(d1, 0), ty);
         assert_eq!(&d1[64..72], "00000000", "D{de} status");
