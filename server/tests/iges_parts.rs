@@ -320,7 +320,7 @@ fn reads_rhino_curves_with_their_labels() {
                 assert_eq!(p.name.as_deref(), Some("3d BsCrv(0)"));
                 c.points.len()
             }
-            IgesEntity::Surface(_) => panic!("a surface"),
+            IgesEntity::Surface(_) | IgesEntity::Trimmed(_) => panic!("a surface"),
         })
         .collect();
     assert_eq!(counts, vec![6, 5, 5, 5, 7, 7]);
@@ -396,6 +396,7 @@ fn reads_the_45_trimmed_faces_of_an_opencascade_export() {
             match &p.entity {
                 IgesEntity::Surface(s) => (s.u_degree, s.v_degree, s.nu, s.nv),
                 IgesEntity::Curve(_) => panic!("a boundary curve became a part"),
+                IgesEntity::Trimmed(_) => panic!("the reader gives no trimmed surfaces"),
             }
         })
         .collect();
@@ -621,6 +622,7 @@ fn parts_are_the_independent_entities_and_the_bases_of_trimmed_surfaces() {
         .map(|p| match p.entity {
             IgesEntity::Surface(_) => "surface",
             IgesEntity::Curve(_) => "curve",
+            IgesEntity::Trimmed(_) => "trimmed",
         })
         .collect();
     assert_eq!(
