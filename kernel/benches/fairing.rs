@@ -3,7 +3,9 @@
 //! mean-curvature goal 1, converged when a sweep moves no point more than
 //! 1e-10 of the size. `global_sweeps`: [`fair_implicit`] (each sweep a
 //! Laplacian-preconditioned BiCGSTAB solve of the frozen equations,
-//! warm-started); `global_sweeps_lu`: the same sweeps each solved by a
+//! warm-started, the sweeps stepped by Anderson acceleration);
+//! `global_sweeps_plain`: the same without acceleration (plain steps, the
+//! previous implementation); `global_sweeps_lu`: the sweeps each solved by a
 //! sparse LU (symbolic factorisation kept); baseline `laplacian`: uniform
 //! Laplacian smoothing solved to its fixed point (one sparse Cholesky),
 //! the straightforward smoother that does not keep the curvature. The
@@ -14,8 +16,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use vsculpt_kernel::fairing::{
-    Control, FairingOptions, PointMesh, SweepSolve, fair, fair_implicit, fair_implicit_with,
-    laplacian_implicit,
+    Acceleration, Control, FairingOptions, PointMesh, SweepSolve, fair, fair_implicit,
+    fair_implicit_with, fair_sweeps, laplacian_implicit,
 };
 
 #[allow(clippy::needless_range_loop)] // lattice indices (i, j)
@@ -59,13 +61,18 @@ fn bench(c: &mut Criterion) {
     let big = octant(140, 0.005);
     let goals = vec![1.0; big.len()];
     let mut results = Vec::new();
-    for solve in [SweepSolve::Iterative, SweepSolve::Direct] {
+    for (solve, acceleration) in [
+        (SweepSolve::Iterative, Acceleration::default()),
+        (SweepSolve::Direct, Acceleration::default()),
+        (SweepSolve::Iterative, Acceleration::Plain),
+    ] {
         let mut probe = big.clone();
-        let r = fair_implicit_with(
+        let r = fair_sweeps(
             &mut probe,
             &goals,
             &FairingOptions::default(),
             solve,
+            acceleration,
             |_| Control::Continue,
         )
         .unwrap();
@@ -75,7 +82,7 @@ fn bench(c: &mut Criterion) {
             .map(|p| (p.length() - 1.0).abs())
             .fold(0.0, f64::max);
         println!(
-            "{} points, {solve:?}: {} global sweeps, converged {}, distance to sphere {dist:.2e}",
+            "{} points, {solve:?}, {acceleration:?}: {} global sweeps, converged {}, distance to sphere {dist:.2e}",
             big.len(),
             r.iterations,
             r.converged
@@ -89,6 +96,13 @@ fn bench(c: &mut Criterion) {
         .map(|(a, b)| (*a - *b).length())
         .fold(0.0, f64::max);
     println!("iterative and direct sweeps end {apart:.2e} apart");
+    let plain_apart = results[0]
+        .points
+        .iter()
+        .zip(&results[2].points)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    println!("accelerated and plain sweeps end {plain_apart:.2e} apart");
     let mut g = c.benchmark_group("fairing_10k");
     g.sample_size(10);
     g.bench_function("global_sweeps", |b| {
@@ -97,6 +111,20 @@ fn bench(c: &mut Criterion) {
             fair_implicit(&mut m, &goals, &FairingOptions::default(), |_| {
                 Control::Continue
             })
+            .unwrap()
+        })
+    });
+    g.bench_function("global_sweeps_plain", |b| {
+        b.iter(|| {
+            let mut m = big.clone();
+            fair_sweeps(
+                &mut m,
+                &goals,
+                &FairingOptions::default(),
+                SweepSolve::Iterative,
+                Acceleration::Plain,
+                |_| Control::Continue,
+            )
             .unwrap()
         })
     });

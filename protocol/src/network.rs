@@ -27,6 +27,8 @@ pub const MAX_NETWORK_CURVES: usize = 64;
 pub const MAX_FAIRING_ITERATIONS: u32 = 100_000;
 /// Most a side's ribbon scale may be; the least is its inverse (1/10).
 pub const MAX_RIBBON_SCALE: f64 = 10.0;
+/// Most tuning handles a `set_tuning` may carry (a face of 64 sides).
+pub const MAX_TUNING_HANDLES: usize = MAX_NETWORK_CURVES + 1;
 
 /// A network part's shape: its curves and what the server found of them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -53,6 +55,14 @@ pub struct NetworkData {
     /// in `create_part`; left out when there are no faces).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub ribbons: Vec<Vec<RibbonHandles>>,
+    /// Per face, its tuning handles (paper 004's u²v² terms): n + 1
+    /// offsets for a face of n sides — the centre's, then one per corner
+    /// (corner k where side k starts) — added to the patch with weights
+    /// that vanish with their gradient on the whole boundary, so they
+    /// reshape the interior only (set by the server; ignored in
+    /// `create_part`; left out when there are no faces).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tuning: Vec<Vec<Vec3>>,
 }
 
 /// A side's ribbon handles (paper 004 §5): how the patch leaves the side.
@@ -199,6 +209,15 @@ pub enum NetworkEdit {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         twist: Option<f64>,
     },
+    /// Set face `face`'s tuning handles (see [`NetworkData::tuning`]): all
+    /// n + 1 of them (zero vectors for none); the face's interior moves,
+    /// its boundary and the tangent planes along it stay.
+    SetTuning {
+        /// The face.
+        face: u32,
+        /// The centre's offset, then each corner's (n + 1 for n sides).
+        handles: Vec<Vec3>,
+    },
 }
 
 /// How a fairing job ended (`fairing_ended`).
@@ -333,6 +352,21 @@ impl NetworkEdit {
                     }
                 }
                 Ok(())
+            }
+            NetworkEdit::SetTuning { handles, .. } => {
+                if !(4..=MAX_TUNING_HANDLES).contains(&handles.len()) {
+                    return Err(bad(
+                        ErrorCode::OutOfRange,
+                        format!(
+                            "{} tuning handles: a face of n sides has n + 1 (4 ..= {MAX_TUNING_HANDLES})",
+                            handles.len()
+                        ),
+                    ));
+                }
+                handles
+                    .iter()
+                    .flatten()
+                    .try_for_each(|x| number("handles", *x))
             }
             NetworkEdit::Fair(f) => {
                 if let FairingGoal::Constant(g) = f.goal {

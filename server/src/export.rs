@@ -373,16 +373,15 @@ pub async fn vtu(doc: Arc<DesignDoc>, part: Option<u64>) -> Result<Body, ExportE
 }
 
 /// The IGES export of `doc` — one part, or every part (surfaces as entity
-/// 128, curves as 126, each named) — written on a blocking thread and
-/// streamed.
+/// 128, curves as 126, a network's faces as trimmed refits, 144, each
+/// named) — made and written on a blocking thread and streamed.
 pub async fn iges(doc: Arc<DesignDoc>, part: Option<u64>) -> Result<Body, ExportError> {
-    let parts = crate::design::exchange::to_iges_parts(&doc, part)
-        .map_err(|e| ExportError::Part(e.message))?;
-    let name = doc.name.clone();
-    drop(doc);
     stream(
         move || {
-            let meta = IgesMeta::now(&name, "vsculpt");
+            // On the blocking thread: a network part's faces are refitted.
+            let parts = crate::design::exchange::to_iges_parts(&doc, part)
+                .map_err(|e| ExportError::Part(e.message))?;
+            let meta = IgesMeta::now(&doc.name, "vsculpt");
             Ok(cad::write_iges_parts(&parts, &meta)?)
         },
         |text, out| out.write_all(text.as_bytes()),

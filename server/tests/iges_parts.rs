@@ -100,7 +100,7 @@ fn parts_round_trip_exactly_with_their_names() {
         .iter()
         .filter_map(|p| match &p.entity {
             IgesEntity::Surface(s) => Some(s.clone()),
-            IgesEntity::Curve(_) => None,
+            IgesEntity::Curve(_) | IgesEntity::Trimmed(_) => None,
         })
         .collect();
     assert_eq!(read_iges(&text).unwrap(), surfaces);
@@ -219,6 +219,7 @@ fn export_follows_the_iges_record_layout() {
         let ty = match part.entity {
             IgesEntity::Surface(_) => "128",
             IgesEntity::Curve(_) => "126",
+            IgesEntity::Trimmed(_) => "144",
         };
         assert_eq!(field(d1, 0), ty);
         assert_eq!(&d1[64..72], "00000000", "D{de} status");
@@ -319,7 +320,7 @@ fn reads_rhino_curves_with_their_labels() {
                 assert_eq!(p.name.as_deref(), Some("3d BsCrv(0)"));
                 c.points.len()
             }
-            IgesEntity::Surface(_) => panic!("a surface"),
+            IgesEntity::Surface(_) | IgesEntity::Trimmed(_) => panic!("a surface"),
         })
         .collect();
     assert_eq!(counts, vec![6, 5, 5, 5, 7, 7]);
@@ -395,6 +396,7 @@ fn reads_the_45_trimmed_faces_of_an_opencascade_export() {
             match &p.entity {
                 IgesEntity::Surface(s) => (s.u_degree, s.v_degree, s.nu, s.nv),
                 IgesEntity::Curve(_) => panic!("a boundary curve became a part"),
+                IgesEntity::Trimmed(_) => panic!("the reader gives no trimmed surfaces"),
             }
         })
         .collect();
@@ -620,6 +622,7 @@ fn parts_are_the_independent_entities_and_the_bases_of_trimmed_surfaces() {
         .map(|p| match p.entity {
             IgesEntity::Surface(_) => "surface",
             IgesEntity::Curve(_) => "curve",
+            IgesEntity::Trimmed(_) => "trimmed",
         })
         .collect();
     assert_eq!(

@@ -352,7 +352,8 @@ async fn bottle_drag_undo_fair_restart_through_the_server() {
         "fairing moved the boundary by {moved_boundary}"
     );
 
-    // Exports: the patches as STL, the curves as IGES 126 entities.
+    // Exports: the patches as STL, the curves as IGES 126 entities, the
+    // faces as trimmed refits (144).
     let stl = get(
         server.addr,
         &format!("/api/designs/{id}/export.stl?part=1"),
@@ -370,17 +371,23 @@ async fn bottle_drag_undo_fair_restart_through_the_server() {
     .await;
     assert_eq!(igs.status, 200);
     let text = igs.text();
-    let entities_126 = text
-        .lines()
-        .filter(|l| {
-            // A directory entry is two lines; its first has an odd sequence number.
-            l.len() == 80
-                && &l[72..73] == "D"
-                && l[..8].trim() == "126"
-                && l[73..].trim().parse::<u32>().is_ok_and(|n| n % 2 == 1)
-        })
-        .count();
-    assert_eq!(entities_126, 9, "one 126 per styling curve");
+    let independent = |ty: &str| {
+        text.lines()
+            .filter(|l| {
+                // A directory entry is two lines; its first has an odd
+                // sequence number. Independent: status 00000000.
+                l.len() == 80
+                    && &l[72..73] == "D"
+                    && l[..8].trim() == ty
+                    && &l[64..72] == "00000000"
+                    && l[73..].trim().parse::<u32>().is_ok_and(|n| n % 2 == 1)
+            })
+            .count()
+    };
+    assert_eq!(independent("126"), 9, "one 126 per styling curve");
+    // Each face (the faired one too) as its refit trimmed to the face
+    // (`tests/network_iges.rs`).
+    assert_eq!(independent("144"), 6, "one 144 per face");
 
     // Restart on the same data: the dragged, faired network comes back.
     let before = network(&Net::connect(server.addr, id, &viewer).await.snapshot);

@@ -8,7 +8,9 @@
 //! every shared curve (normals on both sides at 50 points per curve piece
 //! agree to 1e-9 rad). Undo restores the mesh bit for bit, redo and a
 //! restart keep the handles, and bad values are refused with a clear error,
-//! changing nothing.
+//! changing nothing. The same for a face's tuning handles (`set_tuning`):
+//! the mesh is the test's kernel patches with the reported handles, the
+//! interior moves, the boundary and the G1 joins stay.
 
 mod common;
 
@@ -153,7 +155,7 @@ fn network(snapshot: &Value) -> Value {
 
 /// The test's own kernel network of a wire network: its curves, tolerance
 /// and up, with the scales and twists of `ribbons` (per face, per side;
-/// a side's twist set on each of its edges).
+/// a side's twist set on each of its edges) and the faces' `tuning`.
 fn kernel_network(net: &Value) -> CurveNetwork {
     let curves: Vec<BSplineCurve> = net["curves"]
         .as_array()
@@ -194,6 +196,13 @@ fn kernel_network(net: &Value) -> CurveNetwork {
                 }
             }
         }
+    }
+    let tuning = net["tuning"].as_array().expect("tuning per face");
+    assert_eq!(tuning.len(), k.faces().len());
+    for (f, h) in tuning.iter().enumerate() {
+        let h: Vec<[f64; 3]> = serde_json::from_value(h.clone()).unwrap();
+        k.set_tuning(f, h.into_iter().map(DVec3::from).collect())
+            .unwrap();
     }
     k
 }
@@ -469,6 +478,161 @@ async fn bad_ribbon_edits_are_refused_and_change_nothing() {
     let fresh = Net::connect(server.addr, id, &viewer).await;
     assert_eq!(network(&fresh.snapshot), before);
     assert_eq!(fresh.snapshot["can_undo"], false, "{}", fresh.snapshot);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_tuning_edit_moves_the_interior_only_keeps_g1_undoes_persists_and_refuses_bad_handles() {
+    let data = data_dir("network-tuning");
+    let server = TestServer::start(data.clone()).await;
+    let (id, editor, viewer) = bottle_design(&server).await;
+    let mut a = Net::connect(server.addr, id, &editor).await;
+    let mut b = Net::connect(server.addr, id, &viewer).await;
+    let net0 = network(&b.snapshot);
+    // Default: n + 1 zero handles per face.
+    let k0 = kernel_network(&net0);
+    for (f, h) in net0["tuning"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(
+            *h,
+            json!(vec![[0.0, 0.0, 0.0]; k0.faces()[f].sides.len() + 1]),
+            "{net0}"
+        );
+    }
+    let (five, _) = five_and_shared_side(&k0);
+    let (plain, starts) = samples(&k0);
+    let first = b.mesh().await;
+    assert!(gap(&first, &plain) <= quantum(&first));
+
+    // Bad handles: refused, nothing changes.
+    let edit = |e: Value| json!({"type": "network_edit", "part": 1, "edit": e});
+    let m = a
+        .refused(
+            edit(json!({"op": "set_tuning", "face": five, "handles": vec![[0.0, 0.0, 0.1]; 5]})),
+            "out_of_range",
+        )
+        .await;
+    assert!(m.contains("takes 6 tuning handles"), "{m}");
+    let m = a
+        .refused(
+            edit(json!({"op": "set_tuning", "face": five, "handles": vec![[0.0, 0.0, 0.1]; 3]})),
+            "out_of_range",
+        )
+        .await;
+    assert!(m.contains("tuning handles"), "{m}");
+    let m = a
+        .refused(
+            edit(json!({"op": "set_tuning", "face": five, "handles": vec![[0.0, 1e300, 0.0]; 6]})),
+            "out_of_range",
+        )
+        .await;
+    assert!(m.contains("handles"), "{m}");
+    let m = a
+        .refused(
+            edit(json!({"op": "set_tuning", "face": 6, "handles": vec![[0.0, 0.0, 0.1]; 5]})),
+            "out_of_range",
+        )
+        .await;
+    assert!(m.contains("no face 6"), "{m}");
+    let fresh = Net::connect(server.addr, id, &viewer).await;
+    assert_eq!(network(&fresh.snapshot), net0);
+    assert_eq!(fresh.snapshot["can_undo"], false, "{}", fresh.snapshot);
+    drop(fresh);
+
+    // The centre pushed along the face's normal at its centre, one corner sideways.
+    let n = k0.patch(five).unwrap().normal(glam::DVec2::ZERO);
+    let mut handles = vec![[0.0; 3]; 6];
+    handles[0] = (n * 0.15).to_array();
+    handles[2] = [0.05, -0.03, 0.02];
+    let r = a
+        .request(edit(
+            json!({"op": "set_tuning", "face": five, "handles": handles}),
+        ))
+        .await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let changed = b.wait_for("network_changed").await;
+    let net1 = changed["network"].clone();
+    assert_eq!(net1["tuning"][five], json!(handles), "{net1}");
+    assert_eq!(net1["curves"], net0["curves"]);
+    assert_eq!(net1["ribbons"], net0["ribbons"]);
+    let edited = b.mesh_after(first.revision).await;
+    let k1 = kernel_network(&net1);
+    let (tuned, _) = samples(&k1);
+    let off = gap(&edited, &tuned);
+    assert!(
+        off <= quantum(&edited),
+        "mesh off the tuned patches by {off}"
+    );
+
+    // The five-sided face's interior moved — at its centre by the sum of
+    // the handles (there every weight is 1: β/β(centre) = 1 and each
+    // corner's n λ_k = 1) — while its boundary and every other face did not.
+    let p0 = positions(&first);
+    let p1 = positions(&edited);
+    let dm = PatchSampler::new(&k0.patch(five).unwrap(), RESOLUTION)
+        .mesh()
+        .clone();
+    let sum: DVec3 = handles.iter().map(|h| DVec3::from(*h)).sum();
+    let (mut inside, mut on_boundary, mut centre) = (0.0f64, 0.0f64, f64::NAN);
+    for (j, is_b) in dm.boundary.iter().enumerate() {
+        let d = p0[starts[five] + j].distance(p1[starts[five] + j]);
+        if *is_b {
+            on_boundary = on_boundary.max(d);
+        } else {
+            inside = inside.max(d);
+        }
+        if dm.points[j].length() < 1e-12 {
+            centre = (p1[starts[five] + j] - p0[starts[five] + j]).distance(sum);
+        }
+    }
+    let others = (0..starts.len() - 1)
+        .filter(|&f| f != five)
+        .flat_map(|f| starts[f]..starts[f + 1])
+        .map(|j| p0[j].distance(p1[j]))
+        .fold(0.0f64, f64::max);
+    println!(
+        "tuning edit: interior moved {inside:.4} (centre off the handles' sum by {centre:.2e}), boundary {on_boundary:.2e}, other faces {others:.2e}, mesh vs kernel {off:.2e}"
+    );
+    assert!(
+        centre <= 2.0 * quantum(&edited),
+        "centre off the handles' sum by {centre}"
+    );
+    assert!(
+        inside >= sum.length() - 2.0 * quantum(&edited),
+        "interior moved {inside}"
+    );
+    assert!(
+        on_boundary <= 2.0 * quantum(&edited),
+        "boundary moved {on_boundary}"
+    );
+    assert!(
+        others <= 2.0 * quantum(&edited),
+        "other faces moved {others}"
+    );
+    let (g, shared) = g1_error(&k1);
+    println!("tuning edit: normal angle {g:.2e} rad over {shared} shared edges");
+    assert!(g <= 1e-9, "normals differ by {g} rad across shared curves");
+
+    // Undo: bit for bit; redo and a restart keep the handles.
+    let r = a.request(json!({"type": "undo"})).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let snap = b.wait_for("snapshot").await;
+    assert_eq!(network(&snap), net0);
+    let undone = b.mesh_after(edited.revision).await;
+    assert_eq!(undone.positions, first.positions);
+    assert_eq!(undone.normals, first.normals);
+    let r = a.request(json!({"type": "redo"})).await;
+    assert_eq!(r["type"], "ack", "{r}");
+    let snap = b.wait_for("snapshot").await;
+    assert_eq!(network(&snap), net1);
+    drop((a, b));
+    tokio::time::sleep(std::time::Duration::from_millis(300)).await;
+    server.stop().await;
+    let server = TestServer::start(data.clone()).await;
+    let mut c = Net::connect(server.addr, id, &viewer).await;
+    assert_eq!(network(&c.snapshot), net1);
+    let again = c.mesh().await;
+    assert_eq!(again.positions, edited.positions);
     server.stop().await;
     let _ = std::fs::remove_dir_all(&data);
 }

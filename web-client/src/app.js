@@ -371,7 +371,7 @@ function escape(s) {
 
 function onMessage(msg) {
   if (msg.type === 'ack' || msg.type === 'error') {
-    networkView.answered(msg.req);
+    networkView.answered(msg.req, msg.type === 'error');
     bodyView.answered(msg);
   }
   switch (msg.type) {
@@ -1014,6 +1014,11 @@ $('fair-network').addEventListener('click', () => {
   const running = ids.filter((id) => networkView.jobsOf(id).length);
   if (running.length) for (const id of running) networkView.cancelJobs(id);
   else for (const id of ids) networkView.fairAll(id);
+});
+$('ribbon-handles').addEventListener('click', () => {
+  const on = !networkView.handles.shown;
+  networkView.handles.show(on);
+  $('ribbon-handles').setAttribute('aria-pressed', String(on));
 });
 $('add-dsm').addEventListener('click', addDsm);
 $('finish-curve').addEventListener('click', finishCurve);

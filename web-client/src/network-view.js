@@ -11,12 +11,14 @@
 // (mesh-curvature.js: H, K, k1, k2 and their variations) the patches are
 // coloured by the measure estimated on the drawn mesh; in zebra mode they
 // get the view's stripes, so tangent-plane continuity across the curves
-// shows.
+// shows. The sides' ribbon handles (ribbon-handles.js) are drawn with each
+// part and grabbed before its curves.
 
 import * as THREE from 'three';
 import { curveDerivs } from './bspline.js';
 import { curvatureColor } from './view.js';
 import { isMeasure, measureOf, meshCurvature } from './mesh-curvature.js';
+import { RibbonHandles } from './ribbon-handles.js';
 
 /** Samples per curve for drawing and picking. */
 const SAMPLES = 200;
@@ -64,6 +66,8 @@ export class NetworkView {
     this.jobs = new Map();
     /** The last `fairing_ended`. */
     this.lastEnded = null;
+    /** The sides' ribbon handles (hidden until `handles.show(true)`). */
+    this.handles = new RibbonHandles(view, { send, canEdit });
     const previousMode = view.onModeChange;
     view.onModeChange = () => {
       previousMode.call(view);
@@ -105,6 +109,7 @@ export class NetworkView {
   remove(id) {
     const d = this.parts.get(id);
     if (!d) return;
+    this.handles.remove(id);
     this.group.remove(d.root);
     d.root.traverse((o) => o.geometry && o.geometry.dispose());
     this.parts.delete(id);
@@ -136,6 +141,7 @@ export class NetworkView {
       d.root.add(line);
       return { curve, samples, line };
     });
+    this.handles.update(id, d.root, d.curves.map((c) => c.curve), network);
     const waiting = this.pending.get(id);
     if (waiting) {
       this.pending.delete(id);
@@ -259,6 +265,11 @@ export class NetworkView {
 
   down(e) {
     if (!this.canEdit() || e.button !== 0) return;
+    if (this.handles.down(...this.pixel(e))) {
+      e.stopImmediatePropagation();
+      this.view.controls.enabled = false;
+      return;
+    }
     const hit = this.nearest(e);
     if (!hit) return;
     // Neither the orbit controls nor the icon picking see this press.
@@ -270,6 +281,10 @@ export class NetworkView {
   }
 
   move(e) {
+    if (this.handles.drag) {
+      this.handles.move(...this.pixel(e));
+      return;
+    }
     if (!this.drag) return;
     const [x, y, w, h] = this.pixel(e);
     const ray = new THREE.Raycaster();
@@ -292,8 +307,9 @@ export class NetworkView {
     }
   }
 
-  /** The server answered request `req` (ack or error): the next drag position may go. */
-  answered(req) {
+  /** The server answered request `req` (ack or error, `failed`): the next drag position may go. */
+  answered(req, failed = false) {
+    this.handles.answered(req, failed);
     if (this.drag && this.drag.inFlight === req) {
       this.drag.inFlight = false;
       this.flush();
@@ -301,6 +317,10 @@ export class NetworkView {
   }
 
   up() {
+    if (this.handles.up()) {
+      this.view.controls.enabled = true;
+      return;
+    }
     if (!this.drag) return;
     this.drag = null;
     this.view.controls.enabled = true;

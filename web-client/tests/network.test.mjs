@@ -10,7 +10,11 @@
 // fair button turns into a cancel button (the viewer's is not shown) that
 // cancels it and changes nothing; a finished fairing is drawn. A client
 // joining while jobs run finds them in its snapshot (its page drops every
-// `fairing_progress`, so nothing else could tell it).
+// `fairing_progress`, so nothing else could tell it). A ribbon handle
+// dragged with the mouse sets its side's scale and then its twist: checked
+// on the server's stored part (REST), in the viewer's network, and in the
+// viewer's patches, whose exact boundary normal at the side's middle turns
+// about the curve the way the ball was turned.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -259,6 +263,187 @@ test('fairing runs as a job: progress in both browsers, the button cancels it, a
   const moved = after.positions.reduce((m, x, i) => Math.max(m, Math.abs(x - before.positions[i])), 0);
   assert.ok(moved > 1e-4, `the drawn patches moved by ${moved}`);
   assert.equal(await viewer.evaluate(() => window.vsculpt.networkView.lastEnded.outcome), 'applied');
+  assert.deepEqual(editor.errors, []);
+  assert.deepEqual(viewer.errors, []);
+  await editor.close();
+  await viewer.close();
+});
+
+/**
+ * In `page`: the ribbon handle of side `side` of face `face` as the test
+ * derives it from the curves alone (the side's middle c(t_m), the curve's
+ * unit tangent there, the unit direction normal to it towards the mean of
+ * the face's side middles, the stem 0.3 of that distance), and the screen
+ * positions of the ball at (scale, twist) for each pair of `at`; with
+ * `face` null, the side whose three points are inside the canvas and
+ * farthest apart on screen.
+ */
+function handleScreen(page, face, side, at) {
+  return page.evaluate(
+    async ([face, side, at]) => {
+      const { curveDerivs } = await import('/src/bspline.js');
+      const v = window.vsculpt.view;
+      const d = window.vsculpt.networkView.parts.get(1);
+      const r = v.renderer.domElement.getBoundingClientRect();
+      const curves = d.curves.map((c) => c.curve);
+      const frame = (f, k) => {
+        const sides = d.network.faces[f].sides;
+        const mid = (s) => curveDerivs(curves[s.curve], (s.t_start + s.t_end) / 2);
+        const c = [0, 1, 2].map((x) => sides.reduce((a, s) => a + mid(s).p[x], 0) / sides.length);
+        const m = mid(sides[k]);
+        const l = Math.hypot(...m.d1);
+        const axis = m.d1.map((x) => x / l);
+        const w = c.map((x, i) => x - m.p[i]);
+        const along = w.reduce((a, x, i) => a + x * axis[i], 0);
+        const n = w.map((x, i) => x - along * axis[i]);
+        const dist = Math.hypot(...n);
+        const inward = n.map((x) => x / dist);
+        const across = [axis[1] * inward[2] - axis[2] * inward[1], axis[2] * inward[0] - axis[0] * inward[2], axis[0] * inward[1] - axis[1] * inward[0]];
+        return { mid: m.p, axis, inward, across, reach: 0.3 * dist };
+      };
+      const screen = (fr, [scale, twist]) => {
+        const p = [0, 1, 2].map((i) => fr.mid[i] + fr.reach * scale * (Math.cos(twist) * fr.inward[i] + Math.sin(twist) * fr.across[i]));
+        const q = v.model.localToWorld(new v.camera.position.constructor(...p)).project(v.camera);
+        return { x: r.left + ((q.x + 1) / 2) * r.width, y: r.top + ((1 - q.y) / 2) * r.height };
+      };
+      const inside = (s) => s.x > r.left + 30 && s.x < r.right - 30 && s.y > r.top + 30 && s.y < r.bottom - 30;
+      let best = null;
+      // A side with a meeting inside it has more than one edge: its twist
+      // peaks in each edge's middle, not at the side's (left out).
+      const inner = (s) => d.network.meetings.some((m) => m.curves.some(([c, t]) => c === s.curve && t > Math.min(s.t_start, s.t_end) + 1e-9 && t < Math.max(s.t_start, s.t_end) - 1e-9));
+      d.network.faces.forEach((fc, f) =>
+        fc.sides.forEach((sd, k) => {
+          if (face !== null && (f !== face || k !== side)) return;
+          if (face === null && inner(sd)) return;
+          const fr = frame(f, k);
+          const pts = at.map((a) => screen(fr, a));
+          let sep = Infinity;
+          for (let i = 0; i < pts.length; i++) for (let j = 0; j < i; j++) sep = Math.min(sep, Math.hypot(pts[i].x - pts[j].x, pts[i].y - pts[j].y));
+          if (face === null && !pts.every(inside)) return;
+          if (!best || sep > best.sep) best = { face: f, side: k, frame: fr, pts, sep };
+        }),
+      );
+      return best;
+    },
+    [face, side, at],
+  );
+}
+
+/** Drags with the mouse from screen point `a` to `b` in 10 steps. */
+async function mouseDrag(page, a, b) {
+  await page.mouse.move(a.x, a.y);
+  await page.mouse.down();
+  for (let k = 1; k <= 10; k++) await page.mouse.move(a.x + ((b.x - a.x) * k) / 10, a.y + ((b.y - a.y) * k) / 10);
+  await page.mouse.up();
+}
+
+/** The network part as the server keeps it (REST, with the editor's token from `url`). */
+async function storedNetwork(url) {
+  const q = new URL(url).searchParams;
+  const res = await fetch(`${server.base}/api/designs/${q.get('design')}?token=${encodeURIComponent(q.get('token'))}`);
+  assert.equal(res.status, 200);
+  const body = await res.json();
+  return body.design.parts.find((p) => p.id === 1).body;
+}
+
+/** In `page`: the drawn frame's vertex nearest model point `p` (or vertex `index`): its index, distance, normal, the frame's quantisation bound and revision. */
+function vertexNear(page, p, index = null) {
+  return page.evaluate(
+    ([p, index]) => {
+      const f = window.vsculpt.networkView.parts.get(1).frame;
+      let best = index;
+      if (best === null) {
+        let dist = Infinity;
+        for (let i = 0; i < f.positions.length / 3; i++) {
+          const q = Math.hypot(f.positions[3 * i] - p[0], f.positions[3 * i + 1] - p[1], f.positions[3 * i + 2] - p[2]);
+          if (q < dist) [dist, best] = [q, i];
+        }
+      }
+      const n = [0, 1, 2].map((x) => f.normals[3 * best + x]);
+      const q = [0, 1, 2].map((x) => f.positions[3 * best + x] - p[x]);
+      return { index: best, dist: Math.hypot(...q), quantum: f.step * Math.sqrt(3) + 1e-5, normal: n, revision: f.revision };
+    },
+    [p, index],
+  );
+}
+
+test('a ribbon handle dragged with the mouse sets its side\'s scale, then its twist: on the server, in another browser, and in the patches\' tangent plane', async () => {
+  const d = await bottleDesign('bottle-ribbons');
+  const editor = await openNetwork(d.editor);
+  const viewer = await openNetwork(d.viewer);
+  // Hidden until asked for: a press where a handle would be grabs nothing.
+  assert.equal(await editor.evaluate(() => window.vsculpt.networkView.handles.shown), false);
+  await editor.click('#ribbon-handles');
+  assert.equal(await editor.evaluate(() => document.querySelector('#ribbon-handles').getAttribute('aria-pressed')), 'true');
+
+  // The side whose ball at scale 1, at scale 2 and at (2, twist 0.5) are on screen and farthest apart.
+  const h = await handleScreen(editor, null, null, [[1, 0], [2, 0], [2, 0.5]]);
+  assert.ok(h && h.sep > 25, `no handle to drag on screen: ${JSON.stringify(h)}`);
+  // The page draws the ball where the test puts it (3D, model space).
+  const ball = await editor.evaluate(([f, k]) => window.vsculpt.networkView.handles.parts.get(1).handles.find((x) => x.face === f && x.side === k).ball.position.toArray(), [h.face, h.side]);
+  const expect1 = h.frame.mid.map((x, i) => x + h.frame.reach * h.frame.inward[i]);
+  assert.ok(Math.hypot(...ball.map((x, i) => x - expect1[i])) < 1e-9 * (1 + h.frame.reach), `ball at ${ball}, expected ${expect1}`);
+  const boundary = await vertexNear(viewer, h.frame.mid);
+  assert.ok(boundary.dist <= boundary.quantum, `no mesh vertex at the side's middle: ${boundary.dist} (quantum ${boundary.quantum})`);
+
+  // Scale: the ball dragged out to twice its reach.
+  await mouseDrag(editor, h.pts[0], h.pts[1]);
+  let stored = await storedNetwork(d.editor);
+  for (let k = 0; k < 100 && !(stored.ribbons && stored.ribbons.scales.length); k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    stored = await storedNetwork(d.editor);
+  }
+  assert.equal(stored.ribbons.scales.length, 1, JSON.stringify(stored.ribbons));
+  const [sf, ss, scale] = stored.ribbons.scales[0];
+  assert.deepEqual([sf, ss], [h.face, h.side]);
+  assert.ok(Math.abs(scale - 2) < 0.1, `stored scale ${scale}`);
+  assert.deepEqual(stored.ribbons.twists || [], [], 'a drag along the stem set a twist');
+  await viewer.waitForFunction(([f, k, s]) => {
+    const n = window.vsculpt.networkView.parts.get(1).network;
+    return n.ribbons && n.ribbons[f][k].scale === s;
+  }, [h.face, h.side, scale], { timeout: 15000 });
+  let scaled = await vertexNear(viewer, h.frame.mid, boundary.index);
+  for (let k = 0; k < 50 && scaled.revision <= boundary.revision; k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    scaled = await vertexNear(viewer, h.frame.mid, boundary.index);
+  }
+  assert.ok(scaled.revision > boundary.revision, 'no new patches after the scale');
+  // The editor's handles are redrawn where the server put them.
+  await editor.waitForFunction(([f, k, s]) => {
+    const n = window.vsculpt.networkView.parts.get(1).network;
+    return n.ribbons && n.ribbons[f][k].scale === s;
+  }, [h.face, h.side, scale], { timeout: 15000 });
+
+  // Twist: the ball turned about the curve by 0.5 rad.
+  const t = await handleScreen(editor, h.face, h.side, [[scale, 0], [2, 0.5]]);
+  await mouseDrag(editor, t.pts[0], t.pts[1]);
+  for (let k = 0; k < 100 && !(stored.ribbons.twists && stored.ribbons.twists.length); k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    stored = await storedNetwork(d.editor);
+  }
+  assert.ok(stored.ribbons.twists.length >= 1, JSON.stringify(stored.ribbons));
+  for (const [, twist] of stored.ribbons.twists) assert.ok(Math.abs(twist - 0.5) < 0.06, `stored twist ${twist}`);
+  await viewer.waitForFunction(([f, k]) => {
+    const n = window.vsculpt.networkView.parts.get(1).network;
+    return n.ribbons && Math.abs(n.ribbons[f][k].twist) > 0.3;
+  }, [h.face, h.side], { timeout: 15000 });
+  let twisted = await vertexNear(viewer, h.frame.mid, boundary.index);
+  for (let k = 0; k < 50 && twisted.revision <= scaled.revision; k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    twisted = await vertexNear(viewer, h.frame.mid, boundary.index);
+  }
+  // The tangent plane at the side's middle turned about the curve's
+  // tangent the way the ball did (the boundary normals are the patch's own).
+  const a = h.frame.axis;
+  const proj = (n) => {
+    const s = n.reduce((x, y, i) => x + y * a[i], 0);
+    return n.map((x, i) => x - s * a[i]);
+  };
+  const [n0, n1] = [proj(scaled.normal), proj(twisted.normal)];
+  const c = [n0[1] * n1[2] - n0[2] * n1[1], n0[2] * n1[0] - n0[0] * n1[2], n0[0] * n1[1] - n0[1] * n1[0]];
+  const angle = Math.atan2(c.reduce((x, y, i) => x + y * a[i], 0), n0.reduce((x, y, i) => x + y * n1[i], 0));
+  console.log(`ribbon handle face ${h.face} side ${h.side}: scale ${scale}, twist ${stored.ribbons.twists.map((x) => x[1])}, normal at the side's middle turned ${angle.toFixed(4)} rad about the curve`);
+  assert.ok(angle > 0.25 && angle < 0.56, `normal turned ${angle} rad about the curve's tangent`);
   assert.deepEqual(editor.errors, []);
   assert.deepEqual(viewer.errors, []);
   await editor.close();

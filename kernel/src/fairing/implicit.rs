@@ -22,9 +22,14 @@
 //! Laplacian-preconditioned BiCGSTAB warm-started from the current points
 //! ([`super::sweep_solver`]), or a sparse LU with its symbolic
 //! factorisation kept ([`SweepSolve::Direct`]).
+//!
+//! The sweeps are stepped by Anderson acceleration by default
+//! ([`super::anderson`]): same fixed point, fewer sweeps; plain steps
+//! (x ← x + ω f) with [`Acceleration::Plain`].
 
 use glam::DVec3;
 
+use super::anderson::{Acceleration, Anderson};
 use super::error::FairingError;
 use super::iterate::{Control, FairingOptions, FairingReport, Progress};
 use super::local_axes::{LocalAxes, fit_axes, pseudo_centroid};
@@ -50,6 +55,29 @@ pub fn fair_implicit_with(
     goals: &[f64],
     options: &FairingOptions,
     solve: SweepSolve,
+    progress: impl FnMut(&Progress) -> Control,
+) -> Result<FairingReport, FairingError> {
+    fair_sweeps(
+        mesh,
+        goals,
+        options,
+        solve,
+        Acceleration::default(),
+        progress,
+    )
+}
+
+/// The global sweeps with their linear solves made by `solve` and their
+/// steps taken by `acceleration` (every choice has the same fixed point;
+/// the report's history is the plain residual's largest move per sweep).
+/// Acceleration applies to undamped runs (relaxation 1, the default); a
+/// run with another relaxation takes the damped plain steps it asks for.
+pub fn fair_sweeps(
+    mesh: &mut PointMesh,
+    goals: &[f64],
+    options: &FairingOptions,
+    solve: SweepSolve,
+    acceleration: Acceleration,
     mut progress: impl FnMut(&Progress) -> Control,
 ) -> Result<FairingReport, FairingError> {
     super::iterate::validate(mesh, goals, options)?;
@@ -90,6 +118,14 @@ pub fn fair_implicit_with(
     let mut x = faer::Mat::<f64>::zeros(dim, 1);
     let mut local = Vec::new();
     let mut alpha = Vec::new();
+    // A relaxation other than 1 asks for damped plain steps (a slow run
+    // on purpose): it is taken as asked.
+    let mut stepper = Anderson::new(match acceleration {
+        Acceleration::Anderson(m) if options.relaxation == 1.0 => m,
+        _ => 0,
+    });
+    let mut current = vec![0.0; dim];
+    let mut residual = vec![0.0; dim];
     for iteration in 1..=options.max_iterations {
         let first = solver.needs_pattern();
         values.clear();
@@ -158,9 +194,22 @@ pub fn fair_implicit_with(
         }
         let mut max_move = 0.0f64;
         for (k, &i) in interior.iter().enumerate() {
+            let p = mesh.points[i];
             let q = DVec3::new(x[(3 * k, 0)], x[(3 * k + 1, 0)], x[(3 * k + 2, 0)]);
-            max_move = max_move.max((q - mesh.points[i]).length());
-            mesh.points[i] = mesh.points[i] + (q - mesh.points[i]) * options.relaxation;
+            max_move = max_move.max((q - p).length());
+            for c in 0..3 {
+                current[3 * k + c] = p[c];
+                residual[3 * k + c] = q[c] - p[c];
+            }
+        }
+        if max_move <= threshold || !max_move.is_finite() {
+            // The last sweep (or a failed one): the plain step.
+            Anderson::new(0).step(&mut current, &residual, options.relaxation);
+        } else {
+            stepper.step(&mut current, &residual, options.relaxation);
+        }
+        for (k, &i) in interior.iter().enumerate() {
+            mesh.points[i] = DVec3::new(current[3 * k], current[3 * k + 1], current[3 * k + 2]);
         }
         history.push(max_move);
         if !max_move.is_finite() {

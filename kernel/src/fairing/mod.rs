@@ -14,10 +14,12 @@
 //! * goals are in mean curvature only (Gaussian goals were tried and refused,
 //!   see [`iterate`]);
 //! * the scheme: [`fair`] point by point as the paper, [`fair_implicit`] the
-//!   same equations solved per sweep for all points at once;
+//!   same equations solved per sweep for all points at once, its sweeps
+//!   stepped by Anderson acceleration (same fixed point, fewer sweeps);
 //! * boundary goals: measured at the boundary points, spread harmonically;
 //! * convergence: the largest move of a sweep below 1e-10 of the mesh size.
 
+pub mod anderson;
 pub mod eigen3;
 pub mod error;
 pub mod goals;
@@ -31,9 +33,10 @@ pub mod refit;
 pub mod sparse;
 pub mod sweep_solver;
 
+pub use anderson::Acceleration;
 pub use error::FairingError;
 pub use goals::{Goals, resolve};
-pub use implicit::{fair_implicit, fair_implicit_with, laplacian_implicit};
+pub use implicit::{fair_implicit, fair_implicit_with, fair_sweeps, laplacian_implicit};
 pub use iterate::{Control, FairingOptions, FairingReport, Progress, fair, laplacian_smooth};
 pub use measures::{Fairness, Neighbourhood, estimate, fairness, variation};
 pub use mesh::PointMesh;

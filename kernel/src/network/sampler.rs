@@ -110,11 +110,25 @@ impl DomainMesh {
 #[derive(Clone, Debug)]
 pub struct PatchSampler {
     mesh: DomainMesh,
-    weights: Vec<PointWeights>,
+    /// The domain corner each sample is at, if any.
+    corner: Vec<Option<usize>>,
+    /// Per side, its parameters and blend at every sample (contiguous per
+    /// side: a side's pass reads them in order).
+    side_weights: Vec<SideWeights>,
+    /// Per tuning handle, its weight at every sample.
+    tuning: Vec<Vec<f64>>,
     sides: usize,
     cache: Vec<SideCache>,
     /// Whether the last `evaluate` re-evaluated each side.
     refreshed: Vec<bool>,
+}
+
+/// One side's s_i, d_i and B_i at every sample.
+#[derive(Clone, Debug, Default)]
+struct SideWeights {
+    s: Vec<f64>,
+    d: Vec<f64>,
+    blend: Vec<f64>,
 }
 
 /// One side's basis values at every sample, and its ribbon values.
@@ -123,7 +137,8 @@ struct SideCache {
     key: Option<(f64, f64, Vec<f64>)>,
     /// First control point index per sample.
     first: Vec<u32>,
-    /// 3 (degree + 1) values per sample: N, N′, N″.
+    /// 2 (degree + 1) values per sample: N, N′ (the values need no c″: it
+    /// only carries the exact derivatives of the `Jet` evaluation).
     values: Vec<f64>,
     /// The control points used by the samples: `lo..hi`.
     lo: usize,
@@ -153,11 +168,28 @@ impl PatchSampler {
     /// Samples for an n-sided patch at lattice resolution `m`.
     pub fn new(patch: &Patch, m: usize) -> Self {
         let mesh = DomainMesh::new(patch.domain(), m);
-        let weights = mesh.points.iter().map(|p| patch.weights(*p)).collect();
+        let n = patch.sides();
+        let mut corner = Vec::with_capacity(mesh.points.len());
+        let mut side_weights = vec![SideWeights::default(); n];
+        let mut tuning = vec![Vec::with_capacity(mesh.points.len()); n + 1];
+        for p in &mesh.points {
+            let w: PointWeights = patch.weights(*p);
+            corner.push(w.corner);
+            for (k, sw) in side_weights.iter_mut().enumerate() {
+                sw.s.push(w.s[k]);
+                sw.d.push(w.d[k]);
+                sw.blend.push(w.blend[k]);
+            }
+            for (h, t) in tuning.iter_mut().zip(&w.tuning) {
+                h.push(*t);
+            }
+        }
         Self {
             mesh,
-            weights,
-            sides: patch.sides(),
+            corner,
+            side_weights,
+            tuning,
+            sides: n,
             cache: vec![SideCache::default(); patch.sides()],
             refreshed: vec![false; patch.sides()],
         }
@@ -170,12 +202,12 @@ impl PatchSampler {
 
     /// Number of samples.
     pub fn len(&self) -> usize {
-        self.weights.len()
+        self.corner.len()
     }
 
     /// Whether there are no samples.
     pub fn is_empty(&self) -> bool {
-        self.weights.is_empty()
+        self.corner.is_empty()
     }
 
     /// Forgets the kept ribbon values, so the next [`Self::evaluate`]
@@ -214,14 +246,14 @@ impl PatchSampler {
             cache.first.clear();
             cache.values.clear();
             let (mut lo, mut hi) = (usize::MAX, 0);
-            for pw in &self.weights {
-                let s = if pw.corner.is_some() { 0.0 } else { pw.s[k] };
+            // A corner's weights are all zero (s = 0).
+            for &s in &self.side_weights[k].s {
                 let t = side.t_start + s * (side.t_end - side.t_start);
-                basis_derivs_into(side.curve.knots(), t, 2, &mut scratch);
+                basis_derivs_into(side.curve.knots(), t, 1, &mut scratch);
                 cache.first.push(scratch.first as u32);
                 lo = lo.min(scratch.first);
                 hi = hi.max(scratch.first + w);
-                for d in 0..3 {
+                for d in 0..2 {
                     cache.values.extend((0..w).map(|j| scratch.get(d, j)));
                 }
             }
@@ -241,47 +273,53 @@ impl PatchSampler {
                 continue;
             }
             let w = side.curve.degree() + 1;
+            let sw = &self.side_weights[k];
             cache.ribbon_values.clear();
-            cache.ribbon_values.reserve(self.weights.len());
-            for (idx, pw) in self.weights.iter().enumerate() {
-                if pw.corner.is_some() || pw.blend[k] == 0.0 {
+            cache.ribbon_values.reserve(sw.s.len());
+            for (idx, corner) in self.corner.iter().enumerate() {
+                if corner.is_some() || sw.blend[idx] == 0.0 {
                     cache.ribbon_values.push(DVec3::ZERO);
                     continue;
                 }
                 let first = cache.first[idx] as usize;
-                let vals = &cache.values[idx * 3 * w..(idx + 1) * 3 * w];
+                let vals = &cache.values[idx * 2 * w..(idx + 1) * 2 * w];
                 let pts = &side.curve.points()[first..first + w];
+                // c and c′; c″ (zero here) enters only derivatives, which
+                // the f64 evaluation does not carry.
                 let mut derivs = [DVec3::ZERO; 3];
-                for (d, out_d) in derivs.iter_mut().enumerate() {
-                    for (j, p) in pts.iter().enumerate() {
-                        *out_d += *p * vals[d * w + j];
-                    }
+                for (j, p) in pts.iter().enumerate() {
+                    derivs[0] += *p * vals[j];
+                    derivs[1] += *p * vals[w + j];
                 }
                 cache
                     .ribbon_values
-                    .push(side.eval_from(pw.s[k], pw.d[k], derivs).val());
+                    .push(side.eval_from(sw.s[idx], sw.d[idx], derivs).val());
             }
             cache.ribbon = Some(side.clone());
         }
+        // Σ_i B_i R_i, side by side over all samples, then the tuning
+        // terms, then the corners (where the blends are 0/0).
         out.clear();
-        out.reserve(self.weights.len());
-        for (idx, pw) in self.weights.iter().enumerate() {
-            if let Some(c) = pw.corner {
-                out.push(patch.ribbons()[c].point(0.0));
+        out.resize(self.corner.len(), DVec3::ZERO);
+        for (cache, sw) in self.cache.iter().zip(&self.side_weights) {
+            for ((o, r), b) in out.iter_mut().zip(&cache.ribbon_values).zip(&sw.blend) {
+                if *b != 0.0 {
+                    *o += *r * *b;
+                }
+            }
+        }
+        for (h, weights) in patch.tuning().iter().zip(&self.tuning) {
+            if *h == DVec3::ZERO {
                 continue;
             }
-            let mut acc = DVec3::ZERO;
-            for (k, cache) in self.cache.iter().enumerate() {
-                let b = pw.blend[k];
-                if b == 0.0 {
-                    continue;
-                }
-                acc += cache.ribbon_values[idx] * b;
+            for (o, t) in out.iter_mut().zip(weights) {
+                *o += *h * *t;
             }
-            for (h, t) in patch.tuning().iter().zip(&pw.tuning) {
-                acc += *h * *t;
+        }
+        for (o, c) in out.iter_mut().zip(&self.corner) {
+            if let Some(c) = c {
+                *o = patch.ribbons()[*c].point(0.0);
             }
-            out.push(acc);
         }
         true
     }

@@ -12,8 +12,8 @@ pub mod vtu;
 
 pub use gltf::{write_gltf, write_gltf_to};
 pub use iges::{
-    IgesCurve, IgesEntity, IgesError, IgesMeta, IgesPart, IgesSurface, iges_text, read_iges,
-    read_iges_parts, write_iges, write_iges_parts,
+    IgesCurve, IgesEntity, IgesError, IgesMeta, IgesPart, IgesSurface, IgesTrimmed, iges_text,
+    read_iges, read_iges_parts, write_iges, write_iges_parts,
 };
 pub use mesh::{Mesh, MeshError};
 pub use obj::{write_obj, write_obj_to};

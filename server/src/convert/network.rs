@@ -87,6 +87,7 @@ pub fn network_to_wire(v: &NetworkView) -> NetworkData {
                     .collect()
             })
             .collect(),
+        tuning: v.tuning.clone(),
     }
 }
 
@@ -115,6 +116,10 @@ pub fn edit_from_wire(e: &NetworkEdit) -> NetworkEditDoc {
             side: *side as usize,
             scale: *scale,
             twist: *twist,
+        },
+        NetworkEdit::SetTuning { face, handles } => NetworkEditDoc::SetTuning {
+            face: *face as usize,
+            handles: handles.clone(),
         },
         NetworkEdit::Fair(f) => NetworkEditDoc::Fair(FairingDoc {
             face: f.face as usize,

@@ -1,13 +1,14 @@
 //! CAD exchange of a whole product: the parts of a design to IGES parts
 //! (every surface as an entity 128, every curve — and each curve of a
-//! network part — as a 126, each named) and
+//! network part — as a 126, each face of a network part as its refit
+//! trimmed to the face (144), each named) and
 //! IGES parts into a design as new parts (names from the file, made unique;
 //! unnamed entities numbered). The byte-level IGES work is `crate::cad`'s.
 
 use super::doc::{DesignDoc, SurfaceDoc};
 use super::error::{CommandError, ErrorKind};
 use super::part::{CurveDoc, CurvePart, MAX_PARTS, PALETTE, PartBody, PartDoc, SurfacePart};
-use crate::cad::{IgesCurve, IgesEntity, IgesPart};
+use crate::cad::{IgesCurve, IgesEntity, IgesPart, IgesSurface, IgesTrimmed};
 
 /// The IGES parts of `doc`: part `only`, or every part (hidden ones too:
 /// the exchange file is the whole product), named by their part names.
@@ -51,10 +52,28 @@ pub fn to_iges_parts(doc: &DesignDoc, only: Option<u64>) -> Result<Vec<IgesPart>
             )),
             PartBody::Curve(c) => out.push(named(p.name.clone(), curve(&c.curve))),
             // A network's styling curves, one entity 126 each, named
-            // "<part> curve <k>".
+            // "<part> curve <k>", and each face's refit trimmed to its
+            // domain polygon (entity 144), named "<part> face <k>".
             PartBody::Network(n) => {
                 for (k, c) in n.curves.iter().enumerate() {
                     out.push(named(format!("{} curve {k}", p.name), curve(c)));
+                }
+                let engine = super::network_engine::NetworkEngine::build(n)?;
+                for (k, (fit, outer)) in engine.refits()?.into_iter().enumerate() {
+                    let s = &fit.surface;
+                    let surface = IgesSurface {
+                        u_degree: s.u_knots().degree(),
+                        v_degree: s.v_knots().degree(),
+                        u_knots: s.u_knots().knots().to_vec(),
+                        v_knots: s.v_knots().knots().to_vec(),
+                        nu: s.nu(),
+                        nv: s.nv(),
+                        points: s.points().to_vec(),
+                    };
+                    out.push(named(
+                        format!("{} face {k}", p.name),
+                        IgesEntity::Trimmed(IgesTrimmed { surface, outer }),
+                    ));
                 }
             }
             // A body's boundary: its six faces, outward, named by face.
@@ -104,7 +123,8 @@ pub fn with_iges_parts(
     let mut ids = Vec::new();
     for (k, p) in parts.iter().enumerate() {
         let (kind, body) = match &p.entity {
-            IgesEntity::Surface(s) => (
+            // (The reader gives a trimmed surface's surface as a surface.)
+            IgesEntity::Surface(s) | IgesEntity::Trimmed(IgesTrimmed { surface: s, .. }) => (
                 "surface",
                 PartBody::Surface(SurfacePart {
                     surface: SurfaceDoc::from_iges(s),

@@ -20,8 +20,8 @@ use std::collections::BTreeMap;
 use vsculpt_kernel::bspline::{BSplineCurve, KnotVector, basis_derivs};
 use vsculpt_kernel::fairing::quadric::solve_dense;
 use vsculpt_kernel::fairing::{
-    Control, FairingError, FairingOptions, Goals, Measure, PointMesh, Progress, fair_implicit,
-    resolve,
+    Control, FairingError, FairingOptions, Goals, Measure, PointMesh, Progress, Refit,
+    RefitOptions, fair_implicit, refit, resolve,
 };
 use vsculpt_kernel::network::{CurveNetwork, NetworkError, NetworkOptions, Patch, PatchSampler};
 
@@ -33,6 +33,9 @@ pub const MESH_RESOLUTION: usize = 12;
 pub const DEFAULT_FAIRING_ITERATIONS: usize = 200;
 /// Most sweeps of a fairing run.
 pub const MAX_FAIRING_ITERATIONS: usize = 100_000;
+/// A face's refit for exchange keeps every sample within this fraction of
+/// the part's size (its bounding box's diagonal) — 1e-5: 1 µm on 100 mm.
+pub const REFIT_TOLERANCE: f64 = 1e-5;
 
 /// The measure fairing goals are given in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -115,6 +118,15 @@ pub enum NetworkEditDoc {
         scale: Option<f64>,
         /// The twist in radians, |twist| < π/2.
         twist: Option<f64>,
+    },
+    /// Set face `face`'s tuning handles: the centre's offset, then one
+    /// per corner (n + 1 for n sides); the interior moves, the boundary
+    /// and its tangent planes stay.
+    SetTuning {
+        /// The face.
+        face: usize,
+        /// The n + 1 offsets.
+        handles: Vec<[f64; 3]>,
     },
 }
 
@@ -380,7 +392,43 @@ impl NetworkEngine {
                 scale,
                 twist,
             } => self.set_ribbon(*face, *side, *scale, *twist),
+            NetworkEditDoc::SetTuning { face, handles } => self.set_tuning(*face, handles),
         }
+    }
+
+    /// Sets a face's tuning handles (see [`NetworkEditDoc::SetTuning`]);
+    /// the face is re-sampled (and loses a fair) when they changed.
+    fn set_tuning(
+        &mut self,
+        face: usize,
+        handles: &[[f64; 3]],
+    ) -> Result<Vec<usize>, CommandError> {
+        let sides = self
+            .net
+            .faces()
+            .get(face)
+            .ok_or_else(|| {
+                invalid(format!(
+                    "no face {face} (the part has {})",
+                    self.net.faces().len()
+                ))
+            })?
+            .sides
+            .len();
+        if handles.len() != sides + 1 {
+            return Err(invalid(format!(
+                "face {face} has {sides} sides: it takes {} tuning handles (centre, then each corner), not {}",
+                sides + 1,
+                handles.len()
+            )));
+        }
+        let h = handles
+            .iter()
+            .map(|p| finite(*p))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut net = self.net.clone();
+        net.set_tuning(face, h).map_err(network_error)?;
+        Ok(self.adopt(net))
     }
 
     /// Sets a side's ribbon handles (see [`NetworkEditDoc::SetRibbon`]);
@@ -466,8 +514,9 @@ impl NetworkEngine {
                 // are as they were (a faired face stays faired).
                 let mut points = Vec::new();
                 f.sampler.evaluate(&p, &mut points);
+                let tuned = p.tuning() != f.patch.tuning();
                 f.patch = p;
-                if f.sampler.refreshed().iter().any(|r| *r) {
+                if tuned || f.sampler.refreshed().iter().any(|r| *r) {
                     f.points = points;
                     f.faired = None;
                     changed.push(i);
@@ -722,6 +771,52 @@ impl NetworkEngine {
         }
     }
 
+    /// Every face's refit for exchange: a bicubic B-spline surface fitted
+    /// (the kernel's `refit`) to the face's samples at their domain points
+    /// mapped from [−1, 1]² to [0, 1]² — a faired face's faired points, an
+    /// unfaired face's patch sampled twice as finely as shown — each sample
+    /// within [`REFIT_TOLERANCE`] of the part's size; and the face's domain
+    /// polygon in those parameters (counter-clockwise, side k from corner
+    /// k): the face is the polygon's part of the refit, whose parameter
+    /// square also covers the domain's outside.
+    pub fn refits(&self) -> Result<Vec<(Refit, Vec<[f64; 2]>)>, CommandError> {
+        let (lo, hi) = self.faces.iter().flat_map(|f| f.points.iter()).fold(
+            (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+            |(a, b), p| (a.min(*p), b.max(*p)),
+        );
+        let size = (hi - lo).length();
+        let options = RefitOptions {
+            tolerance: REFIT_TOLERANCE * size,
+            ..RefitOptions::default()
+        };
+        let to_unit = |p: glam::DVec2| (p + glam::DVec2::ONE) * 0.5;
+        self.faces
+            .iter()
+            .enumerate()
+            .map(|(k, f)| {
+                let (points, domain) = if f.faired.is_some() {
+                    (f.points.clone(), f.sampler.mesh().points.clone())
+                } else {
+                    let mut fine = PatchSampler::new(&f.patch, 2 * MESH_RESOLUTION);
+                    let mut points = Vec::new();
+                    fine.evaluate(&f.patch, &mut points);
+                    (points, fine.mesh().points.clone())
+                };
+                let params: Vec<glam::DVec2> = domain.iter().map(|p| to_unit(*p)).collect();
+                let fit = refit(&points, &params, &options)
+                    .map_err(|e| invalid(format!("face {k} cannot be refitted: {e}")))?;
+                let outer = f
+                    .patch
+                    .domain()
+                    .vertices()
+                    .iter()
+                    .map(|p| to_unit(*p).to_array())
+                    .collect();
+                Ok((fit, outer))
+            })
+            .collect()
+    }
+
     /// The part with its meetings and faces.
     pub fn view(&self) -> NetworkView {
         NetworkView::from_network(self.to_part(), &self.net)
@@ -744,6 +839,8 @@ pub struct NetworkView {
     /// Per face, per side, its ribbon handles (scale, twist): the twist of
     /// the side's first edge (a `set_ribbon` sets every edge of the side).
     pub ribbons: Vec<Vec<(f64, f64)>>,
+    /// Per face, its tuning handles (centre, then corners).
+    pub tuning: Vec<Vec<[f64; 3]>>,
 }
 
 impl NetworkView {
@@ -782,6 +879,15 @@ impl NetworkView {
                         .collect()
                 })
                 .collect(),
+            tuning: (0..net.faces().len())
+                .map(|f| {
+                    net.tuning(f)
+                        .unwrap_or_default()
+                        .iter()
+                        .map(|h| h.to_array())
+                        .collect()
+                })
+                .collect(),
         }
     }
 
@@ -813,6 +919,7 @@ impl NetworkView {
                 meetings: Vec::new(),
                 faces: Vec::new(),
                 ribbons: Vec::new(),
+                tuning: Vec::new(),
             },
         }
     }
@@ -827,6 +934,10 @@ fn set_handles(net: &mut CurveNetwork, h: &RibbonHandlesDoc) -> Result<(), Comma
     }
     for &(e, t) in &h.twists {
         net.set_twist(e, t).map_err(network_error)?;
+    }
+    for (f, handles) in &h.tuning {
+        let v = handles.iter().map(|p| DVec3::from(*p)).collect();
+        net.set_tuning(*f, v).map_err(network_error)?;
     }
     Ok(())
 }
@@ -848,6 +959,13 @@ fn handles(net: &CurveNetwork) -> RibbonHandlesDoc {
             && t != 0.0
         {
             h.twists.push((e, t));
+        }
+    }
+    for f in 0..net.faces().len() {
+        if let Some(t) = net.tuning(f)
+            && t.iter().any(|v| *v != DVec3::ZERO)
+        {
+            h.tuning.push((f, t.iter().map(|v| v.to_array()).collect()));
         }
     }
     h

@@ -161,12 +161,16 @@ pub struct RibbonHandlesDoc {
     /// (edge, twist in radians) with twist ≠ 0.
     #[serde(default)]
     pub twists: Vec<(usize, f64)>,
+    /// (face, its n + 1 tuning handles: centre, then corners) for faces
+    /// with a non-zero handle.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tuning: Vec<(usize, Vec<[f64; 3]>)>,
 }
 
 impl RibbonHandlesDoc {
     /// No handle moved.
     pub fn is_empty(&self) -> bool {
-        self.scales.is_empty() && self.twists.is_empty()
+        self.scales.is_empty() && self.twists.is_empty() && self.tuning.is_empty()
     }
 
     /// Finite values in range (indices are the kernel's to check).
@@ -176,6 +180,11 @@ impl RibbonHandlesDoc {
         }
         for &(e, t) in &self.twists {
             check_twist(t).map_err(|m| invalid(format!("edge {e}: {m}")))?;
+        }
+        for (f, h) in &self.tuning {
+            if h.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(invalid(format!("face {f}: tuning handles must be finite")));
+            }
         }
         Ok(())
     }

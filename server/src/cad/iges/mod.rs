@@ -1,6 +1,7 @@
 //! IGES 5.3 exchange of B-spline surfaces (entity 128, "rational B-spline
-//! surface") and curves (entity 126, "rational B-spline curve"), the format
-//! designers' CAD tools read and write.
+//! surface"), curves (entity 126, "rational B-spline curve") and, written
+//! only, surfaces trimmed to a polygon of their parameter space (entity
+//! 144), the format designers' CAD tools read and write.
 //!
 //! The writer emits a fixed-format ASCII file: Start (S), Global (G),
 //! Directory Entry (D, two 80-column records per entity), Parameter Data (P,
@@ -28,12 +29,14 @@ mod format;
 mod parse;
 mod read;
 mod surface;
+mod trimmed;
 mod write;
 
 pub use curve::IgesCurve;
 pub use format::{iges_text, iges_timestamp};
 pub use read::{read_iges, read_iges_parts};
 pub use surface::IgesSurface;
+pub use trimmed::IgesTrimmed;
 pub use write::{write_iges, write_iges_parts};
 
 use thiserror::Error;
@@ -132,6 +135,9 @@ pub enum IgesEntity {
     Surface(IgesSurface),
     /// A polynomial B-spline curve.
     Curve(IgesCurve),
+    /// A surface trimmed to a polygon of its parameter space (written as
+    /// entity 144; the reader gives its surface as [`IgesEntity::Surface`]).
+    Trimmed(IgesTrimmed),
 }
 
 /// One part of a design as IGES carries it: its geometry and its name.

@@ -6,14 +6,22 @@ use super::format::{hollerith, iges_text, pack, real, with_delims};
 use super::{IgesEntity, IgesError, IgesMeta, IgesPart, IgesSurface};
 use std::fmt::Write;
 
-/// One entity to write: its type and form, parameters (no delimiters) and
-/// DE label.
+/// One entity to write: its type and form, parameters (no delimiters), DE
+/// label and status (blank, subordinate, use, hierarchy: `00000000` for an
+/// independent entity).
 struct Item {
     entity: u32,
     form: u32,
     params: Vec<String>,
     label: String,
+    status: &'static str,
 }
+
+/// Status of an entity another one is made of (physically dependent).
+const DEPENDENT: &str = "00010000";
+/// Status of a curve in a surface's parameter space (physically
+/// dependent, use flag 5: 2D parametric).
+const DEPENDENT_PARAMETRIC: &str = "00010500";
 
 /// Writes one surface as an IGES 5.3 file (millimetres), unnamed.
 pub fn write_iges(surface: &IgesSurface, meta: &IgesMeta) -> Result<String, IgesError> {
@@ -28,13 +36,17 @@ pub fn write_iges(surface: &IgesSurface, meta: &IgesMeta) -> Result<String, Iges
         form: 0,
         params: surface.params(),
         label: String::new(),
+        status: "00000000",
     };
     Ok(write_items(vec![item], max, meta, "entity 128"))
 }
 
 /// Writes every part as an IGES 5.3 file (millimetres): one entity 128 per
 /// surface and one entity 126 per curve, in the order given, each
-/// independent (status 00000000), polynomial with weights 1 and its knots
+/// independent (status 00000000), and a trimmed surface as an entity 144
+/// followed by what it is made of (its 128, the 126 of its trimming polygon
+/// and the 142 that puts it on the surface; see [`super::IgesTrimmed`]);
+/// everything polynomial with weights 1 and its knots
 /// and control points exact. A named part also gets a Name property (406
 /// form 15) that its parameter data points to — `..., 0, 1, <406 DE>;`,
 /// no associativities and one property — and the name's first 8
@@ -51,6 +63,9 @@ pub fn write_iges_parts(parts: &[IgesPart], meta: &IgesMeta) -> Result<String, I
     let mut max: f64 = 0.0;
     let mut items = Vec::with_capacity(2 * parts.len());
     for part in parts {
+        // This entity's DE (its parts' follow it).
+        let de = 2 * items.len() + 1;
+        let mut dependents = Vec::new();
         let (entity, mut params) = match &part.entity {
             IgesEntity::Surface(s) => {
                 s.validate()?;
@@ -71,6 +86,54 @@ pub fn write_iges_parts(parts: &[IgesPart], meta: &IgesMeta) -> Result<String, I
                     .fold(max, f64::max);
                 (126, c.params())
             }
+            IgesEntity::Trimmed(t) => {
+                t.validate()?;
+                max = t
+                    .surface
+                    .points
+                    .iter()
+                    .map(|p| p.abs().max_element())
+                    .fold(max, f64::max);
+                let (surface, outline, on_surface) = (de + 2, de + 4, de + 6);
+                dependents = vec![
+                    Item {
+                        entity: 128,
+                        form: 0,
+                        params: t.surface.params(),
+                        label: String::new(),
+                        status: DEPENDENT,
+                    },
+                    Item {
+                        entity: 126,
+                        form: 0,
+                        params: t.loop_params(),
+                        label: String::new(),
+                        status: DEPENDENT_PARAMETRIC,
+                    },
+                    Item {
+                        entity: 142,
+                        form: 0,
+                        params: vec![
+                            "142".into(),
+                            "0".into(),
+                            surface.to_string(),
+                            outline.to_string(),
+                            "0".into(),
+                            "1".into(),
+                        ],
+                        label: String::new(),
+                        status: DEPENDENT,
+                    },
+                ];
+                let params = vec![
+                    "144".into(),
+                    surface.to_string(),
+                    "1".into(),
+                    "0".into(),
+                    on_surface.to_string(),
+                ];
+                (144, params)
+            }
         };
         let name = part.name.as_deref().map(iges_text);
         let Some(name) = name.filter(|n| !n.trim().is_empty()) else {
@@ -79,26 +142,31 @@ pub fn write_iges_parts(parts: &[IgesPart], meta: &IgesMeta) -> Result<String, I
                 form: 0,
                 params,
                 label: String::new(),
+                status: "00000000",
             });
+            items.extend(dependents);
             continue;
         };
-        // This entity's DE is 2 * items.len() + 1; its name's follows it.
-        let name_de = 2 * items.len() + 3;
+        // The name follows the entity and its parts.
+        let name_de = de + 2 * (dependents.len() + 1);
         params.extend(["0".to_string(), "1".into(), name_de.to_string()]);
         items.push(Item {
             entity,
             form: 0,
             params,
             label: name.chars().take(8).collect(),
+            status: "00000000",
         });
+        items.extend(dependents);
         items.push(Item {
             entity: 406,
             form: 15,
             params: vec!["406".into(), "1".into(), hollerith(&name)],
             label: String::new(),
+            status: "00000000",
         });
     }
-    Ok(write_items(items, max, meta, "entities 126/128"))
+    Ok(write_items(items, max, meta, "entities 126/128/144"))
 }
 
 /// The file of `items`, each entity's directory entry at `2k + 1`.
@@ -166,7 +234,7 @@ fn write_items(items: Vec<Item>, max_coord: f64, meta: &IgesMeta, what: &str) ->
         }
         let d1 = format!(
             "{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}",
-            item.entity, first, 0, 0, 0, 0, 0, 0, "00000000"
+            item.entity, first, 0, 0, 0, 0, 0, 0, item.status
         );
         let d2 = format!(
             "{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}{:>8}",
