@@ -25,6 +25,10 @@ use vsculpt_kernel::fairing::{
 };
 use vsculpt_kernel::network::{CurveNetwork, NetworkError, NetworkOptions, Patch, PatchSampler};
 
+/// A face refit for exchange: the B-spline surface and the face's outline
+/// in its parameters (counter-clockwise, side k from corner k).
+pub type TrimmedRefit = (Refit, Vec<[f64; 2]>);
+
 /// Lattice segments per side of each face's sample mesh (the display and
 /// fairing resolution): a five-sided face has 5·(m+1)(m+2)/2 − shared
 /// points ≈ 400 at m = 12.
@@ -771,7 +775,7 @@ impl NetworkEngine {
         }
     }
 
-    /// Every face's refit for exchange: a bicubic B-spline surface fitted
+    /// Every face's refit for exchange (see [`TrimmedRefit`]): a bicubic B-spline surface fitted
     /// (the kernel's `refit`) to the face's samples at their domain points
     /// mapped from [−1, 1]² to [0, 1]² — a faired face's faired points, an
     /// unfaired face's patch sampled twice as finely as shown — each sample
@@ -779,7 +783,7 @@ impl NetworkEngine {
     /// polygon in those parameters (counter-clockwise, side k from corner
     /// k): the face is the polygon's part of the refit, whose parameter
     /// square also covers the domain's outside.
-    pub fn refits(&self) -> Result<Vec<(Refit, Vec<[f64; 2]>)>, CommandError> {
+    pub fn refits(&self) -> Result<Vec<TrimmedRefit>, CommandError> {
         let (lo, hi) = self.faces.iter().flat_map(|f| f.points.iter()).fold(
             (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
             |(a, b), p| (a.min(*p), b.max(*p)),
