@@ -265,9 +265,10 @@ export class BodyView {
   create(id) {
     const group = new THREE.Group();
     group.name = `body-${id}`;
+    // Lit by the studio like the other parts (studio.js).
     const mesh = new THREE.Mesh(
       new THREE.BufferGeometry(),
-      new THREE.MeshStandardMaterial({ color: 0xc8ccd4, metalness: 0.1, roughness: 0.5, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1, side: THREE.DoubleSide }),
+      this.view.studio.light(new THREE.MeshStandardMaterial({ color: 0xc8ccd4, metalness: 0.1, roughness: 0.5, polygonOffset: true, polygonOffsetFactor: 1, polygonOffsetUnits: 1, side: THREE.DoubleSide })),
     );
     mesh.name = `body-boundary-${id}`;
     const lines = new THREE.LineSegments(new THREE.BufferGeometry(), new THREE.LineBasicMaterial({ vertexColors: true }));

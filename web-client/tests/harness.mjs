@@ -170,14 +170,16 @@ export function gizmoZArrow(page) {
   });
 }
 
-/** Every part's control points as the page holds them: { id: [x, y, z, …] } (f32 values, from the frames). */
+/** Every surface and curve part's control points as the page holds them: { id: [x, y, z, …] } (f32 values, from the frames). */
 export function shownPoints(page) {
-  return page.evaluate(() => Object.fromEntries([...window.vsculpt.design.parts.values()].map((p) => [p.id, Array.from(p.geometry ? p.geometry.points : [])])));
+  return page.evaluate(() =>
+    Object.fromEntries([...window.vsculpt.design.parts.values()].filter((p) => p.kind === 'surface' || p.kind === 'curve').map((p) => [p.id, Array.from(p.geometry ? p.geometry.points : [])])),
+  );
 }
 
-/** Every part's control points in a design document of the REST API (`design.parts[].body`): { id: [x, y, z, …] }. */
+/** Every surface and curve part's control points in a design document of the REST API (`design.parts[].body`): { id: [x, y, z, …] }. */
 export function documentPoints(doc) {
-  return Object.fromEntries(doc.parts.map((p) => [p.id, (p.body.kind === 'surface' ? p.body.surface.points : p.body.curve.points).flat()]));
+  return Object.fromEntries(doc.parts.filter((p) => p.body.kind === 'surface' || p.body.kind === 'curve').map((p) => [p.id, (p.body.kind === 'surface' ? p.body.surface.points : p.body.curve.points).flat()]));
 }
 
 

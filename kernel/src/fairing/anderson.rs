@@ -31,9 +31,13 @@ pub enum Acceleration {
 }
 
 impl Default for Acceleration {
-    /// Anderson with depth 5 (measured on the octants: `benches/fairing.rs`).
+    /// Plain steps, the paper's scheme. `Anderson(5)` reaches the same fixed
+    /// point in 13 sweeps instead of 22 on the octants (`benches/fairing.rs`)
+    /// but is not the default yet: with it the web client's fairing of the
+    /// network demo did not finish within 30 s (`network.test.mjs`), a cause
+    /// not found yet.
     fn default() -> Self {
-        Acceleration::Anderson(5)
+        Acceleration::Plain
     }
 }
 
