@@ -400,6 +400,15 @@ impl NetworkEngine {
         }
     }
 
+    /// The number of sides of face `face`, or a clear error naming how many faces there are.
+    fn face_sides(&self, face: usize) -> Result<usize, CommandError> {
+        let faces = self.net.faces();
+        faces
+            .get(face)
+            .map(|f| f.sides.len())
+            .ok_or_else(|| invalid(format!("no face {face} (the part has {})", faces.len())))
+    }
+
     /// Sets a face's tuning handles (see [`NetworkEditDoc::SetTuning`]);
     /// the face is re-sampled (and loses a fair) when they changed.
     fn set_tuning(
@@ -407,18 +416,7 @@ impl NetworkEngine {
         face: usize,
         handles: &[[f64; 3]],
     ) -> Result<Vec<usize>, CommandError> {
-        let sides = self
-            .net
-            .faces()
-            .get(face)
-            .ok_or_else(|| {
-                invalid(format!(
-                    "no face {face} (the part has {})",
-                    self.net.faces().len()
-                ))
-            })?
-            .sides
-            .len();
+        let sides = self.face_sides(face)?;
         if handles.len() != sides + 1 {
             return Err(invalid(format!(
                 "face {face} has {sides} sides: it takes {} tuning handles (centre, then each corner), not {}",
@@ -447,18 +445,7 @@ impl NetworkEngine {
         if scale.is_none() && twist.is_none() {
             return Err(invalid("set_ribbon needs a scale or a twist"));
         }
-        let sides = self
-            .net
-            .faces()
-            .get(face)
-            .ok_or_else(|| {
-                invalid(format!(
-                    "no face {face} (the part has {})",
-                    self.net.faces().len()
-                ))
-            })?
-            .sides
-            .len();
+        let sides = self.face_sides(face)?;
         if side >= sides {
             return Err(invalid(format!(
                 "face {face} has no side {side} (it has {sides})"
