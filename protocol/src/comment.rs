@@ -46,6 +46,10 @@ pub struct CommentReply {
     pub access: Access,
     /// When, milliseconds since the Unix epoch.
     pub time_ms: u64,
+    /// When its text was last changed (`edit_comment`), milliseconds since
+    /// the Unix epoch; absent if it never was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edited_ms: Option<u64>,
     /// The design version it was written on (see [`Comment::version`]).
     pub version: u64,
 }
@@ -69,6 +73,10 @@ pub struct Comment {
     pub access: Access,
     /// When, milliseconds since the Unix epoch.
     pub time_ms: u64,
+    /// When its text was last changed (`edit_comment`), milliseconds since
+    /// the Unix epoch; absent if it never was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edited_ms: Option<u64>,
     /// The design version it was written on: the version last committed,
     /// restored or reverted to when it was written (0: before the first
     /// commit). The comment may be about uncommitted changes made since.

@@ -58,6 +58,7 @@ fn comment_messages_round_trip() {
         author: "Ben".into(),
         access: Access::Viewer,
         time_ms: 1_700_000_000_000,
+        edited_ms: Some(1_700_000_000_500),
         version: 3,
         resolved: true,
         resolved_by: Some("Ana".into()),
@@ -67,6 +68,7 @@ fn comment_messages_round_trip() {
             author: "Ana".into(),
             access: Access::Editor,
             time_ms: 1_700_000_000_001,
+            edited_ms: None,
             version: 3,
         }],
     };

@@ -333,21 +333,35 @@ async fn a_text_is_edited_by_its_authors_side_or_an_editor_and_the_comments_are_
     let reply = r["comment"].as_u64().unwrap();
 
     // The viewer's side edits its comment: every client gets the thread
-    // with the new text and everything else as it was.
+    // with the new text, marked edited, and everything else as it was.
+    assert!(added.get("edited_ms").is_none(), "not edited yet: {added}");
+    let before_edit = now_ms();
     viewer
         .ok(json!({"type": "edit_comment", "comment": theirs, "text": "Softer here, like v3?"}))
         .await;
+    let after_edit = now_ms();
     let edited = loop {
         let c = editor.wait_for("comment_changed").await["comment"].clone();
         if c["text"] == "Softer here, like v3?" {
             break c;
         }
     };
+    let edited_at = edited["edited_ms"].as_u64().expect("marked edited");
+    assert!(
+        (before_edit..=after_edit).contains(&edited_at),
+        "edited at {edited_at}, between {before_edit} and {after_edit}"
+    );
+    assert!(edited_at >= added["time_ms"].as_u64().unwrap());
     let mut want = added.clone();
     want["text"] = json!("Softer here, like v3?");
+    want["edited_ms"] = json!(edited_at);
     want["replies"] = edited["replies"].clone();
-    assert_eq!(edited, want, "only the text changes");
+    assert_eq!(edited, want, "only the text and its edit time change");
     assert_eq!(edited["replies"][0]["text"], "Will do.");
+    assert!(
+        edited["replies"][0].get("edited_ms").is_none(),
+        "the reply was not edited"
+    );
     // Not the editor's comment or reply; a device nothing.
     viewer
         .refused(
@@ -400,6 +414,8 @@ async fn a_text_is_edited_by_its_authors_side_or_an_editor_and_the_comments_are_
     };
     assert_eq!(thread["id"], json!(theirs));
     assert_eq!(thread["text"], "Softer here, like v3?");
+    assert_eq!(thread["edited_ms"], json!(edited_at));
+    assert!(thread["replies"][0]["edited_ms"].as_u64().unwrap() >= edited_at);
 
     // Over HTTP, with any token of the design: what a joiner's snapshot has.
     let path = format!("/api/designs/{}/comments", d.id);
@@ -423,6 +439,11 @@ async fn a_text_is_edited_by_its_authors_side_or_an_editor_and_the_comments_are_
     assert_eq!(ids, [theirs, mine], "oldest first");
     assert_eq!(listed["comments"][0]["text"], "Softer here, like v3?");
     assert_eq!(listed["comments"][0]["replies"][0]["text"], "Done in v4.");
+    assert_eq!(listed["comments"][0]["edited_ms"], json!(edited_at));
+    assert!(
+        listed["comments"][1].get("edited_ms").is_none(),
+        "the editor's own comment was never edited"
+    );
     // No token, a bad one, another design's: refused alike.
     let created = common::http::request(
         server.addr,
@@ -586,10 +607,21 @@ async fn comments_carry_their_version_stay_out_of_undo_and_survive_a_restart() {
     editor
         .ok(json!({"type": "reply_comment", "comment": b, "text": "ok"}))
         .await;
+    viewer
+        .ok(json!({"type": "edit_comment", "comment": b, "text": "on the new version, please"}))
+        .await;
     let before = Client::connect(server.addr, d.id, &d.viewer, "x")
         .await
         .snapshot["comments"]
         .clone();
+    let edited: Vec<&Value> = before
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c.get("edited_ms").is_some())
+        .collect();
+    assert_eq!(edited.len(), 1, "{before}");
+    assert_eq!(edited[0]["id"], json!(b));
     drop((editor, viewer));
     assert!(server.terminate().success());
 
@@ -632,13 +664,9 @@ fn a_store_from_before_comments_is_migrated_and_a_newer_one_refused() {
     // tables, user_version 0, one design.
     {
         let db = rusqlite::Connection::open(dir.join("vsculpt.db")).unwrap();
+        db.execute_batch(SCHEMA_1_TABLES).unwrap();
         db.execute_batch(
-            "CREATE TABLE designs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL, created_ms INTEGER NOT NULL,
-                 editor_token TEXT NOT NULL, viewer_token TEXT NOT NULL, device_token TEXT NOT NULL, deleted INTEGER NOT NULL DEFAULT 0);
-             CREATE TABLE versions (design_id INTEGER NOT NULL REFERENCES designs(id), number INTEGER NOT NULL, time_ms INTEGER NOT NULL,
-                 author TEXT NOT NULL, message TEXT NOT NULL, snapshot BLOB NOT NULL, PRIMARY KEY (design_id, number));
-             CREATE TABLE working (design_id INTEGER PRIMARY KEY REFERENCES designs(id), updated_ms INTEGER NOT NULL, snapshot BLOB NOT NULL);
-             INSERT INTO designs (name, created_ms, editor_token, viewer_token, device_token) VALUES ('old', 1, 'e', 'v', 'd');
+            "INSERT INTO designs (name, created_ms, editor_token, viewer_token, device_token) VALUES ('old', 1, 'e', 'v', 'd');
              INSERT INTO versions VALUES (1, 1, 2, 'ann', 'first', x'00');",
         )
         .unwrap();
@@ -687,13 +715,79 @@ fn a_store_from_before_comments_is_migrated_and_a_newer_one_refused() {
     let v: i64 = db
         .query_row("PRAGMA user_version", [], |r| r.get(0))
         .unwrap();
-    assert_eq!(v, 2);
+    assert_eq!(v, 3);
     db.pragma_update(None, "user_version", 7).unwrap();
     drop(db);
     match Store::open(&dir) {
-        Err(StoreError::NewerSchema { found: 7, known: 2 }) => {}
+        Err(StoreError::NewerSchema { found: 7, known: 3 }) => {}
         Err(e) => panic!("wrong refusal: {e}"),
         Ok(_) => panic!("a database of a newer schema was opened"),
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_store_of_schema_2_gains_edit_times_and_keeps_its_comments() {
+    use vsculpt_server::store::Store;
+    let dir = common::data_dir("comments-migrate-v2");
+    // A database as the servers of schema version 2 wrote it (comments,
+    // no edit times), written here by hand from that schema.
+    {
+        let db = rusqlite::Connection::open(dir.join("vsculpt.db")).unwrap();
+        db.execute_batch(SCHEMA_1_TABLES).unwrap();
+        db.execute_batch(
+            "CREATE TABLE comments (id INTEGER PRIMARY KEY AUTOINCREMENT, design_id INTEGER NOT NULL REFERENCES designs(id),
+                 parent INTEGER REFERENCES comments(id) ON DELETE CASCADE, part INTEGER NOT NULL, u REAL, v REAL, x REAL, y REAL, z REAL,
+                 text TEXT NOT NULL, author TEXT NOT NULL, access TEXT NOT NULL, time_ms INTEGER NOT NULL, version INTEGER NOT NULL,
+                 resolved_by TEXT, resolved_ms INTEGER);
+             INSERT INTO designs (name, created_ms, editor_token, viewer_token, device_token) VALUES ('two', 1, 'e', 'v', 'd');
+             INSERT INTO comments (design_id, part, u, v, text, author, access, time_ms, version)
+                 VALUES (1, 1, 0.5, 0.25, 'from schema 2', 'Ben', 'viewer', 1700000000000, 1);
+             PRAGMA user_version = 2;",
+        )
+        .unwrap();
+    }
+    let store = Store::open(&dir).unwrap();
+    let rows = store.comments(1).unwrap();
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0].comment.text, "from schema 2");
+    assert_eq!(rows[0].time_ms, 1_700_000_000_000);
+    assert_eq!(rows[0].edited_ms, None, "never edited");
+    let id = rows[0].id;
+    let at = store
+        .edit_comment(1, id, "edited after the migration")
+        .unwrap()
+        .expect("the comment is there");
+    assert!(at > 1_700_000_000_000);
+    let rows = store.comments(1).unwrap();
+    assert_eq!(rows[0].comment.text, "edited after the migration");
+    assert_eq!(rows[0].edited_ms, Some(at));
+    assert_eq!(rows[0].time_ms, 1_700_000_000_000, "the first time stays");
+    assert_eq!(store.edit_comment(1, id + 1, "x").unwrap(), None);
+    drop(store);
+    let db = rusqlite::Connection::open(dir.join("vsculpt.db")).unwrap();
+    let v: i64 = db
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(v, 3);
+    drop(db);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The three tables of the store before schema versions (and of schema
+/// version 1), written here by hand from that schema.
+const SCHEMA_1_TABLES: &str = "
+    CREATE TABLE designs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL, created_ms INTEGER NOT NULL,
+        editor_token TEXT NOT NULL, viewer_token TEXT NOT NULL, device_token TEXT NOT NULL, deleted INTEGER NOT NULL DEFAULT 0);
+    CREATE TABLE versions (design_id INTEGER NOT NULL REFERENCES designs(id), number INTEGER NOT NULL, time_ms INTEGER NOT NULL,
+        author TEXT NOT NULL, message TEXT NOT NULL, snapshot BLOB NOT NULL, PRIMARY KEY (design_id, number));
+    CREATE TABLE working (design_id INTEGER PRIMARY KEY REFERENCES designs(id), updated_ms INTEGER NOT NULL, snapshot BLOB NOT NULL);
+";
+
+/// Milliseconds since the Unix epoch, by the test's own clock.
+fn now_ms() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_millis() as u64
 }

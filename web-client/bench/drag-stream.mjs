@@ -60,7 +60,7 @@ function basis() {
 function dragFrame(revision, z) {
   const buf = new ArrayBuffer(72 + 24 * ICONS);
   const dv = new DataView(buf);
-  [0x56, 0x53, 0x47, 0x46, 5, 2, 1].forEach((b, i) => dv.setUint8(i, b));
+  [0x56, 0x53, 0x47, 0x46, 6, 2, 1].forEach((b, i) => dv.setUint8(i, b));
   dv.setBigUint64(8, 1n, true);
   dv.setBigUint64(16, 1n, true);
   dv.setBigUint64(24, BigInt(revision), true);

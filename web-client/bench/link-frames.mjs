@@ -15,14 +15,17 @@
 // one curve position constraint, one dragged point load). Each run is one
 // grab: the viewer joins through a fresh link, the editor (connected
 // directly, full frames) grabs the load and drags it at 60 Hz for `seconds`,
-// then releases. Frames/s counts the drag frames that reached the viewer
-// within the drag and 0.5 s after it; bytes/frame is the binary bytes that
+// then releases. Frames/s is the drag frames that reached the viewer within
+// the drag and 0.5 s after it, over the drag's length (so a viewer that sees
+// every frame the server solved shows the server's rate); "seen" is the
+// share of the solved frames that reached it; bytes/frame is the binary bytes that
 // reached the viewer in that time (bases and reference frames included) over
 // those frames; the added delay is arrival − the drag message's send − the
 // link's 40 ms; "exact" says whether the viewer held the editor's frame at
 // rest, the same f32 bits, within 5 s of the release.
 //
 //   cd web-client && node --experimental-websocket bench/link-frames.mjs [--seconds 3] [--mbit 2,10,100]
+//     [--surfaces 81x159,...] [--modes 0,1,2,3]
 //
 // VSCULPT_SERVER_BIN names the server binary (else cargo's target dir).
 
@@ -40,19 +43,21 @@ const arg = (name, fallback) => {
 const SECONDS = Number(arg('seconds', 3));
 const SPEEDS = arg('mbit', '2,10,100').split(',').map(Number);
 const DELAY_MS = 40;
-/** Paper 003, Table 2. */
+/** Paper 003, Table 2 (`--surfaces 81x159,20x15` picks some). */
 const SURFACES = [
   [20, 15],
   [38, 32],
   [42, 40],
   [91, 54],
   [81, 159],
-];
+].filter(([nu, nv]) => arg('surfaces', null) === null || arg('surfaces').split(',').includes(`${nu}x${nv}`));
 const MODES = [
   { name: 'full (before)', opts: {} },
   { name: 'full, deflated, paced', opts: { deflate: true, pace: true } },
   { name: 'page: stream, deflated, paced (after)', opts: { stream: true, deflate: true, pace: true } },
-];
+  // Not in the default run (`--modes` picks by index): the page's connection without pacing.
+  { name: 'stream, deflated, unpaced', opts: { stream: true, deflate: true } },
+].filter((_, i) => (arg('modes', null) === null ? i < 3 : arg('modes').split(',').map(Number).includes(i)));
 
 if (typeof WebSocket === 'undefined') {
   console.error('run with node --experimental-websocket (Node 20)');
@@ -131,7 +136,11 @@ async function run(server, design, ed, part, icon, mbit, mode, z0) {
     const bytes = viewer.bytes - bytes0;
     const wrote = link.bytes.down;
     const delays = delivered.filter((a) => revisionSent.has(a.revision)).map((a) => a.at - revisionSent.get(a.revision) - DELAY_MS);
-    const solved = ed.frames.filter((f) => f.part === part && f.flags & 1 && f.revision > before).length;
+    const solvedRevisions = ed.frames.filter((f) => f.part === part && f.flags & 1 && f.revision > before).map((f) => f.revision);
+    const solved = solvedRevisions.length;
+    const got = new Set(delivered.map((a) => a.revision));
+    // Which of the solved frames did not reach the viewer, by their place in the drag (0 = first).
+    const missed = solvedRevisions.map((r, i) => (got.has(r) ? -1 : i)).filter((i) => i >= 0);
     await request(ed, { type: 'drag_end', part, icon });
     let rest;
     const t0 = performance.now();
@@ -150,7 +159,9 @@ async function run(server, design, ed, part, icon, mbit, mode, z0) {
       await sleep(10);
     }
     return {
-      fps: delivered.length / window,
+      fps: delivered.length / SECONDS,
+      seen: solved ? delivered.filter((a) => a.revision > before).length / solved : NaN,
+      missed,
       solvedFps: solved / SECONDS,
       bytesPerFrame: delivered.length ? bytes / delivered.length : NaN,
       wroteMBs: wrote / window / 1e6,
@@ -187,7 +198,7 @@ try {
         const row = { surface: `${nu} × ${nv}`, mbit, mode: mode.name, ...r };
         rows.push(row);
         console.log(
-          `${row.surface}\t${mbit} Mbit/s\t${mode.name}\t${r.fps.toFixed(1)} frames/s (server solved ${r.solvedFps.toFixed(1)}/s)\t${Math.round(r.bytesPerFrame)} B/frame\tdelay p50 ${r.p50.toFixed(0)} p90 ${r.p90.toFixed(0)} ms\tserver wrote ${r.wroteMBs.toFixed(2)} MB/s\texact at rest: ${r.exact ? 'yes' : 'NO'}`,
+          `${row.surface}\t${mbit} Mbit/s\t${mode.name}\t${r.fps.toFixed(1)} frames/s (server solved ${r.solvedFps.toFixed(1)}/s, seen ${(100 * r.seen).toFixed(0)} %)\t${Math.round(r.bytesPerFrame)} B/frame\tdelay p50 ${r.p50.toFixed(0)} p90 ${r.p90.toFixed(0)} ms\tserver wrote ${r.wroteMBs.toFixed(2)} MB/s\texact at rest: ${r.exact ? 'yes' : 'NO'}${r.missed.length && r.missed.length < 10 ? `\tmissed frames #${r.missed.join(', #')}` : ''}`,
         );
       }
     }

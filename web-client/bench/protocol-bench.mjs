@@ -4,7 +4,9 @@
 // server or the web client. It starts the real server binary over a fresh
 // data directory and measures, on loopback:
 //
-//   join   hello sent → snapshot received, over sequential joins (p50/p99)
+//   join   hello sent → snapshot received, over sequential joins (p50/p99);
+//          also over a bare TCP socket with no WebSocket library and no
+//          JSON parsing (rawJoin): the server's own share
 //   own    drag sent → the dragging editor's own geometry frame (p50/p99),
 //          one drag every 1/60 s
 //   fanout 50 viewers while the editor drags at 60 Hz on 81 × 159: drag sent
@@ -40,6 +42,8 @@
 // reported too.
 
 import { spawn } from 'node:child_process';
+import { randomBytes } from 'node:crypto';
+import { connect as tcpConnect } from 'node:net';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
@@ -158,7 +162,10 @@ class StreamState {
       const dz = dv.getFloat64(56, true);
       const r = ref.points;
       const rho = b.rho;
-      const out = new Float32Array(r.length);
+      // The net shown is rebuilt in place, as a renderer's vertex buffer
+      // would be: no allocation (and no garbage to collect) per frame.
+      let out = this.net.get(part);
+      if (!out || out === ref.points || out.length !== r.length) out = new Float32Array(r.length);
       for (let k = 0, i = 0; k < rho.length; k++, i += 3) {
         out[i] = r[i] + rho[k] * dx;
         out[i + 1] = r[i + 1] + rho[k] * dy;
@@ -192,14 +199,20 @@ class Client {
     this.closed = false;
     this.bytes = 0;
     this.stream = stream ? new StreamState() : null;
+    // A message is stamped when it arrives and handled after every socket
+    // that became readable in the same turn of the event loop was stamped
+    // (setImmediate runs after the poll phase), so one viewer's decoding
+    // does not delay another viewer's arrival stamp on the same thread.
     this.ws.onmessage = (ev) => {
       const now = clock();
-      if (typeof ev.data === 'string') this.onText(JSON.parse(ev.data), now);
-      else {
-        this.bytes += ev.data.byteLength;
-        const h = this.stream ? this.stream.take(ev.data) : frameHeader(ev.data);
-        if (h) this.onFrame(h, now);
-      }
+      setImmediate(() => {
+        if (typeof ev.data === 'string') this.onText(JSON.parse(ev.data), now);
+        else {
+          this.bytes += ev.data.byteLength;
+          const h = this.stream ? this.stream.take(ev.data) : frameHeader(ev.data);
+          if (h) this.onFrame(h, now);
+        }
+      });
     };
     this.ws.onclose = () => {
       this.closed = true;
@@ -255,7 +268,89 @@ class Client {
   }
 }
 
+/**
+ * A join over a bare TCP socket (RFC 6455 by hand: the upgrade, one masked
+ * text frame out, unmasked frames in), timing the server alone: hello sent →
+ * the first and the last byte of the snapshot's frame received, with no
+ * WebSocket library and no JSON parsing on the client's side (a message is
+ * known for the snapshot by its first bytes, `{"type":"snapshot"`, as the
+ * server writes it). Resolves [ms to the first byte, ms to the last byte].
+ */
+function rawJoin(addr, design, token, name, geometryFirst) {
+  const [host, port] = [addr.slice(0, addr.lastIndexOf(':')), Number(addr.slice(addr.lastIndexOf(':') + 1))];
+  return new Promise((resolve, reject) => {
+    const sock = tcpConnect({ host, port });
+    let upgraded = false;
+    let buf = Buffer.alloc(0);
+    let t0 = 0;
+    let first = null;
+    const fail = (e) => {
+      sock.destroy();
+      reject(e);
+    };
+    sock.on('error', fail);
+    sock.on('connect', () => {
+      sock.write(`GET /ws HTTP/1.1\r\nHost: ${addr}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: ${randomBytes(16).toString('base64')}\r\nSec-WebSocket-Version: 13\r\n\r\n`);
+    });
+    sock.on('data', (chunk) => {
+      const now = clock();
+      buf = Buffer.concat([buf, chunk]);
+      if (!upgraded) {
+        const end = buf.indexOf('\r\n\r\n');
+        if (end < 0) return;
+        if (!buf.subarray(0, 12).toString().includes('101')) return fail(new Error(`no upgrade: ${buf.subarray(0, end)}`));
+        upgraded = true;
+        buf = buf.subarray(end + 4);
+        const hello = { type: 'hello', protocol: PROTOCOL, token, design, client_name: name, client_kind: 'tool' };
+        if (geometryFirst) hello.geometry_first = true;
+        const payload = Buffer.from(JSON.stringify(hello));
+        const mask = randomBytes(4);
+        const head = payload.length < 126 ? Buffer.from([0x81, 0x80 | payload.length]) : Buffer.from([0x81, 0x80 | 126, payload.length >> 8, payload.length & 255]);
+        const masked = Buffer.from(payload.map((b, i) => b ^ mask[i & 3]));
+        t0 = clock();
+        sock.write(Buffer.concat([head, mask, masked]));
+      }
+      // Frames in: the server's are unmasked.
+      while (buf.length >= 2) {
+        const op = buf[0] & 15;
+        let len = buf[1] & 127;
+        let at = 2;
+        if (len === 126) {
+          if (buf.length < 4) return;
+          len = buf.readUInt16BE(2);
+          at = 4;
+        } else if (len === 127) {
+          if (buf.length < 10) return;
+          len = Number(buf.readBigUInt64BE(2));
+          at = 10;
+        }
+        const isSnapshot = op === 1 && buf.length >= at + 18 && buf.subarray(at, at + 18).toString() === '{"type":"snapshot"';
+        if (isSnapshot && first === null) first = now;
+        if (buf.length < at + len) return;
+        if (isSnapshot) {
+          sock.destroy();
+          return resolve([first - t0, now - t0]);
+        }
+        if (op === 1 && buf.subarray(at, at + 15).toString() === '{"type":"error"') return fail(new Error(buf.subarray(at, at + len).toString()));
+        buf = buf.subarray(at + len);
+      }
+    });
+  });
+}
+
 // ---- the benches -------------------------------------------------------------
+
+/** JOINS sequential joins over a bare socket (rawJoin): the server's own share of a join. */
+async function benchJoinRaw(srv, design, viewer, geometryFirst = false) {
+  const firstByte = [];
+  const lastByte = [];
+  for (let k = 0; k < JOINS; k++) {
+    const [a, b] = await rawJoin(srv.addr, design.id, viewer, `raw-joiner-${k}`, geometryFirst);
+    firstByte.push(a);
+    lastByte.push(b);
+  }
+  return { firstByte, lastByte };
+}
 
 /** JOINS sequential joins: hello → snapshot, and hello → first frame. */
 async function benchJoin(srv, design, viewer, geometryFirst = false) {
@@ -535,6 +630,13 @@ if (!isMainThread) {
         `compact join 81x159 (geometry_first), ${compact.times.length} joins: hello → first frame p50 ${fmt(pct(compact.firstFrames, 50))} ms, ` +
           `p99 ${fmt(pct(compact.firstFrames, 99))} ms; hello → snapshot p50 ${fmt(pct(compact.times, 50))} ms, p99 ${fmt(pct(compact.times, 99))} ms`,
       );
+      for (const [label, gf] of [['plain', false], ['compact', true]]) {
+        const raw = await benchJoinRaw(srv, big, big.tokens.viewer, gf);
+        console.log(
+          `${label} join 81x159 over a bare socket, ${raw.lastByte.length} joins: hello → the snapshot's first byte p50 ${fmt(pct(raw.firstByte, 50))} ms, ` +
+            `p99 ${fmt(pct(raw.firstByte, 99))} ms; → its last byte p50 ${fmt(pct(raw.lastByte, 50))} ms, p99 ${fmt(pct(raw.lastByte, 99))} ms`,
+        );
+      }
     }
     if (runs('own')) {
       const own = await benchOwnFrame(srv, big);

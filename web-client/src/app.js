@@ -191,7 +191,7 @@ function drawnIcons() {
 const geometryOf = (partId) => design.parts.get(partId)?.geometry || null;
 
 /** Work counted for BENCHMARKS.md (bench/browser-fps.mjs reads it): full redraws, surfaces sent to the worker and shown; when the first picture was drawn (ms since navigation start). */
-const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null, firstPicture: null };
+const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null, firstPicture: null, prewarmedAt: null };
 
 /** Per part: how many shapes arrived (frames, snapshots) and which of them its drawing shows. */
 const partSeq = new Map();
@@ -1267,9 +1267,17 @@ $('enter-vr').addEventListener('click', () => {
 
 // --- the link (last: its first status call reaches everything above) ------------
 
+/** The first picture's shader programs compile while the design is on its way (once: they stay cached). */
+let prewarmed = false;
+function prewarmOnce() {
+  if (prewarmed) return;
+  prewarmed = true;
+  perf.prewarm = view.prewarm().then(() => (perf.prewarmedAt = performance.now()));
+}
+
 // Without a token this page is the bare server address: say what to open instead of failing to join.
 const link = token
-  ? new Link({ design: designId, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status })
+  ? new Link({ design: designId, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status, onHello: prewarmOnce })
   : { send: () => null, open: false };
 if (!token) {
   $('shell-title').textContent = 'vsculpt';

@@ -303,7 +303,9 @@ export class Comments {
         ? `<form data-edit-form="${x.id}"><textarea rows="3" maxlength="${MAX_COMMENT_BYTES}" aria-label="edit comment ${x.id}">${escape(x.text)}</textarea><button>save</button> <button type="button" data-edit-cancel>cancel</button></form>`
         : `<p>${escape(x.text)}</p>`;
     const editButton = (x) => `<button data-edit="${x.id}" title="change its text">edit</button>`;
-    const who = (x) => `<b>${escape(x.author)}</b> <small>${x.access === 'viewer' ? 'reviewer' : x.access} · ${when(x.time_ms)} · on v${x.version}</small>`;
+    // A changed text says so (and when, on hover): a reader must not take it for what was first written.
+    const edited = (x) => (x.edited_ms ? ` · <span class="edited" data-edited="${x.id}" title="edited ${when(x.edited_ms)}">edited</span>` : '');
+    const who = (x) => `<b>${escape(x.author)}</b> <small>${x.access === 'viewer' ? 'reviewer' : x.access} · ${when(x.time_ms)} · on v${x.version}${edited(x)}</small>`;
     this.list.innerHTML = all
       .map((c) => {
         const mod = this.canModerate(c.access);

@@ -16,8 +16,10 @@ export const REFUSALS = {
 };
 
 export class Link {
-  constructor({ design, token, name, onMessage, onFrame, onStatus }) {
+  constructor({ design, token, name, onMessage, onFrame, onStatus, onHello = () => {} }) {
     this.design = design;
+    /** Called each time a hello has been sent (the page prepares its first picture meanwhile). */
+    this.onHello = onHello;
     this.token = token;
     this.name = name;
     this.onMessage = onMessage;
@@ -55,6 +57,7 @@ export class Link {
         // The compact join: the shape first, in binary, then a snapshot without points.
         geometry_first: true,
       }));
+      this.onHello();
     };
     const text = (data) => {
       let msg;

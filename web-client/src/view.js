@@ -108,6 +108,46 @@ export class View {
   }
 
   /** The sphere around the drawn bounds, or null. */
+  /**
+   * Compiles the first picture's costly shader program (the studio-lit
+   * shaded surface, the one program every design's first picture draws)
+   * while the design is still on its way, so that the first frame drawn
+   * finds it ready: on a software renderer it takes a few hundred
+   * milliseconds, which would otherwise come after the last byte of the
+   * design. Only this probe is compiled (in a scene of their own, with this scene's
+   * lights, which the programs' keys depend on), not the whole scene,
+   * whose hidden helpers the first picture never draws. Uses the browser's
+   * parallel compile where it has one (`compileAsync`,
+   * KHR_parallel_shader_compile), so the page stays responsive. The
+   * programs are found again by their cache keys (the material's kind and
+   * options, the lights), not by the material object. Resolves when they
+   * are compiled.
+   */
+  prewarm() {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, 0, 1, 0, 0, 0, 1, 0], 3));
+    g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
+    const shaded = this.studio.light(new THREE.MeshStandardMaterial({ side: THREE.DoubleSide }));
+    const probes = new THREE.Scene();
+    probes.add(new THREE.Mesh(g, shaded));
+    const done = () => {
+      this.studio.materials.delete(shaded);
+      g.dispose();
+      // The materials are not disposed: that would release the programs
+      // (three counts each program's users) before the parts take them.
+    };
+    let compiled;
+    try {
+      compiled = this.renderer.compileAsync ? this.renderer.compileAsync(probes, this.camera, this.scene) : Promise.resolve(this.renderer.compile(probes, this.camera, this.scene));
+    } catch (e) {
+      compiled = Promise.reject(e);
+    }
+    return compiled.then(done, (e) => {
+      done();
+      console.warn('shader prewarm failed', e);
+    });
+  }
+
   boundingSphere() {
     const box = this.bounds();
     return box && !box.isEmpty() ? box.getBoundingSphere(new THREE.Sphere()) : null;

@@ -226,6 +226,16 @@ test('an 81 × 159 design joins compactly: the net crosses the link once, in bin
     assert.equal(shown.length, 81 * 159 * 3);
     const size = Math.max(...points.map(Math.abs));
     for (let i = 0; i < points.length; i++) assert.ok(Math.abs(shown[i] - points[i]) <= 1e-6 * size, `point ${i}`);
+    // The studio's shader program, the first picture's costly one, was compiled while the design
+    // was on its way (view.prewarm, at hello) and is the very program the surface is drawn with:
+    // one program of that kind, ready before the first picture.
+    const { studio, prewarmedAt, firstPicture } = await page.evaluate(() => ({
+      studio: window.vsculpt.view.renderer.info.programs.filter((p) => p.cacheKey.includes('vsculpt-studio')).length,
+      prewarmedAt: window.vsculpt.perf.prewarmedAt,
+      firstPicture: window.vsculpt.perf.firstPicture,
+    }));
+    assert.equal(studio, 1, 'the prewarmed studio program is the one the surface uses');
+    assert.ok(typeof prewarmedAt === 'number' && prewarmedAt <= firstPicture, `prewarmed at ${prewarmedAt}, first picture at ${firstPicture}`);
   } finally {
     await context.close();
     await link.close();

@@ -146,7 +146,8 @@ test('a reviewer edits its comment with the mouse and the designer sees it live;
       assert.equal((await mark.textContent()).trim(), '💬 1');
     }
 
-    // The reviewer edits it: edit, new text, save.
+    // The reviewer edits it: edit, new text, save; until then nothing says "edited".
+    for (const page of [editor, viewer]) assert.equal(await page.locator(`#comments [data-edited="${id}"]`).count(), 0);
     await viewer.waitForSelector(`#comments li[data-comment="${id}"] button[data-edit="${id}"]`);
     await viewer.click(`#comments li[data-comment="${id}"] button[data-edit="${id}"]`);
     const box = viewer.locator(`#comments form[data-edit-form="${id}"] textarea`);
@@ -158,6 +159,18 @@ test('a reviewer edits its comment with the mouse and the designer sees it live;
     assert.equal(await entry(editor), 'Second thought: softer <edge> & lower');
     await viewer.waitForFunction((cid) => !document.querySelector(`form[data-edit-form="${cid}"]`) && window.vsculpt.comments.comments.get(cid)?.text === 'Second thought: softer <edge> & lower', id, { timeout: 20000 });
     assert.equal(await entry(viewer), 'Second thought: softer <edge> & lower');
+    // Both pages mark it edited, with the server's time of the edit on hover.
+    for (const page of [editor, viewer]) {
+      const mark = page.locator(`#comments li[data-comment="${id}"] [data-edited="${id}"]`);
+      await mark.waitFor({ timeout: 20000 });
+      assert.equal((await mark.textContent()).trim(), 'edited');
+      const [title, expected] = await page.evaluate((cid) => {
+        const c = window.vsculpt.comments.comments.get(cid);
+        return [document.querySelector(`[data-edited="${cid}"]`).title, `edited ${new Date(c.edited_ms).toLocaleString()}`];
+      }, id);
+      assert.equal(title, expected);
+      assert.ok(await page.evaluate((cid) => window.vsculpt.comments.comments.get(cid).edited_ms >= window.vsculpt.comments.comments.get(cid).time_ms, id));
+    }
 
     // The designer's reply: the designer may edit it, the reviewer is not offered to.
     await editor.evaluate((cid) => window.vsculpt.send({ type: 'reply_comment', comment: cid, text: 'ok' }), id);

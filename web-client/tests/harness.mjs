@@ -83,6 +83,8 @@ export function clientAt(rev) {
   const tmp = mkdtempSync(join(tmpdir(), 'vsculpt-client-'));
   execSync(`git archive ${rev} web-client | tar -x -C ${tmp}`, { cwd: join(webDir, '..'), stdio: ['ignore', 'ignore', 'inherit'] });
   symlinkSync(join(webDir, 'node_modules'), join(tmp, 'web-client', 'node_modules'));
+  // A revision with the install-time bundle serves it, as its `npm ci` would have built it.
+  if (existsSync(join(tmp, 'web-client', 'tools', 'bundle.mjs'))) execSync('node tools/bundle.mjs', { cwd: join(tmp, 'web-client'), stdio: ['ignore', 'ignore', 'inherit'] });
   return { dir: join(tmp, 'web-client'), cleanup: () => rmSync(tmp, { recursive: true, force: true }) };
 }
 

@@ -13,6 +13,7 @@ fn reply_to_wire(r: &CommentRecord) -> wire::CommentReply {
         author: r.comment.author.clone(),
         access: super::access(r.comment.access),
         time_ms: r.time_ms.max(0) as u64,
+        edited_ms: r.edited_ms.map(|t| t.max(0) as u64),
         version: r.comment.version,
     }
 }
@@ -32,6 +33,7 @@ pub fn thread_to_wire(t: &CommentThread) -> wire::Comment {
         author: h.comment.author.clone(),
         access: super::access(h.comment.access),
         time_ms: h.time_ms.max(0) as u64,
+        edited_ms: h.edited_ms.map(|t| t.max(0) as u64),
         version: h.comment.version,
         resolved: h.resolved_by.is_some(),
         resolved_by: h.resolved_by.clone(),

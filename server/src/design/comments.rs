@@ -133,6 +133,8 @@ pub enum Written {
         comment: u64,
         /// The new text.
         text: String,
+        /// When it was stored, ms since the Unix epoch.
+        at: i64,
     },
 }
 
@@ -154,10 +156,10 @@ impl Write {
                 Written::Deleted { comment }
             }
             Write::Edit { comment, text } => {
-                if !store.edit_comment(design, comment, &text)? {
+                let Some(at) = store.edit_comment(design, comment, &text)? else {
                     return Err(StoreError::UnknownComment(design, comment));
-                }
-                Written::Edited { comment, text }
+                };
+                Written::Edited { comment, text, at }
             }
         })
     }
@@ -420,7 +422,7 @@ impl CommentBook {
                     }
                 }
             }
-            Written::Edited { comment, text } => {
+            Written::Edited { comment, text, at } => {
                 let t = self
                     .threads
                     .values_mut()
@@ -430,6 +432,7 @@ impl CommentBook {
                         for r in std::iter::once(&mut t.head).chain(t.replies.iter_mut()) {
                             if r.id == comment {
                                 r.comment.text.clone_from(&text);
+                                r.edited_ms = Some(at);
                             }
                         }
                         (None, Some(CommentChange::Changed(t.clone())))

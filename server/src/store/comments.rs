@@ -51,6 +51,9 @@ pub struct NewComment {
     pub version: u64,
 }
 
+/// Schema version 3: when a comment's text was last edited.
+pub(super) const SCHEMA_EDITED: &str = "ALTER TABLE comments ADD COLUMN edited_ms INTEGER;";
+
 /// A stored comment or reply.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CommentRecord {
@@ -60,6 +63,9 @@ pub struct CommentRecord {
     pub comment: NewComment,
     /// When, ms since the Unix epoch.
     pub time_ms: i64,
+    /// When its text was last edited, ms since the Unix epoch (`None`:
+    /// never).
+    pub edited_ms: Option<i64>,
     /// Who resolved it (a comment; `None` while open).
     pub resolved_by: Option<String>,
 }
@@ -101,11 +107,11 @@ fn row_to_record(r: &rusqlite::Row<'_>) -> rusqlite::Result<CommentRecord> {
         },
         time_ms: r.get(11)?,
         resolved_by: r.get(13)?,
+        edited_ms: r.get(14)?,
     })
 }
 
-const COLUMNS: &str =
-    "id, parent, part, u, v, x, y, z, text, author, access, time_ms, version, resolved_by";
+const COLUMNS: &str = "id, parent, part, u, v, x, y, z, text, author, access, time_ms, version, resolved_by, edited_ms";
 
 impl Store {
     /// Stores a comment or reply of live design `id` (a reply's parent must
@@ -156,6 +162,7 @@ impl Store {
             id: new_id,
             comment: c.clone(),
             time_ms,
+            edited_ms: None,
             resolved_by: None,
         })
     }
@@ -186,14 +193,21 @@ impl Store {
         Ok(n == 1)
     }
 
-    /// Replaces the text of comment or reply `comment` of design `id`; false
-    /// when there is no such row.
-    pub fn edit_comment(&self, id: DesignId, comment: u64, text: &str) -> Result<bool, StoreError> {
+    /// Replaces the text of comment or reply `comment` of design `id` and
+    /// stamps the edit; the time stamped (ms since the Unix epoch), or
+    /// `None` when there is no such row.
+    pub fn edit_comment(
+        &self,
+        id: DesignId,
+        comment: u64,
+        text: &str,
+    ) -> Result<Option<i64>, StoreError> {
+        let at = super::now_ms();
         let n = self.conn().execute(
-            "UPDATE comments SET text = ?3 WHERE design_id = ?1 AND id = ?2",
-            params![id as i64, comment as i64, text],
+            "UPDATE comments SET text = ?3, edited_ms = ?4 WHERE design_id = ?1 AND id = ?2",
+            params![id as i64, comment as i64, text, at],
         )?;
-        Ok(n == 1)
+        Ok((n == 1).then_some(at))
     }
 
     /// Deletes comment or reply `comment` of design `id` (a comment with its

@@ -143,7 +143,7 @@ CREATE TABLE IF NOT EXISTS working (
 /// The schema's migrations, oldest first: entry `k` brings a database from
 /// `PRAGMA user_version` k to k + 1, in one transaction with the version
 /// bump, so a database is always at exactly one version. Append only.
-const MIGRATIONS: &[&str] = &[SCHEMA, comments::SCHEMA];
+const MIGRATIONS: &[&str] = &[SCHEMA, comments::SCHEMA, comments::SCHEMA_EDITED];
 
 /// Brings the database to the newest schema version; refuses a database
 /// from a newer server.
