@@ -15,6 +15,15 @@ export const REFUSALS = {
   bad_handshake: () => 'the server did not accept this page\'s greeting: reload it',
 };
 
+/**
+ * The link's capabilities, in its URL: drag_stream=1, a drag comes as ρ once and d per frame
+ * (protocol/README.md, "Drag stream"); deflate=1, large binary messages come deflated (kind 7,
+ * "Deflated message"); pace=1, geometry at the rate this link carries ("Paced delivery"), for
+ * which the page reports the binary bytes it has received. index.html opens its early socket
+ * with the same query.
+ */
+export const LINK_QUERY = 'drag_stream=1&deflate=1&pace=1';
+
 export class Link {
   constructor({ design, token, name, onMessage, onFrame, onStatus, onHello = () => {} }) {
     this.design = design;
@@ -36,17 +45,20 @@ export class Link {
 
   connect() {
     const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
-    // drag_stream=1: a drag comes as ρ once and d per frame (protocol/README.md, "Drag stream");
-    // deflate=1: large binary messages come deflated (kind 7, "Deflated message");
-    // pace=1: geometry at the rate this link carries ("Paced delivery"), for
-    // which the page reports the binary bytes it has received.
-    const ws = new WebSocket(`${proto}//${location.host}/ws?drag_stream=1&deflate=1&pace=1`);
+    const url = `${proto}//${location.host}/ws?${LINK_QUERY}`;
+    // The first time, the socket index.html opened while the code loaded, if it is this link and
+    // not already closing (the server says nothing before hello, so nothing was missed).
+    const early = this.adopted ? null : window.vsculptEarlyLink;
+    this.adopted = true;
+    const adopt = early && early.url === url && early.ws.readyState <= WebSocket.OPEN;
+    if (early && !adopt) early.ws.close();
+    const ws = adopt ? early.ws : new WebSocket(url);
     let received = 0;
     const stream = new DragStream();
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
     this.onStatus('connecting', 'connecting to the server…');
-    ws.onopen = () => {
+    const hello = () => {
       ws.send(JSON.stringify({
         type: 'hello',
         protocol: PROTOCOL_VERSION,
@@ -59,6 +71,8 @@ export class Link {
       }));
       this.onHello();
     };
+    if (ws.readyState === WebSocket.OPEN) hello();
+    else ws.onopen = hello;
     const text = (data) => {
       let msg;
       try {

@@ -212,6 +212,8 @@ test('an 81 × 159 design joins compactly: the net crosses the link once, in bin
   const context = await browser.newContext({ viewport: { width: 1100, height: 700 } });
   try {
     const page = await context.newPage();
+    const sockets = [];
+    page.on('websocket', (ws) => sockets.push(ws.url()));
     await page.goto(link.url(`${server.base}/?design=${big.id}&token=${big.tokens.viewer}`), { waitUntil: 'commit' });
     await page.waitForFunction(() => window.vsculpt && window.vsculpt.perf.firstPicture !== null && window.vsculpt.state.access, null, { timeout: 60000 });
     // The page's modules (about 410 KiB compressed) and one 155 KiB frame; the JSON net alone was about 700 KiB.
@@ -235,6 +237,9 @@ test('an 81 × 159 design joins compactly: the net crosses the link once, in bin
       firstPicture: window.vsculpt.perf.firstPicture,
     }));
     assert.equal(studio, 1, 'the prewarmed studio program is the one the surface uses');
+    // One socket, the one index.html opened while the code loaded, taken over by the link.
+    assert.equal(sockets.length, 1, `sockets: ${sockets.join(', ')}`);
+    assert.ok(await page.evaluate(() => window.vsculptEarlyLink && window.vsculptEarlyLink.ws === window.vsculpt.link.ws), 'the link took over the early socket');
     assert.ok(typeof prewarmedAt === 'number' && prewarmedAt <= firstPicture, `prewarmed at ${prewarmedAt}, first picture at ${firstPicture}`);
   } finally {
     await context.close();
