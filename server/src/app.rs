@@ -150,6 +150,19 @@ pub enum Caller {
 }
 
 impl Shared {
+    /// Runs `call` against the store on the blocking pool (SQLite blocks),
+    /// a store failure or a lost task answering `internal`.
+    pub async fn on_store<T: Send + 'static>(
+        &self,
+        call: impl FnOnce(&Store) -> Result<T, crate::store::StoreError> + Send + 'static,
+    ) -> Result<T, ApiError> {
+        let store = self.store.clone();
+        tokio::task::spawn_blocking(move || call(&store))
+            .await
+            .map_err(storage)?
+            .map_err(storage)
+    }
+
     /// Who `token` belongs to.
     pub async fn caller(&self, token: &str) -> Result<Option<Caller>, ApiError> {
         if token.is_empty() {
@@ -164,12 +177,10 @@ impl Shared {
         {
             return Ok(Some(Caller::Admin));
         }
-        let store = self.store.clone();
         let token = token.to_owned();
-        let found = tokio::task::spawn_blocking(move || store.design_by_token(&token))
-            .await
-            .map_err(storage)?
-            .map_err(storage)?;
+        let found = self
+            .on_store(move |store| store.design_by_token(&token))
+            .await?;
         Ok(found.map(|(d, role)| Caller::Design(d.id, role)))
     }
 
@@ -178,11 +189,7 @@ impl Shared {
         if let Some(Caller::Admin) = self.caller(token).await? {
             return Ok(Some(Role::Editor));
         }
-        let store = self.store.clone();
-        let rec = tokio::task::spawn_blocking(move || store.design(id))
-            .await
-            .map_err(storage)?
-            .map_err(storage)?;
+        let rec = self.on_store(move |store| store.design(id)).await?;
         Ok(rec.and_then(|r| r.tokens.role_of(token)))
     }
 }
@@ -258,19 +265,16 @@ async fn list_designs(
 ) -> Result<Response, ApiError> {
     let token = request_token(&headers, &q).ok_or_else(unauthorized)?;
     let caller = s.caller(&token).await?.ok_or_else(unauthorized)?;
-    let store = s.store.clone();
     let list: Vec<_> = match caller {
-        Caller::Admin => tokio::task::spawn_blocking(move || store.designs())
-            .await
-            .map_err(storage)?
-            .map_err(storage)?
+        Caller::Admin => s
+            .on_store(|store| store.designs())
+            .await?
             .iter()
             .map(|d| design_json(d, Some(Role::Editor)))
             .collect(),
-        Caller::Design(..) => tokio::task::spawn_blocking(move || store.design_by_token(&token))
-            .await
-            .map_err(storage)?
-            .map_err(storage)?
+        Caller::Design(..) => s
+            .on_store(move |store| store.design_by_token(&token))
+            .await?
             .iter()
             .map(|(d, r)| design_json(d, Some(*r)))
             .collect(),
@@ -366,11 +370,7 @@ async fn list_versions(
     Query(q): Q,
 ) -> Result<Response, ApiError> {
     need_role(&s, &headers, &q, id).await?;
-    let store = s.store.clone();
-    let v = tokio::task::spawn_blocking(move || store.versions(id))
-        .await
-        .map_err(storage)?
-        .map_err(storage)?;
+    let v = s.on_store(move |store| store.versions(id)).await?;
     Ok(axum::Json(json!({ "id": id, "versions": v })).into_response())
 }
 
@@ -381,11 +381,7 @@ async fn get_version(
     Query(q): Q,
 ) -> Result<Response, ApiError> {
     need_role(&s, &headers, &q, id).await?;
-    let store = s.store.clone();
-    let v = tokio::task::spawn_blocking(move || store.version(id, number))
-        .await
-        .map_err(storage)?
-        .map_err(storage)?;
+    let v = s.on_store(move |store| store.version(id, number)).await?;
     let (info, bytes) = v.ok_or_else(|| {
         ApiError(
             StatusCode::NOT_FOUND,
@@ -407,11 +403,7 @@ async fn list_comments(
     Query(q): Q,
 ) -> Result<Response, ApiError> {
     need_role(&s, &headers, &q, id).await?;
-    let store = s.store.clone();
-    let rows = tokio::task::spawn_blocking(move || store.comments(id))
-        .await
-        .map_err(storage)?
-        .map_err(storage)?;
+    let rows = s.on_store(move |store| store.comments(id)).await?;
     // Every stored row, whatever a server's configured limit.
     let book = crate::design::comments::CommentBook::new(rows, usize::MAX);
     let comments: Vec<_> = book
