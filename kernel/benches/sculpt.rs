@@ -14,6 +14,8 @@
 //!   column is a new sparse solve), then removed outside the timing;
 //! * `first_frame_after_add` — the first frame of a grab just after an icon
 //!   was added (the drag response recomputed, the pending column solved);
+//! * `pin_change` — a small region constraint switched (sleeping ↔
+//!   passive): the pinned control points change (a numeric refactor);
 //! * `refactor` — a material change: numeric refactorisation + solve;
 //! * `tessellate` — the client tessellation at the paper's polygon count;
 //! * `full_frame` — drag frame + tessellation with normals and curvature.
@@ -32,6 +34,7 @@ use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 use vsculpt_kernel::design::Design;
 use vsculpt_kernel::energy::SurfaceMaterial;
 use vsculpt_kernel::icon::{Anchor, Edge, IconId, IconSpec, IconState, Role};
+use vsculpt_kernel::solve::SolveReport;
 
 /// (nu, nv, polygons) of paper 003's Table 2.
 const GRIDS: [(usize, usize, usize); 5] = [
@@ -96,6 +99,17 @@ fn scene(nu: usize, nv: usize) -> Scene {
     }
 }
 
+/// Switches `icon` passive (even `k`) or sleeping (odd `k`) and solves.
+fn switch_and_solve(design: &mut Design, icon: IconId, k: u64) -> SolveReport {
+    let state = if k.is_multiple_of(2) {
+        IconState::Passive
+    } else {
+        IconState::Sleeping
+    };
+    design.set_state(icon, state).unwrap();
+    design.solve().unwrap()
+}
+
 fn benches(c: &mut Criterion) {
     let mut group = c.benchmark_group("sculpt");
     group
@@ -153,13 +167,7 @@ fn benches(c: &mut Criterion) {
         group.bench_function(BenchmarkId::new("constraint_change", &id), |b| {
             b.iter(|| {
                 k += 1;
-                let state = if k.is_multiple_of(2) {
-                    IconState::Passive
-                } else {
-                    IconState::Sleeping
-                };
-                sc.design.set_state(sc.switch, state).unwrap();
-                black_box(sc.design.solve().unwrap())
+                black_box(switch_and_solve(&mut sc.design, sc.switch, k))
             })
         });
         // The same switch, but woken with a lifted target: the shape moves
@@ -237,6 +245,33 @@ fn benches(c: &mut Criterion) {
                 spent
             })
         });
+        // A region constraint switched (sleeping ↔ passive): the control
+        // points its rectangle holds are pinned or freed, so the pin set
+        // changes (a numeric refactor of the stiffness each way).
+        let region = sc
+            .design
+            .add_icon(IconSpec {
+                anchor: Anchor::Region {
+                    u0: 0.6,
+                    v0: 0.3,
+                    u1: 0.65,
+                    v1: 0.35,
+                    inside: true,
+                },
+                role: Role::Position,
+                state: IconState::Sleeping,
+                target: None,
+            })
+            .unwrap();
+        sc.design.solve().unwrap();
+        group.bench_function(BenchmarkId::new("pin_change", &id), |b| {
+            b.iter(|| {
+                k += 1;
+                black_box(switch_and_solve(&mut sc.design, region, k))
+            })
+        });
+        sc.design.remove_icon(region).unwrap();
+        sc.design.solve().unwrap();
         group.bench_function(BenchmarkId::new("refactor", &id), |b| {
             b.iter(|| {
                 k += 1;
@@ -330,13 +365,7 @@ fn clamped_plate(c: &mut Criterion) {
     group.bench_function(BenchmarkId::new("clamp_change", &id), |b| {
         b.iter(|| {
             k += 1;
-            let state = if k.is_multiple_of(2) {
-                IconState::Passive
-            } else {
-                IconState::Sleeping
-            };
-            d.set_state(clamps[0], state).unwrap();
-            black_box(d.solve().unwrap())
+            black_box(switch_and_solve(&mut d, clamps[0], k))
         })
     });
     group.finish();

@@ -9,6 +9,23 @@ use vsculpt_kernel::energy::{Stiffness, SurfaceMaterial};
 use vsculpt_kernel::icon::surface_row;
 use vsculpt_kernel::solve::{Equation, Factor, Group, Load, Problem, ScalarRow, Solver};
 
+/// `x` solves K x = a to round-off: componentwise against |K||x| + |a|.
+fn assert_solves(k: &Stiffness, x: &[f64], a: &[f64], column: usize) {
+    let n = k.dim();
+    let xs: Vec<DVec3> = x.iter().map(|&v| DVec3::new(v, 0.0, 0.0)).collect();
+    let mut kx = vec![DVec3::ZERO; n];
+    let mut bound = vec![DVec3::ZERO; n];
+    k.mul_points_with_bound(&xs, &mut kx, &mut bound);
+    for i in 0..n {
+        let r = (kx[i].x - a[i]).abs();
+        assert!(
+            r <= 1e-12 * (bound[i].x + a[i].abs()),
+            "column {column}, point {i}: residual {r:e} against {:e}",
+            bound[i].x
+        );
+    }
+}
+
 /// Large enough for a supernodal factor (checked below).
 const N: usize = 30;
 
@@ -229,11 +246,7 @@ fn forward_and_backward_halves_equal_full_solves() {
     // Each finished column solves K x = a to round-off (componentwise
     // against |K||x|), and agrees with the full solve as far as K's
     // conditioning lets two backward-stable solves agree.
-    let mut kx = vec![DVec3::ZERO; n];
-    let mut bound = vec![DVec3::ZERO; n];
     for j in 0..=last {
-        let xs: Vec<DVec3> = (0..n).map(|i| DVec3::new(x[(i, j)], 0.0, 0.0)).collect();
-        k.mul_points_with_bound(&xs, &mut kx, &mut bound);
         let mut a = vec![0.0; n];
         if j < last {
             for (&i, &w) in rows[j].indices.iter().zip(&rows[j].weights) {
@@ -242,14 +255,7 @@ fn forward_and_backward_halves_equal_full_solves() {
         } else {
             a.copy_from_slice(&dense);
         }
-        for i in 0..n {
-            let r = (kx[i].x - a[i]).abs();
-            assert!(
-                r <= 1e-12 * (bound[i].x + a[i].abs()),
-                "column {j}, point {i}: residual {r:e} against {:e}",
-                bound[i].x
-            );
-        }
+        assert_solves(&k, x.col_as_slice(j), &a, j);
         let scale = (0..n).fold(0.0f64, |m, i| m.max(want[(i, j)].abs()));
         for i in 0..n {
             assert!(
@@ -372,4 +378,54 @@ fn pending_columns_are_solved_when_the_shape_moves_and_answers_stay_exact() {
     assert!(report.constraint_residual < 1e-9, "{report:?}");
     let gap = max_gap(&out, &dense_answer(&k, &p, &problem, None));
     assert!(gap < 1e-9, "moving solve off the dense answer by {gap:e}");
+}
+
+/// A combination of many rows (as a drag response's first answer is
+/// solved: the constraint and load rows weighted by their multipliers and
+/// forces) solved by its sparse forward half — only the elimination-tree
+/// reach of its non-zeros — and the backward pass: a solution of K x = a
+/// to round-off, the same as a full solve of the dense right-hand side.
+#[test]
+fn a_combined_sparse_right_hand_side_solves_like_a_dense_one() {
+    let s = plate(N);
+    let k = stiffness(&s);
+    let n = k.dim();
+    let mut a = vec![0.0; n];
+    for (m, (u, v)) in [
+        (0.1, 0.1),
+        (0.9, 0.15),
+        (0.3, 0.6),
+        (0.55, 0.45),
+        (0.8, 0.85),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let row = surface_row(&s, u, v, 0, 0);
+        let weight = [0.7, -1.3, 2.1, -0.4, 1.9][m];
+        for (&i, &w) in row.indices.iter().zip(&row.weights) {
+            a[i] += weight * w;
+        }
+    }
+    let (indices, weights): (Vec<usize>, Vec<f64>) = a
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v != 0.0)
+        .map(|(i, v)| (i, *v))
+        .unzip();
+    let mut factor = Factor::new(k.clone()).unwrap();
+    let mut want = faer::Mat::<f64>::from_fn(n, 1, |i, _| a[i]);
+    factor.solve_in_place(want.as_mut());
+    let half = factor
+        .forward_sparse(&[(indices.as_slice(), weights.as_slice())])
+        .expect("supernodal")
+        .pop()
+        .unwrap();
+    let mut x = faer::Mat::<f64>::from_fn(n, 1, |i, _| half.values()[i]);
+    assert!(factor.backward_in_place(x.as_mut()));
+    assert_solves(&k, x.col_as_slice(0), &a, 0);
+    let scale = (0..n).fold(0.0f64, |m, i| m.max(want[(i, 0)].abs()));
+    for i in 0..n {
+        assert!((x[(i, 0)] - want[(i, 0)]).abs() <= 1e-6 * scale);
+    }
 }

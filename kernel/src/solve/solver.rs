@@ -687,7 +687,9 @@ impl Solver {
     /// solve), G = Aᵀ Z and S over the scalar equations. A few new rows
     /// that are only equations (no load) are left pending (returned) when
     /// the factor gives their block of G by forward solves: their entries
-    /// against solved columns are a_newᵀ z_c (K⁻¹ is symmetric).
+    /// against solved columns are a_newᵀ z_c (K⁻¹ is symmetric). Rows
+    /// still pending keep their forward halves, and G's entries between
+    /// rows the current problem has too are copied, not recomputed.
     fn schur(
         &mut self,
         rows: &[ScalarRow],
@@ -727,20 +729,44 @@ impl Solver {
         for l in loads {
             is_load[l.col] = true;
         }
+        // The forward halves of rows still pending are kept (same factor:
+        // a refactor forgets the pending columns); only new rows need one.
+        let carried: HashMap<usize, &Forward> = if self.pending_forward.len() == self.pending.len()
+        {
+            self.pending
+                .iter()
+                .copied()
+                .zip(&self.pending_forward)
+                .collect()
+        } else {
+            HashMap::new()
+        };
+        let carried_of = |c: usize| {
+            old.get(&row_key(&rows[c]))
+                .and_then(|oc| carried.get(oc).copied())
+        };
         let forward = if !missing.is_empty()
             && missing.len() <= LAZY_COLUMNS
             && missing.iter().all(|&c| !is_load[c])
         {
+            let kept: Vec<Option<&Forward>> = missing.iter().map(|&c| carried_of(c)).collect();
             let columns: Vec<(&[usize], &[f64])> = missing
                 .iter()
-                .map(|&c| {
+                .zip(&kept)
+                .filter(|(_, k)| k.is_none())
+                .map(|(&c, _)| {
                     (
                         free_rows[c].indices.as_slice(),
                         free_rows[c].weights.as_slice(),
                     )
                 })
                 .collect();
-            self.factor.forward_sparse(&columns)
+            self.factor.forward_sparse(&columns).map(|fresh| {
+                let mut fresh = fresh.into_iter();
+                kept.iter()
+                    .filter_map(|k| k.map_or_else(|| fresh.next(), |f| Some(f.clone())))
+                    .collect::<Vec<Forward>>()
+            })
         } else {
             None
         };
@@ -780,13 +806,23 @@ impl Solver {
                 .map(|(&i, &w)| w * col.values[i])
                 .sum()
         };
+        // Entries between rows the current problem has too are kept (the
+        // same rows and columns: the same numbers, so S over kept
+        // equations is the current one entry for entry).
+        let nc_old = self.rows.len();
+        let old_of: Vec<Option<usize>> = if self.g.len() == nc_old * nc_old {
+            rows.iter().map(|r| old.get(&row_key(r)).copied()).collect()
+        } else {
+            vec![None; nc]
+        };
         let mut g = vec![0.0; nc * nc];
         for a in 0..nc {
             for b in 0..nc {
-                g[a * nc + b] = match (is_pending[a], is_pending[b]) {
-                    (_, false) => dot(&free_rows[a], &z[b]),
-                    (false, true) => dot(&free_rows[b], &z[a]),
-                    (true, true) => 0.0,
+                g[a * nc + b] = match (old_of[a], old_of[b], is_pending[a], is_pending[b]) {
+                    (Some(oa), Some(ob), _, _) => self.g[oa * nc_old + ob],
+                    (_, _, _, false) => dot(&free_rows[a], &z[b]),
+                    (_, _, false, true) => dot(&free_rows[b], &z[a]),
+                    (_, _, true, true) => 0.0,
                 };
             }
         }
@@ -794,7 +830,9 @@ impl Solver {
             let k = pending.len();
             for (i, &a) in pending.iter().enumerate() {
                 for (j, &b) in pending.iter().enumerate() {
-                    g[a * nc + b] = gram[i * k + j];
+                    if old_of[a].is_none() || old_of[b].is_none() {
+                        g[a * nc + b] = gram[i * k + j];
+                    }
                 }
             }
         }
@@ -821,31 +859,45 @@ impl Solver {
         if self.pending.is_empty() {
             return;
         }
-        self.solve_batch(Mat::zeros(self.dim(), 0));
+        self.solve_batch(&[]);
     }
 
-    /// K̃⁻¹ of every column of `extra` (dense right-hand sides over the
-    /// free points), with the pending columns of Z solved in the same
-    /// batch: the pending ones need only their backward half (their forward
-    /// halves were kept from the Gram), the extra ones both, and one
-    /// backward pass over the factor serves them all.
-    fn solve_batch(&mut self, extra: Mat<f64>) -> Mat<f64> {
+    /// K̃⁻¹ of every sparse right-hand side in `extra` (`(indices,
+    /// weights)` over the free points), with the pending columns of Z
+    /// solved in the same batch. The extra ones' forward halves visit only
+    /// the elimination-tree reach of their non-zeros
+    /// ([`Factor::forward_sparse`]: a combination of constraint and load
+    /// rows touches a fraction of the factor), the pending ones need no
+    /// forward half (kept from the Gram), and one backward pass over the
+    /// factor serves them all. Dense columns of K̃⁻¹ per right-hand side,
+    /// in `extra`'s order.
+    fn solve_batch(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
         let n = self.dim();
         let pending = std::mem::take(&mut self.pending);
         let forward = std::mem::take(&mut self.pending_forward);
-        let e = extra.ncols();
+        let e = extra.len();
         let k = e + pending.len();
         let mut x = Mat::<f64>::zeros(n, k);
-        x.as_mut().subcols_mut(0, e).copy_from(extra.as_ref());
-        let halves = forward.len() == pending.len()
-            && self.factor.forward_in_place(x.as_mut().subcols_mut(0, e));
-        if halves {
-            for (m, f) in forward.iter().enumerate() {
-                x.col_mut(e + m)
-                    .copy_from(faer::ColRef::from_slice(f.values()));
+        let sparse: Vec<(&[usize], &[f64])> = extra
+            .iter()
+            .map(|(i, w)| (i.as_slice(), w.as_slice()))
+            .collect();
+        let halves = if forward.len() == pending.len() {
+            self.factor.forward_sparse(&sparse)
+        } else {
+            None
+        };
+        if let Some(halves) = halves {
+            for (m, f) in halves.iter().chain(&forward).enumerate() {
+                x.col_mut(m).copy_from(faer::ColRef::from_slice(f.values()));
             }
             self.factor.backward_in_place(x.as_mut());
         } else {
+            for (m, (indices, weights)) in extra.iter().enumerate() {
+                for (&i, &w) in indices.iter().zip(weights) {
+                    x[(i, m)] += w;
+                }
+            }
             for (m, &c) in pending.iter().enumerate() {
                 let row = &self.free_rows[c];
                 for (&i, &w) in row.indices.iter().zip(&row.weights) {
@@ -869,7 +921,10 @@ impl Solver {
     /// inverse is exact (Cholesky path, same factor), the change is small,
     /// and the result is provably well conditioned and checked: the same
     /// condition bound as [`well_conditioned_inverse`], and S S⁻¹ v = v to
-    /// 1e-9 on two probe vectors.
+    /// 1e-9 on two probe vectors. With nothing added or removed (a load's
+    /// group came or went) S is the current one entry for entry (see
+    /// `schur`: G's entries between kept rows are kept), so the current
+    /// inverse, permuted, is returned unchecked.
     fn updated_inverse(
         &self,
         rows: &[ScalarRow],
@@ -891,6 +946,18 @@ impl Solver {
             return None;
         }
         let old = |i: usize, j: usize| self.s_pinv[i * m_old + j];
+        if a == 0 && r == 0 {
+            // The same equations on the same columns (a load came or went,
+            // or equations were only reordered): S is the old one, entry
+            // for entry, and so is its inverse, permuted. Nothing to check.
+            let mut out = vec![0.0; m * m];
+            for &(e, o) in &kept {
+                for &(f, q) in &kept {
+                    out[e * m + f] = old(o, q);
+                }
+            }
+            return Some(out);
+        }
         // (S_kk)⁻¹ over the kept equations, in the new order.
         let mut inv_k = Mat::<f64>::from_fn(k, k, |i, j| old(kept[i].1, kept[j].1));
         if r > 0 {
@@ -1572,20 +1639,33 @@ impl Solver {
         if columns.is_empty() && self.pending.is_empty() {
             return;
         }
-        let mut rhs = Mat::<f64>::zeros(n, columns.len());
-        for (j, &(p, k)) in columns.iter().enumerate() {
-            for (c, wc) in weights[p].iter().enumerate() {
-                let f = wc[k];
-                if f == 0.0 {
-                    continue;
+        // The combined rows, summed in a dense scratch (in the order the
+        // rows come), kept sparse: their non-zeros lie on the rows' points.
+        let mut sum = vec![0.0; n];
+        let rhs: Vec<SparseRhs> = columns
+            .iter()
+            .map(|&(p, k)| {
+                for (c, wc) in weights[p].iter().enumerate() {
+                    let f = wc[k];
+                    if f == 0.0 {
+                        continue;
+                    }
+                    let row = &self.free_rows[c];
+                    for (&i, &a) in row.indices.iter().zip(&row.weights) {
+                        sum[i] += f * a;
+                    }
                 }
-                let row = &self.free_rows[c];
-                for (&i, &a) in row.indices.iter().zip(&row.weights) {
-                    rhs[(i, j)] += f * a;
+                let mut column: SparseRhs = (Vec::new(), Vec::new());
+                for (i, v) in sum.iter_mut().enumerate() {
+                    if *v != 0.0 {
+                        column.0.push(i);
+                        column.1.push(std::mem::take(v));
+                    }
                 }
-            }
-        }
-        let rhs = self.solve_batch(rhs);
+                column
+            })
+            .collect();
+        let rhs = self.solve_batch(&rhs);
         for (j, &(p, k)) in columns.iter().enumerate() {
             for (d, &v) in deltas[p].iter_mut().zip(rhs.col_as_slice(j)) {
                 d[k] += v;
@@ -1884,8 +1964,17 @@ impl Solver {
         let mut computed = DVec3::ZERO;
         let mut k_delta = vec![DVec3::ZERO; n];
         let mut k_abs = vec![DVec3::ZERO; n];
-        self.augmented
-            .mul_points_with_bound(delta, &mut k_delta, &mut k_abs);
+        let x_only = |v: &DVec3| v.y == 0.0 && v.z == 0.0;
+        if delta.iter().all(x_only) {
+            // One coordinate (a symmetric response's x input): K δ and
+            // |K||δ| are zero on y and z, so one scalar pass over K gives
+            // the same numbers as the three-coordinate one.
+            let x: Vec<f64> = delta.iter().map(|d| d.x).collect();
+            mul_with_bound_x(&self.augmented, &x, &mut k_delta, &mut k_abs);
+        } else {
+            self.augmented
+                .mul_points_with_bound(delta, &mut k_delta, &mut k_abs);
+        }
         // The componentwise backward error max_i |ρ_i| / (|b| + |Cᵀ||λ| +
         // |K||δ|)_i (Oettli–Prager), per coordinate.
         let mut backward = DVec3::ZERO;
@@ -2200,6 +2289,10 @@ fn same_group(a: &Group, b: &Group) -> bool {
             .all(|(x, y)| x.row == y.row && x.drag_gain == y.drag_gain)
 }
 
+/// A sparse right-hand side over the free points: indices (unique) and
+/// values.
+type SparseRhs = (Vec<usize>, Vec<f64>);
+
 /// What `Solver::schur` builds: Z (pending placeholders included), the
 /// pending columns and their forward halves, G (row-major) and S.
 type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
@@ -2332,6 +2425,33 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
     Ok((out, m - kept.len(), false))
 }
 
+/// `y[i].x = Σ_j K_ij x_j` and `y_abs[i].x = Σ_j |K_ij| |x_j|` (the
+/// other coordinates left as they are), in one pass over the lower
+/// triangle of the symmetric `k`: the x field of
+/// [`Stiffness::mul_points_with_bound`] for a field that is zero on y and
+/// z, with the same terms summed in the same order.
+fn mul_with_bound_x(k: &Stiffness, x: &[f64], y: &mut [DVec3], y_abs: &mut [DVec3]) {
+    let lower = k.lower();
+    let s = lower.symbolic();
+    let (cp, ri, v) = (s.col_ptr(), s.row_idx(), lower.val());
+    for c in 0..x.len() {
+        let xc = x[c];
+        let xc_abs = xc.abs();
+        let mut acc = 0.0;
+        let mut acc_abs = 0.0;
+        for (&r, &a) in ri[cp[c]..cp[c + 1]].iter().zip(&v[cp[c]..cp[c + 1]]) {
+            y[r].x += xc * a;
+            y_abs[r].x += xc_abs * a.abs();
+            if r != c {
+                acc += x[r] * a;
+                acc_abs += x[r].abs() * a.abs();
+            }
+        }
+        y[c].x += acc;
+        y_abs[c].x += acc_abs;
+    }
+}
+
 /// Most steps of iterative refinement per solve (see
 /// `Solver::refined_deltas`); it stops earlier when a step gains less than
 /// half.
@@ -2446,6 +2566,36 @@ fn checked_inverse(s: &Mat<f64>, inverse: &Mat<f64>) -> Option<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The x-only product used for a symmetric response's residual is the
+    /// x field of the three-coordinate one, bit for bit (same terms, same
+    /// order), and leaves y and z alone.
+    #[test]
+    fn the_x_only_product_is_the_three_coordinate_one() {
+        let s = crate::bspline::BSplineSurface::plane(1.0, 2.0, 9, 7, 3).unwrap();
+        let k = Stiffness::surface(
+            s.u_knots(),
+            s.v_knots(),
+            &crate::energy::SurfaceMaterial::default(),
+        )
+        .unwrap();
+        let n = k.dim();
+        let x: Vec<f64> = (0..n).map(|i| ((i * 13) % 7) as f64 - 3.1).collect();
+        let points: Vec<DVec3> = x.iter().map(|&v| DVec3::new(v, 0.0, 0.0)).collect();
+        let (mut y, mut y_abs) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        k.mul_points_with_bound(&points, &mut y, &mut y_abs);
+        let (mut yx, mut yx_abs) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+        mul_with_bound_x(&k, &x, &mut yx, &mut yx_abs);
+        for i in 0..n {
+            assert_eq!(yx[i].x.to_bits(), y[i].x.to_bits());
+            assert_eq!(yx_abs[i].x.to_bits(), y_abs[i].x.to_bits());
+            assert_eq!(
+                (yx[i].y, yx[i].z, yx_abs[i].y, yx_abs[i].z),
+                (0.0, 0.0, 0.0, 0.0)
+            );
+        }
+        assert!(y.iter().any(|v| v.x != 0.0));
+    }
 
     /// A well-conditioned SPD matrix (Cholesky path) and a singular one
     /// (eigendecomposition path): S S⁺ S = S and S⁺ symmetric in both, the
