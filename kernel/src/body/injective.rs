@@ -32,7 +32,10 @@
 use faer::Mat;
 use faer::prelude::Solve;
 
+use glam::DVec3;
+
 use super::{BSplineVolume, BodyError, Dir, VolumeScratch};
+use crate::bspline::basis_derivs;
 
 /// Subdivision levels before an undecided cell is refused.
 pub const MAX_DEPTH: usize = 12;
@@ -187,25 +190,87 @@ fn cells(vol: &BSplineVolume) -> Vec<Cell> {
     out
 }
 
-/// The Bernstein coefficients of det J on the cell [lo, hi].
-fn cell_patch(
-    vol: &BSplineVolume,
-    colloc: &[Collocation],
-    scratch: &mut VolumeScratch,
-    lo: [f64; 3],
-    hi: [f64; 3],
-) -> Patch {
+/// The Bernstein coefficients of det J on the cell [lo, hi] whose control
+/// points start at `first`: det J at the collocation nodes by sum
+/// factorisation over the cell's (l+1)(m+1)(n+1) control points (the basis
+/// functions and their first derivatives once per direction and node, the
+/// points contracted along w, then v, then u), then the collocation solves.
+fn cell_patch(vol: &BSplineVolume, colloc: &[Collocation], cell: &Cell) -> Patch {
+    let (lo, hi) = (cell.lo, cell.hi);
     let dims = [0, 1, 2].map(|a| colloc[a].nodes.len());
+    let deg = vol.degrees();
+    // Per direction and node: the p + 1 values and first derivatives.
+    let basis: Vec<Vec<(Vec<f64>, Vec<f64>)>> = Dir::ALL
+        .iter()
+        .map(|&d| {
+            let a = d.index();
+            colloc[a]
+                .nodes
+                .iter()
+                .map(|&s| {
+                    let b = basis_derivs(vol.knots(d), lo[a] + (hi[a] - lo[a]) * s, 1);
+                    debug_assert_eq!(b.first, cell.first[a]);
+                    (
+                        (0..=deg[a]).map(|k| b.get(0, k)).collect(),
+                        (0..=deg[a]).map(|k| b.get(1, k)).collect(),
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    let [pu, pv, pw] = deg.map(|p| p + 1);
+    let pts = vol.points();
+    let f = cell.first;
+    // Along w: w0[(a, b, r)] = Σ_c N(w_r)_c P_abc, w1 with N'.
+    let mut w0 = vec![DVec3::ZERO; pu * pv * dims[2]];
+    let mut w1 = w0.clone();
+    for a in 0..pu {
+        for b in 0..pv {
+            for (r, (n, dn)) in basis[2].iter().enumerate() {
+                let (mut x, mut y) = (DVec3::ZERO, DVec3::ZERO);
+                for c in 0..pw {
+                    let p = pts[vol.index(f[0] + a, f[1] + b, f[2] + c)];
+                    x += p * n[c];
+                    y += p * dn[c];
+                }
+                w0[(a * pv + b) * dims[2] + r] = x;
+                w1[(a * pv + b) * dims[2] + r] = y;
+            }
+        }
+    }
+    // Along v: v00 = Σ_b N w0, v10 = Σ_b N' w0, v01 = Σ_b N w1.
+    let size = pu * dims[1] * dims[2];
+    let (mut v00, mut v10, mut v01) = (
+        vec![DVec3::ZERO; size],
+        vec![DVec3::ZERO; size],
+        vec![DVec3::ZERO; size],
+    );
+    for a in 0..pu {
+        for (t, (n, dn)) in basis[1].iter().enumerate() {
+            for r in 0..dims[2] {
+                let at = (a * dims[1] + t) * dims[2] + r;
+                for b in 0..pv {
+                    let i = (a * pv + b) * dims[2] + r;
+                    v00[at] += w0[i] * n[b];
+                    v10[at] += w0[i] * dn[b];
+                    v01[at] += w1[i] * n[b];
+                }
+            }
+        }
+    }
+    // Along u: the three first derivatives, and det J.
     let mut coef = Vec::with_capacity(dims[0] * dims[1] * dims[2]);
-    for &s in &colloc[0].nodes {
-        for &t in &colloc[1].nodes {
-            for &r in &colloc[2].nodes {
-                let p = [
-                    lo[0] + (hi[0] - lo[0]) * s,
-                    lo[1] + (hi[1] - lo[1]) * t,
-                    lo[2] + (hi[2] - lo[2]) * r,
-                ];
-                coef.push(vol.eval(scratch, p, 1).det());
+    for (n, dn) in &basis[0] {
+        for t in 0..dims[1] {
+            for r in 0..dims[2] {
+                let (mut xu, mut xv, mut xw) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+                for a in 0..pu {
+                    let i = (a * dims[1] + t) * dims[2] + r;
+                    xu += v00[i] * dn[a];
+                    xv += v10[i] * n[a];
+                    xw += v01[i] * n[a];
+                }
+                coef.push(xu.dot(xv.cross(xw)));
             }
         }
     }
@@ -400,7 +465,7 @@ impl InjectivityCache {
         let mut scale = 0.0f64;
         for (c, cell) in cells.iter().enumerate() {
             if dirty[c] {
-                let p = cell_patch(vol, &colloc, &mut scratch, cell.lo, cell.hi);
+                let p = cell_patch(vol, &colloc, cell);
                 scale = scale.max(patch_scale(&p));
                 patches.push(Some(p));
             } else {
@@ -413,7 +478,7 @@ impl InjectivityCache {
         // made again.
         for (c, cell) in cells.iter().enumerate() {
             if patches[c].is_none() && self.cells[c].lower <= eps {
-                patches[c] = Some(cell_patch(vol, &colloc, &mut scratch, cell.lo, cell.hi));
+                patches[c] = Some(cell_patch(vol, &colloc, cell));
             }
         }
         let mut proofs = vec![
