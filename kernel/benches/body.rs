@@ -18,6 +18,12 @@
 //!   at t and its display (six faces + 3 iso-surfaces per direction,
 //!   17 × 17 each); `morph/body_at_t` the body alone.
 //!
+//! * `injective/fresh` — the proof that det J > 0 of the tricubic 8³
+//!   lattice with one point moved, every cell proved ([`check_injective`]);
+//!   `injective/kept` — the same proof with the proofs of the last lattice
+//!   kept ([`InjectivityCache`]): only the cells the moved point reaches
+//!   are proved again.
+//!
 //! Run: `cargo bench -p vsculpt-kernel --bench body -- --warm-up-time 1
 //! --measurement-time 3`. Figures in BENCHMARKS.md.
 
@@ -26,7 +32,7 @@ use glam::DVec3;
 use std::hint::black_box;
 use vsculpt_kernel::body::demo::{chair, cube_to_spool};
 use vsculpt_kernel::body::display::BodyDisplay;
-use vsculpt_kernel::body::{BSplineVolume, Ffd};
+use vsculpt_kernel::body::{BSplineVolume, Ffd, InjectivityCache, check_injective};
 
 /// 100 000 vertices on a sphere shell of radius 0.45 around (0.5, 0.5, 0.5)
 /// (a latitude–longitude grid, 250 × 400).
@@ -130,5 +136,41 @@ fn display(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, ffd, display);
+fn injective(c: &mut Criterion) {
+    let lat = unit_lattice(3, 8);
+    let idx = lat.index(6, 4, 4);
+    let rest = lat.points()[idx];
+    let mut g = c.benchmark_group("injective");
+    // The point wanders on a small loop: no lattice repeats.
+    let moved = |k: u32| {
+        let a = 0.05 * k as f64;
+        let mut v = lat.clone();
+        v.set_point(idx, rest + 0.04 * DVec3::new(a.cos(), a.sin(), 0.0))
+            .unwrap();
+        v
+    };
+    let mut cache = InjectivityCache::default();
+    cache.check(&lat).unwrap();
+    println!(
+        "injective: {} of {} cells reached by point (6, 4, 4)",
+        cache.changed_cells(&moved(1)),
+        check_injective(&lat).unwrap().cells
+    );
+    let mut k = 0u32;
+    g.bench_function("fresh", |b| {
+        b.iter(|| {
+            k += 1;
+            black_box(check_injective(&moved(k)).unwrap().lower_bound)
+        })
+    });
+    g.bench_function("kept", |b| {
+        b.iter(|| {
+            k += 1;
+            black_box(cache.check(&moved(k)).unwrap().lower_bound)
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, ffd, display, injective);
 criterion_main!(benches);

@@ -6,7 +6,9 @@
 
 use glam::DVec3;
 use vsculpt_kernel::body::interior::{det_grid, det_on_plane, edit, move_keeping_shape, volume};
-use vsculpt_kernel::body::{BSplineVolume, Body1, BodyError, Dir, Edges, check_injective};
+use vsculpt_kernel::body::{
+    BSplineVolume, Body1, BodyError, Dir, Edges, InjectivityCache, check_injective,
+};
 use vsculpt_kernel::bspline::{BSplineCurve, KnotVector, greville};
 mod body_support;
 use body_support::Rng;
@@ -89,6 +91,75 @@ fn a_fold_between_samples_is_found() {
         }
         other => panic!("{other:?}"),
     }
+}
+
+/// The knot spans of a clamped uniform direction with `n` points of
+/// degree `p` that point `i` reaches (its basis function's support):
+/// spans s = p … n − 1 with s − p ≤ i ≤ s.
+fn spans_reached(n: usize, p: usize, i: usize) -> usize {
+    (p..n).filter(|&s| s - p <= i && i <= s).count()
+}
+
+#[test]
+fn kept_proofs_give_a_fresh_proof_s_verdict_and_fold() {
+    // A tricubic 6³ box whose points wander one at a time, some far enough
+    // to fold it: at every step the kept proofs' verdict and fold are
+    // those of a proof from scratch, the bound they report is below det J
+    // wherever it is sampled, and only the cells the moved point reaches
+    // are proved again.
+    let base = BSplineVolume::affine(
+        DVec3::ZERO,
+        [DVec3::X, DVec3::Y, DVec3::Z],
+        [3, 3, 3],
+        [6, 6, 6],
+    )
+    .unwrap();
+    let mut cache = InjectivityCache::default();
+    cache.check(&base).unwrap();
+    let mut current = base.clone();
+    let mut rng = Rng(0x5eed_1234);
+    let (mut folds, mut proofs) = (0, 0);
+    for step in 0..40 {
+        let ijk = [0, 1, 2].map(|_| (rng.next() * 6.0) as usize);
+        let idx = current.index(ijk[0], ijk[1], ijk[2]);
+        // Every fourth move is large (likely to fold), the others small.
+        let size = if step % 4 == 3 { 1.2 } else { 0.08 };
+        let mut next = current.clone();
+        next.set_point(idx, current.points()[idx] + rng.vec(size))
+            .unwrap();
+        let reached: usize = (0..3).map(|d| spans_reached(6, 3, ijk[d])).product();
+        assert_eq!(cache.changed_cells(&next), reached, "point {ijk:?}");
+        let fresh = check_injective(&next);
+        let kept = cache.check(&next);
+        match (&fresh, &kept) {
+            (Ok(_), Ok(r)) => {
+                proofs += 1;
+                assert!(r.lower_bound > 0.0);
+                let low = det_grid(&next, 7).into_iter().fold(f64::INFINITY, f64::min);
+                assert!(low >= r.lower_bound * (1.0 - 1e-9), "{low} < {r:?}");
+                current = next;
+            }
+            (Err(a), Err(b)) => {
+                folds += 1;
+                assert_eq!(a, b);
+                // A refused lattice leaves the kept proofs as they were.
+                assert_eq!(cache.last(), Some(&current));
+            }
+            _ => panic!("step {step}: fresh {fresh:?}, kept {kept:?}"),
+        }
+    }
+    assert!(folds > 0 && proofs > 0, "{folds} folds, {proofs} proofs");
+    // The unchanged lattice is proved again without proving any cell.
+    assert_eq!(cache.changed_cells(&current), 0);
+    // Another knot vector is a new space: every cell is proved.
+    let other = BSplineVolume::affine(
+        DVec3::ZERO,
+        [DVec3::X, DVec3::Y, DVec3::Z],
+        [3, 3, 3],
+        [6, 6, 7],
+    )
+    .unwrap();
+    assert_eq!(cache.changed_cells(&other), 3 * 3 * 4);
 }
 
 /// A straight cubic edge with its control points at Greville spacing.

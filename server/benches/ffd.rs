@@ -9,10 +9,17 @@
 //!   the normals of the deformed mesh;
 //! * `ffd_server/dsm_sync_and_frame` — the same plus the mesh frame (kind 3)
 //!   every viewer receives (quantised and encoded);
-//! * `ffd_server/body_edit` — the whole `body_edit` in the design model:
-//!   the edit validated (the body proved injective), the body's display
-//!   re-evaluated, the bound mesh deformed, the document synchronised, and
-//!   the DSM part's frame encoded.
+//! * `lattice_move/after` — the whole server path of a `body_edit` moving
+//!   one lattice point, as the design actor runs it: `DesignModel::apply`
+//!   (the edit validated: the body proved injective, with the proofs of
+//!   the cells the point does not reach kept from the last edit; the
+//!   body's display re-evaluated; the bound mesh's vertices in the point's
+//!   support recomputed with the normals around them; the document
+//!   synchronised), then `DesignModel::geometry` of every part it moved
+//!   (the body frame and the DSM part's mesh frame, the bytes sent);
+//! * `lattice_move/before` — the same path with every vertex and normal
+//!   recomputed (`set_ffd_full_recompute`) and every proof made afresh
+//!   (`body_proof::forget`): the server as it was before locality.
 //!
 //! Run: `cargo bench -p vsculpt-server --bench ffd`.
 
@@ -22,6 +29,7 @@ use std::hint::black_box;
 use vsculpt_kernel::body::BSplineVolume;
 use vsculpt_protocol::dsm::{DsmData, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitiveShape};
 use vsculpt_server::design::body_part::{BodyPart, LatticeDoc, LatticeSelect};
+use vsculpt_server::design::body_proof;
 use vsculpt_server::design::doc::DesignDoc;
 use vsculpt_server::design::dsm_engine::{DsmEngine, DsmPart};
 use vsculpt_server::design::edit::{Edit, PartEdit};
@@ -85,7 +93,7 @@ fn model() -> DesignModel {
 const IJK: [usize; 3] = [6, 4, 4];
 
 fn bench(c: &mut Criterion) {
-    let mut m = model();
+    let m = model();
     let n = m.dsm_mesh(2).unwrap().positions.len();
     println!("dsm mesh: {n} vertices");
     assert!(n >= 100_000, "{n} vertices");
@@ -120,25 +128,45 @@ fn bench(c: &mut Criterion) {
             black_box(ffds.frame(1, 2, k, true).unwrap().len())
         })
     });
-    // The whole edit is slow (the body's injectivity proof): few samples.
+    g.finish();
+
+    // The whole server path of a lattice point's move, as the design actor
+    // runs it for a `body_edit` (`DesignModel::apply`) and then for its
+    // publication (`DesignModel::geometry` of every part it moved: the
+    // body frame and the DSM part's mesh frame). The point wanders on a
+    // small loop so no lattice repeats (a repeated lattice would find its
+    // proof kept whole).
+    let mut g = c.benchmark_group("lattice_move");
     g.sample_size(10);
-    g.bench_function("body_edit", |b| {
-        b.iter(|| {
-            k += 1;
-            let s = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
-            let (_, parts) = m
-                .apply(Edit::Part {
-                    part: 1,
-                    edit: PartEdit::MoveLattice {
-                        select: LatticeSelect::Point(IJK),
-                        delta: [0.05 * s, 0.02 * s, 0.0],
-                    },
-                })
-                .unwrap();
-            assert!(parts.contains(&2));
-            black_box(m.geometry(1, 2, k, true).unwrap().frame.len())
-        })
-    });
+    for (name, fresh) in [("before", true), ("after", false)] {
+        let mut m = model();
+        m.set_ffd_full_recompute(fresh);
+        let mut k = 0u64;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                k += 1;
+                if fresh {
+                    body_proof::forget();
+                }
+                let a = 0.05 * k as f64;
+                let (_, parts) = m
+                    .apply(Edit::Part {
+                        part: 1,
+                        edit: PartEdit::MoveLattice {
+                            select: LatticeSelect::Point(IJK),
+                            delta: [0.002 * a.cos(), 0.002 * a.sin(), 0.0],
+                        },
+                    })
+                    .unwrap();
+                assert!(parts.contains(&1) && parts.contains(&2));
+                let bytes: usize = parts
+                    .iter()
+                    .map(|&p| m.geometry(1, p, k, false).unwrap().frame.len())
+                    .sum();
+                black_box(bytes)
+            })
+        });
+    }
     g.finish();
 }
 

@@ -14,6 +14,7 @@
 //! * [`lattice`] — several bodies sharing faces; continuity across them.
 //! * [`morph`] — metamorphosis: grid correspondence, paths, the body at t.
 //! * [`union`] — union of bodies as a set operation on their boundaries.
+//! * [`weld`] — the union's pieces welded into one closed, manifold mesh.
 //! * [`display`] — boundary and isoparametric surface meshes for viewers.
 //! * [`demo`] — the paper's cube, spool, cube-to-spool morph and chair.
 
@@ -32,11 +33,12 @@ pub mod refine;
 pub mod space;
 pub mod union;
 pub mod volume;
+pub mod weld;
 
 pub use coons::{Body0, Body1, Body2, Edges, coons_patch, trilinear};
 pub use error::BodyError;
 pub use ffd::{Embedding, Ffd};
-pub use injective::{InjectivityReport, check_injective};
+pub use injective::{InjectivityCache, InjectivityReport, check_injective};
 pub use invert::{Inversion, Inverter};
 pub use lattice::{BodyLattice, Continuity, Joint};
 pub use morph::{Morph, Path};

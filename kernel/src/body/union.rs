@@ -32,14 +32,24 @@
 //! boundaries (samples, exact) and cuts lie on the other body's boundary to
 //! the classification's tolerance (1e-9 of its size) and on this body's
 //! boundary to its chord error; where bodies are bounded by planes (affine
-//! lattices) the union is exact to that tolerance. The seam between two bodies is cut on each side separately, so
-//! the mesh is not welded there (gaps of the order of the chord error). A
+//! lattices) the union is exact to that tolerance. The seam between two
+//! bodies is cut on each side separately; the pieces are then welded into
+//! one closed, manifold mesh ([`super::weld`]: copies of a vertex merged,
+//! each side's seam vertices inserted into the other side's seam edges,
+//! what is left open — where three bodies meet — fanned shut). A
 //! body poking through the inside of a triangle without containing any of
 //! its vertices is missed: sample finer than the features that meet.
 
 use glam::DVec3;
 
+use super::weld::{Pieces, WeldReport, weld};
 use super::{BSplineVolume, BodyError, Dir, Face, Inverter, VolumeScratch};
+
+/// Vertices closer than this, relative to the diagonal of the bodies' box,
+/// are one when the pieces are welded (10× the classification's
+/// tolerance: the copies of a vertex along body edges and shared faces
+/// differ by rounding, cuts by the classification's tolerance).
+pub const WELD: f64 = 1e-8;
 
 /// Bisection steps for a cut: 2⁻⁴⁸ of the edge length.
 const CUT_STEPS: usize = 48;
@@ -58,6 +68,8 @@ pub struct UnionMesh {
     pub triangles: Vec<[usize; 3]>,
     /// For each triangle, the body whose boundary it lies on.
     pub body: Vec<usize>,
+    /// What welding the bodies' pieces into one closed mesh did.
+    pub weld: WeldReport,
 }
 
 impl UnionMesh {
@@ -445,5 +457,26 @@ pub fn union(bodies: &[BSplineVolume], per_span: usize) -> Result<UnionMesh, Bod
         mesh.triangles
             .extend(skin.triangles.into_iter().map(|t| t.map(|k| k + base)));
     }
-    Ok(mesh)
+    let (lo, hi) = solids
+        .iter()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), s| {
+            (l.min(s.lo), h.max(s.hi))
+        });
+    let size = if bodies.is_empty() {
+        0.0
+    } else {
+        (hi - lo).length()
+    };
+    let mut pieces = Pieces {
+        positions: mesh.positions,
+        triangles: mesh.triangles,
+        body: mesh.body,
+    };
+    let report = weld(&mut pieces, WELD * size.max(f64::MIN_POSITIVE));
+    Ok(UnionMesh {
+        positions: pieces.positions,
+        triangles: pieces.triangles,
+        body: pieces.body,
+        weld: report,
+    })
 }

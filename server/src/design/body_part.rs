@@ -9,7 +9,7 @@ use super::doc::{IconDoc, SurfaceDoc};
 use super::error::{CommandError, ErrorKind};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
-use vsculpt_kernel::body::{BSplineVolume, BodyError, Dir, Face, Morph, Path, check_injective};
+use vsculpt_kernel::body::{BSplineVolume, BodyError, Dir, Face, Morph, Path};
 use vsculpt_kernel::bspline::KnotVector;
 
 /// Highest degree along any direction.
@@ -142,10 +142,11 @@ impl LatticeDoc {
         .map_err(|e| invalid(format!("body: {e}")))
     }
 
-    /// The volume, proved injective (det J > 0), or the place it folds.
+    /// The volume, proved injective (det J > 0), or the place it folds
+    /// (proofs of unchanged cells are kept between checks: `body_proof`).
     pub fn checked_volume(&self) -> Result<BSplineVolume, CommandError> {
         let vol = self.volume()?;
-        check_injective(&vol).map_err(|e| fold_error(e, &vol))?;
+        super::body_proof::prove(&vol).map_err(|e| fold_error(e, &vol))?;
         Ok(vol)
     }
 

@@ -419,9 +419,10 @@ impl DsmFfd {
 
     /// Moves to lattice `current` (same knots as the rest): only the moved
     /// lattice points' supports are recomputed, and the normals of the
-    /// vertices that share a triangle with a recomputed vertex. Returns how
-    /// many lattice points moved.
-    fn update(&mut self, current: &BSplineVolume) -> Result<usize, CommandError> {
+    /// vertices that share a triangle with a recomputed vertex (with
+    /// `full`, every vertex and normal). Returns how many lattice points
+    /// moved.
+    fn update(&mut self, current: &BSplineVolume, full: bool) -> Result<usize, CommandError> {
         let kernel = |e: vsculpt_kernel::body::BodyError| out_of_range(format!("ffd: {e}"));
         let moved: Vec<(usize, DVec3)> = current
             .points()
@@ -431,6 +432,23 @@ impl DsmFfd {
             .filter(|(_, (a, b))| a != b)
             .map(|(i, (a, _))| (i, *a))
             .collect();
+        if full && !moved.is_empty() {
+            // Every vertex and every normal, as before locality was used
+            // (kept to measure against: `DsmFfds::set_full_recompute`).
+            self.ffd
+                .set_lattice(current.points().to_vec())
+                .map_err(kernel)?;
+            self.ffd
+                .deform_all(&self.emb, &mut self.mesh.positions)
+                .map_err(kernel)?;
+            renormal(&mut self.mesh);
+            let m = &self.mesh;
+            for (c, t) in self.cross.iter_mut().zip(&m.triangles) {
+                let [a, b, c3] = t.map(|i| m.positions[i as usize]);
+                *c = (b - a).cross(c3 - a);
+            }
+            return Ok(moved.len());
+        }
         self.listed.clear();
         for &(i, p) in &moved {
             self.ffd
@@ -517,9 +535,19 @@ pub fn renormal(m: &mut Mesh) {
 #[derive(Default)]
 pub struct DsmFfds {
     parts: BTreeMap<u64, DsmFfd>,
+    /// Recompute every vertex at a lattice change (no locality): only to
+    /// measure what locality buys (`server/benches/ffd.rs`).
+    full: bool,
 }
 
 impl DsmFfds {
+    /// With `full`, a lattice change recomputes every vertex and normal of
+    /// the bound meshes instead of the moved points' supports (the same
+    /// result to rounding; kept to measure locality against).
+    pub fn set_full_recompute(&mut self, full: bool) {
+        self.full = full;
+    }
+
     /// Brings the deformed meshes in step with `doc` (its `ffd` relations
     /// of DSM parts, its bodies' lattices) and `dsm` (the meshes). Returns
     /// the DSM parts whose mesh as shown changed. On an error nothing
@@ -548,7 +576,7 @@ impl DsmFfds {
                 let current = b.lattice.volume()?;
                 let e = match old.remove(part) {
                     Some(mut e) if e.body == *body && e.rest == *rest && e.data == d.dsm => {
-                        if e.update(&current)? > 0 {
+                        if e.update(&current, self.full)? > 0 {
                             changed.push(*part);
                         }
                         e

@@ -7,6 +7,7 @@ pub mod actor;
 pub mod body_demo;
 pub mod body_engine;
 pub mod body_part;
+pub mod body_proof;
 pub mod command;
 pub mod comment_write;
 pub mod comments;

@@ -443,6 +443,13 @@ impl DesignModel {
         Ok(moved)
     }
 
+    /// With `full`, a body's lattice change recomputes every vertex of the
+    /// DSM meshes bound to it instead of only the moved points' supports
+    /// (`DsmFfds::set_full_recompute`: to measure locality against).
+    pub fn set_ffd_full_recompute(&mut self, full: bool) {
+        self.ffds.set_full_recompute(full);
+    }
+
     /// The mesh DSM part `part` shows: carried by a morphing body
     /// (`morph_follow`), else deformed by the body it is bound to
     /// (`ffd_binding`), else its own.
