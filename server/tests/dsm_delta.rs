@@ -124,13 +124,12 @@ async fn a_viewer_following_drags_through_deltas_holds_the_whole_frames_bytes() 
     assert_eq!(deltas.shown[&part].0, bytes(&first));
 
     // The net (primitive 4, 5 × 4 nodes): node 7 pulled up step by step;
-    // then the lanyard hole (primitive 5) moved step by step.
+    // then the lanyard hole (primitive 5) moved sideways step by step.
     let steps = 6;
     let node_drag = (1..=steps)
         .map(|k| json!({"op": "drag_node", "id": 4, "node": 7, "height": 0.26 + 0.01 * k as f64}));
-    let hole_drag = (1..=steps).map(
-        |k| json!({"op": "move_primitive", "id": 5, "at": [1.15 - 0.01 * k as f64, 0.0, 0.0]}),
-    );
+    let hole_drag = (1..=steps)
+        .map(|k| json!({"op": "move_primitive", "id": 5, "at": [1.15, 0.01 * k as f64, 0.0]}));
     let mut last = first;
     let mut whole_bytes = Vec::new();
     for edit in node_drag.chain(hole_drag) {
@@ -200,7 +199,9 @@ async fn a_paced_viewer_that_missed_revisions_gets_the_whole_frame() {
     // Paced and never reporting: its window stays at the floor (32 KiB).
     let mut paced = DeltaViewer::connect(server.addr, design, &viewer, "mesh_delta=1&pace=1").await;
 
-    let handset = serde_json::to_value(vsculpt_server::design::demo::handset_dsm()).unwrap();
+    // At 64 cells the handset's frame (about 80 kB) is over the window.
+    let mut handset = serde_json::to_value(vsculpt_server::design::demo::handset_dsm()).unwrap();
+    handset["cells"] = json!(64);
     let r = ed
         .request(json!({"type": "create_part", "spec": {"name": "handset", "shape": {"kind": "dsm", "dsm": handset}}}))
         .await;
@@ -212,7 +213,7 @@ async fn a_paced_viewer_that_missed_revisions_gets_the_whole_frame() {
     let mut last = first;
     for k in 1..=3 {
         ed.ok(json!({"type": "dsm_edit", "part": part, "edit":
-            {"op": "move_primitive", "id": 5, "at": [1.15 - 0.01 * k as f64, 0.0, 0.0]}}))
+            {"op": "move_primitive", "id": 5, "at": [1.15, 0.01 * k as f64, 0.0]}}))
             .await;
         last = whole.mesh_of_after(part, last.revision).await;
     }

@@ -181,7 +181,7 @@ test('a page following drags through mesh deltas draws the mesh the server sends
   let m = await meshAfter(page, part, 0);
   const edits = [
     ...[1, 2, 3].map((k) => ({ op: 'drag_node', id: 4, node: 7, height: 0.26 + 0.02 * k })),
-    ...[1, 2, 3].map((k) => ({ op: 'move_primitive', id: 5, at: [1.15 - 0.02 * k, 0, 0] })),
+    ...[1, 2, 3].map((k) => ({ op: 'move_primitive', id: 5, at: [1.15, 0.02 * k, 0] })),
   ];
   for (const [k, edit] of edits.entries()) {
     editor.send({ type: 'dsm_edit', req: 10 + k, part, edit });

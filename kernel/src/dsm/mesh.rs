@@ -1,7 +1,8 @@
 //! Meshing S: dual contouring with Hermite data on a uniform grid, visited through
 //! an octree whose nodes are culled by interval bounds.
 //!
-//! 1. The grid spans [`Model::bounds`] with `cells` cells along its longest side.
+//! 1. The grid spans [`Model::bounds`] with about `cells` cells along its longest side
+//!    ([`Grid::for_model`]: on a lattice, so it stays put while the bounds move a little).
 //!    An octree over it culls, per node, the primitives whose influence cannot
 //!    reach the node's ball, and classifies the node by interval arithmetic
 //!    ([`Model::classify`]): a node wholly inside or outside S is skipped.
@@ -65,7 +66,8 @@ impl Mesh {
 /// What to mesh at which resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MeshOptions {
-    /// Cells along the longest side of the model's bounds (4 ..= 4096).
+    /// Cells along the longest side of the model's bounds (4 ..= 4096; about:
+    /// see [`Grid::for_model`]).
     pub cells: usize,
 }
 
@@ -138,7 +140,21 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The grid for a model at `cells` cells along its longest side.
+    /// The grid for a model at about `cells` cells along the longest side of
+    /// its bounds, on a lattice so that it stays put while an edit moves the
+    /// bounds a little (an incremental re-mesh, and a mesh frame quantised on
+    /// the grid, need the same grid; `server` sends a drag's frames as
+    /// deltas):
+    /// * the cell size is size / cells rounded up to a power of 2^(1/16)
+    ///   (so there are between cells / 1.045 and `cells` cells along the
+    ///   longest side);
+    /// * the origin is the bounds' low corner rounded down to a multiple of
+    ///   the cell size, less two cells, and the grid ends two to three cells
+    ///   beyond the high corner: between two and three cells to spare on
+    ///   every side.
+    ///
+    /// A function of the bounds alone, so a part edited step by step and a
+    /// part built from its final document get the same grid.
     pub fn for_model(model: &Model, cells: usize) -> Result<Self, DsmError> {
         if !(4..=4096).contains(&cells) {
             return Err(DsmError::BadMeshRequest("cells must be in 4..=4096"));
@@ -152,9 +168,10 @@ impl Grid {
                 "the model's bounds are empty or infinite",
             ));
         }
-        let h = size / cells as f64;
-        let origin = lo - DVec3::splat(1.5 * h);
-        let dims = ((hi - lo) / h).ceil().as_ivec3() + IVec3::splat(3);
+        let h = (16.0 * (size / cells as f64).log2()).ceil() / 16.0;
+        let h = h.exp2();
+        let origin = ((lo / h).floor() - DVec3::splat(2.0)) * h;
+        let dims = ((hi - origin) / h).ceil().as_ivec3() + IVec3::splat(2);
         Ok(Self { origin, h, dims })
     }
 

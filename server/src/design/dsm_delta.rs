@@ -80,9 +80,10 @@ mod tests {
         // The lanyard hole (the subtracted cylinder), moved a little.
         let id = demo.groups[1].primitives[0].id;
         let at = demo.groups[1].primitives[0].at;
+        // Sideways: the box's bounding ball, not the hole's, bounds the model in y.
         let edit = DsmEdit::MovePrimitive {
             id,
-            at: [at[0] + 0.01, at[1], at[2]],
+            at: [at[0], at[1] + 0.01, at[2]],
         };
         let moved: DsmData = super::super::dsm_engine::apply_edit(&demo, &edit).unwrap();
         engine.insert(5, &DsmPart::new(moved)).unwrap();
