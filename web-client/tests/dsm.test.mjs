@@ -11,7 +11,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { createDesign, serverAndBrowser, openClient } from './harness.mjs';
-import { connect, until } from './ws-client.mjs';
+import { decodeMeshFrame } from '../src/frame.js';
 
 let server;
 let browser;
@@ -161,12 +161,23 @@ test('what the editor has typed and not applied survives a redraw caused by anot
 
 test('a page following drags through mesh deltas draws the mesh the server sends whole', async () => {
   const d = await freshDesign('dsm-delta');
+  const editor = await openClient(browser, d.editor);
   const page = await openClient(browser, d.viewer);
-  // A client without mesh_delta=1: every mesh frame whole.
-  const whole = connect(server.base, d.id, d.tokens.viewer);
-  await whole.ready;
-  const editor = connect(server.base, d.id, d.tokens.editor);
-  await editor.ready;
+  // Beside the page's own link (mesh_delta=1), a plain socket of the same
+  // browser without it: every mesh frame whole, kept as bytes by revision.
+  await page.evaluate(([design, token]) => {
+    window.wholeFrames = {};
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    ws.binaryType = 'arraybuffer';
+    ws.onopen = () => ws.send(JSON.stringify({ type: 'hello', protocol: 2, token, design, client_kind: 'tool' }));
+    ws.onmessage = (ev) => {
+      if (typeof ev.data === 'string') return;
+      const b = new Uint8Array(ev.data);
+      if (b[4] !== 3) return;
+      const rev = Number(new DataView(ev.data).getBigUint64(24, true));
+      window.wholeFrames[rev] = Array.from(b);
+    };
+  }, [d.id, d.tokens.viewer]);
   // A slab topped by a 5 × 4 passing-points net, with a hole through it.
   const heights = [0.08, 0.1, 0.1, 0.1, 0.08, 0.1, 0.22, 0.26, 0.22, 0.1, 0.1, 0.22, 0.26, 0.22, 0.1, 0.08, 0.1, 0.1, 0.1, 0.08];
   const dsm = { de: 1, cells: 32, groups: [
@@ -176,28 +187,27 @@ test('a page following drags through mesh deltas draws the mesh the server sends
     ] },
     { op: 'subtract', primitives: [{ id: 5, at: [1.15, 0, 0], shape: { type: 'cylinder', radius: 0.15, half_height: 1.5 } }] },
   ] };
-  editor.send({ type: 'create_part', req: 1, spec: { name: 'slab', shape: { kind: 'dsm', dsm } } });
-  const part = (await editor.waitText((m) => m.type === 'ack' && m.req === 1)).part;
+  await editor.evaluate((s) => window.vsculpt.send({ type: 'create_part', spec: s }), { name: 'slab', shape: { kind: 'dsm', dsm } });
+  const part = await (await editor.waitForFunction(() => [...window.vsculpt.design.parts.values()].find((p) => p.kind === 'dsm')?.id, null, { timeout: 20000 })).jsonValue();
   let m = await meshAfter(page, part, 0);
   const edits = [
     ...[1, 2, 3].map((k) => ({ op: 'drag_node', id: 4, node: 7, height: 0.26 + 0.02 * k })),
     ...[1, 2, 3].map((k) => ({ op: 'move_primitive', id: 5, at: [1.15, 0.02 * k, 0] })),
   ];
-  for (const [k, edit] of edits.entries()) {
-    editor.send({ type: 'dsm_edit', req: 10 + k, part, edit });
-    await editor.waitText((x) => x.req === 10 + k);
+  for (const edit of edits) {
+    await editor.evaluate(([p, e]) => window.vsculpt.dsmEdit(p, e), [part, edit]);
     m = await meshAfter(page, part, m.revision);
-    await until(whole, part, m.revision);
-    const w = whole.frames.find((f) => f.part === part && f.revision === m.revision);
-    assert.ok(w, `the whole-frame client has revision ${m.revision}`);
+    const bytes = await (await page.waitForFunction((r) => window.wholeFrames[r], m.revision, { timeout: 20000 })).jsonValue();
+    const w = decodeMeshFrame(Uint8Array.from(bytes).buffer);
+    assert.equal(w.part, part);
     assert.deepEqual(m.positions, Array.from(w.positions), `positions after ${JSON.stringify(edit)}`);
     assert.deepEqual(m.indices, Array.from(w.indices), `triangles after ${JSON.stringify(edit)}`);
   }
   const counts = await page.evaluate(() => ({ applied: window.vsculpt.link.meshes.applied, ignored: window.vsculpt.link.meshes.ignored }));
   assert.ok(counts.applied >= 3, `${counts.applied} deltas applied`);
   assert.equal(counts.ignored, 0);
+  assert.deepEqual(editor.errors, []);
   assert.deepEqual(page.errors, []);
-  editor.ws.close();
-  whole.ws.close();
+  await editor.close();
   await page.close();
 });
