@@ -22,6 +22,8 @@
 //! * [`dsm`] — a Density Spatial Model part's shape and its edits.
 //! * [`network`] — a styling-curve network part's shape and its edits.
 //! * [`mesh_frame`] — the binary mesh frame (kind 3, [`MeshFrame`]).
+//! * [`mesh_delta`] — a mesh frame as the changes from an earlier one the
+//!   client holds (kind 8), for clients that ask for it (`/ws?mesh_delta=1`).
 //! * [`body`] — a Coons body part's lattice, its edits and morph time.
 //! * [`body_frame`] — the binary body frame (kind 4, [`BodyFrame`]).
 //! * [`drag_frame`] — the drag stream: a part's drag basis (kind 5) and
@@ -42,6 +44,7 @@ pub mod dsm;
 pub mod error;
 pub mod frame;
 pub mod limits;
+pub mod mesh_delta;
 pub mod mesh_frame;
 pub mod network;
 pub mod parts;

@@ -48,8 +48,74 @@ fn bad(message: impl Into<String>) -> ProtocolError {
     ProtocolError::new(ErrorCode::Malformed, message)
 }
 
-fn index_bytes(vertices: usize) -> usize {
+/// Bytes of an index for a mesh of `vertices` vertices: 2 up to 65 535, else 4.
+pub(crate) fn index_bytes(vertices: usize) -> usize {
     if vertices <= u16::MAX as usize { 2 } else { 4 }
+}
+
+/// Writes a cube (origin, step) and an index width `ib`, then zeros up to
+/// `header` bytes (the tail of a mesh frame's or a mesh delta's header).
+pub(crate) fn write_cube(out: &mut Vec<u8>, origin: [f32; 3], step: f32, ib: usize, header: usize) {
+    for c in origin {
+        out.extend_from_slice(&c.to_le_bytes());
+    }
+    out.extend_from_slice(&step.to_le_bytes());
+    out.push(ib as u8);
+    out.resize(header, 0);
+}
+
+/// Writes vertex records (every quantised position, then every normal) and
+/// triangles with `ib` bytes an index.
+pub(crate) fn write_records(
+    out: &mut Vec<u8>,
+    (positions, normals): (&[[u16; 3]], &[[i16; 3]]),
+    triangles: &[[u32; 3]],
+    ib: usize,
+) {
+    for p in positions {
+        p.iter()
+            .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+    }
+    for n in normals {
+        n.iter()
+            .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
+    }
+    for t in triangles {
+        for &i in t {
+            if ib == 2 {
+                out.extend_from_slice(&(i as u16).to_le_bytes());
+            } else {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+    }
+}
+
+/// Quantised positions, normals and triangles as [`read_records`] reads them.
+pub(crate) type Records = (Vec<[u16; 3]>, Vec<[i16; 3]>, Vec<[u32; 3]>);
+
+/// Reads `v` vertex records and `t` triangles of `ib`-byte indices written
+/// by [`write_records`] from byte `at` (the caller checked the length).
+pub(crate) fn read_records(bytes: &[u8], at: usize, (v, t): (usize, usize), ib: usize) -> Records {
+    let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
+    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+    let (nn, tn) = (at + 6 * v, at + 12 * v);
+    (
+        (0..v)
+            .map(|k| [0, 1, 2].map(|a| u16_at(at + 6 * k + 2 * a)))
+            .collect(),
+        (0..v)
+            .map(|k| [0, 1, 2].map(|a| u16_at(nn + 6 * k + 2 * a) as i16))
+            .collect(),
+        (0..t)
+            .map(|k| {
+                [0, 1, 2].map(|a| {
+                    let o = tn + ib * (3 * k + a);
+                    if ib == 2 { u16_at(o) as u32 } else { u32_at(o) }
+                })
+            })
+            .collect(),
+    )
 }
 
 /// As many normals as positions, all finite.
@@ -241,29 +307,13 @@ impl MeshFrame {
         );
         out.extend_from_slice(&(v as u32).to_le_bytes());
         out.extend_from_slice(&(self.triangles.len() as u32).to_le_bytes());
-        for c in self.origin {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-        out.extend_from_slice(&self.step.to_le_bytes());
-        out.push(ib as u8);
-        out.resize(MESH_HEADER_BYTES, 0);
-        for p in &self.positions {
-            p.iter()
-                .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
-        }
-        for n in &self.normals {
-            n.iter()
-                .for_each(|c| out.extend_from_slice(&c.to_le_bytes()));
-        }
-        for t in &self.triangles {
-            for &i in t {
-                if ib == 2 {
-                    out.extend_from_slice(&(i as u16).to_le_bytes());
-                } else {
-                    out.extend_from_slice(&i.to_le_bytes());
-                }
-            }
-        }
+        write_cube(&mut out, self.origin, self.step, ib, MESH_HEADER_BYTES);
+        write_records(
+            &mut out,
+            (&self.positions, &self.normals),
+            &self.triangles,
+            ib,
+        );
         debug_assert_eq!(out.len(), self.byte_len());
         Ok(out)
     }
@@ -299,9 +349,7 @@ impl MeshFrame {
                 bytes.len()
             )));
         }
-        let pn = MESH_HEADER_BYTES;
-        let nn = pn + 6 * v;
-        let tn = nn + 6 * v;
+        let (positions, normals, triangles) = read_records(bytes, MESH_HEADER_BYTES, (v, t), ib);
         let frame = Self {
             design: u64_at(8),
             part: u64_at(16),
@@ -309,20 +357,9 @@ impl MeshFrame {
             flags: u16_at(6),
             origin: [f32_at(40), f32_at(44), f32_at(48)],
             step: f32_at(52),
-            positions: (0..v)
-                .map(|k| [0, 1, 2].map(|a| u16_at(pn + 6 * k + 2 * a)))
-                .collect(),
-            normals: (0..v)
-                .map(|k| [0, 1, 2].map(|a| u16_at(nn + 6 * k + 2 * a) as i16))
-                .collect(),
-            triangles: (0..t)
-                .map(|k| {
-                    [0, 1, 2].map(|a| {
-                        let o = tn + ib * (3 * k + a);
-                        if ib == 2 { u16_at(o) as u32 } else { u32_at(o) }
-                    })
-                })
-                .collect(),
+            positions,
+            normals,
+            triangles,
         };
         frame.check()?;
         Ok(frame)

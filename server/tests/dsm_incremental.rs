@@ -174,14 +174,16 @@ async fn a_drag_inside_the_bounds_keeps_every_far_vertex_quantum_for_quantum() {
     let after = viewer.mesh_of_after(part, before.revision).await;
     // The frames' quantisation is the part's grid: the same in both.
     assert_eq!((before.origin, before.step), (after.origin, after.step));
-    // The grid spans the box's bounding ball (radius |half|) with 1.5 cells
-    // to spare: the frame's origin.
+    // The grid spans the box's bounding ball (radius |half|): cell size
+    // 2·radius / 32 rounded up to a power of 2^(1/16), origin the ball's low
+    // corner rounded down to a multiple of it, less two cells (the frame's
+    // origin).
     let radius = (1.0f64 + 0.25 + 0.09).sqrt();
-    let h = 2.0 * radius / 32.0;
+    let h = ((16.0 * (2.0 * radius / 32.0).log2()).ceil() / 16.0).exp2();
     for a in 0..3 {
         let o = before.origin[a] as f64;
         assert!(
-            (o + radius + 1.5 * h).abs() < 1e-6,
+            (o - ((-radius / h).floor() - 2.0) * h).abs() < 1e-6,
             "origin {:?}",
             before.origin
         );

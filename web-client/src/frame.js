@@ -6,9 +6,11 @@
 // part meshed by the server: "Binary mesh frame (kind 3)") has its own
 // 64-byte header and quantised positions, i16 normals and u16/u32 indices.
 // The drag stream ("Drag stream (kinds 5 and 6)"): a drag basis (ρ of one
-// part, kind 5) and drag frames (d and icon positions, kind 6).
+// part, kind 5) and drag frames (d and icon positions, kind 6). A mesh delta
+// (kind 8, "Binary mesh delta") is decoded by dsm-delta.js.
 
 import { KIND_BODY, decodeBodyFrame } from './body-frame.js';
+import { KIND_MESH_DELTA, decodeMeshDelta } from './dsm-delta.js';
 
 const MAGIC = [0x56, 0x53, 0x47, 0x46]; // "VSGF"
 export const PROTOCOL_VERSION = 2;
@@ -44,6 +46,10 @@ export function decodeFrame(buf) {
   if (kind === KIND_BODY) {
     if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
     return decodeBodyFrame(buf);
+  }
+  if (kind === KIND_MESH_DELTA) {
+    if (dv.getUint8(5) !== PROTOCOL_VERSION) throw new Error(`frame version ${dv.getUint8(5)}, this page speaks ${PROTOCOL_VERSION}`);
+    return decodeMeshDelta(buf);
   }
   if (kind === KIND_DRAG_BASIS) return decodeDragBasis(buf);
   if (kind === KIND_DRAG_FRAME) return decodeDragFrame(buf);
@@ -95,7 +101,8 @@ const MAX_MESH_TRIANGLES = 8 << 20;
  * Decodes a mesh frame (kind 3) from an ArrayBuffer; throws on any malformed
  * input. Gives { kind: 'mesh', part, design, revision, flags, origin, step,
  * positions (Float32Array x, y, z, dequantised), normals (Float32Array, unit),
- * indices (Uint16Array or Uint32Array) }.
+ * indices (Uint16Array or Uint32Array), quanta (Uint16Array) and normalQuanta
+ * (Int16Array) as sent (what a mesh delta copies) }.
  */
 export function decodeMeshFrame(buf) {
   if (!(buf instanceof ArrayBuffer) || buf.byteLength < MESH_HEADER) throw new Error('mesh frame too short');
@@ -128,7 +135,7 @@ export function decodeMeshFrame(buf) {
     positions[i] = origin[i % 3] + q[i] * step;
     normals[i] = qn[i] / 32767;
   }
-  return { kind: 'mesh', part, design, revision, flags, origin, step, positions, normals, indices };
+  return { kind: 'mesh', part, design, revision, flags, origin, step, positions, normals, indices, quanta: q, normalQuanta: qn };
 }
 
 function checkStreamHead(buf, kind, header) {

@@ -6,6 +6,7 @@
 import { decodeFrame, PROTOCOL_VERSION } from './frame.js';
 import { DragStream } from './drag-stream.js';
 import { isDeflated, inflateMessage } from './deflated.js';
+import { MeshDeltas } from './dsm-delta.js';
 
 /** Why the server refused to let this page join, said so a person knows what to do; the link then stays closed. */
 export const REFUSALS = {
@@ -19,10 +20,11 @@ export const REFUSALS = {
  * The link's capabilities, in its URL: drag_stream=1, a drag comes as ρ once and d per frame
  * (protocol/README.md, "Drag stream"); deflate=1, large binary messages come deflated (kind 7,
  * "Deflated message"); pace=1, geometry at the rate this link carries ("Paced delivery"), for
- * which the page reports the binary bytes it has received. index.html opens its early socket
- * with the same query.
+ * which the page reports the binary bytes it has received; mesh_delta=1, a re-meshed part comes
+ * as the changes from its last mesh frame ("Binary mesh delta (kind 8)"). index.html opens its
+ * early socket with the same query.
  */
-export const LINK_QUERY = 'drag_stream=1&deflate=1&pace=1';
+export const LINK_QUERY = 'drag_stream=1&deflate=1&pace=1&mesh_delta=1';
 
 export class Link {
   constructor({ design, token, name, onMessage, onFrame, onStatus, onHello = () => {} }) {
@@ -55,6 +57,9 @@ export class Link {
     const ws = adopt ? early.ws : new WebSocket(url);
     let received = 0;
     const stream = new DragStream();
+    const meshes = new MeshDeltas();
+    /** This connection's mesh frames and deltas (for tools and tests). */
+    this.meshes = meshes;
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
     this.onStatus('connecting', 'connecting to the server…');
@@ -94,7 +99,7 @@ export class Link {
     };
     const binary = (buf) => {
       try {
-        const f = stream.take(decodeFrame(buf));
+        const f = meshes.take(stream.take(decodeFrame(buf)));
         if (f) this.onFrame(f);
       } catch (e) {
         this.onStatus('error', `bad geometry frame: ${e.message}`);

@@ -4,11 +4,14 @@
 // density from the DSM panel's inputs, and adds a second primitive; a second
 // browser (a viewer) draws every mesh the server sends, and each one is
 // checked vertex by vertex against the primitives' analytic surfaces. The
-// page's "add DSM" button makes a drawn part too.
+// page's "add DSM" button makes a drawn part too. A page following a net-node
+// drag and a primitive drag through mesh deltas (kind 8) draws, after every
+// step, the very mesh the server sends whole to a client without deltas.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { createDesign, serverAndBrowser, openClient } from './harness.mjs';
+import { decodeMeshFrame } from '../src/frame.js';
 
 let server;
 let browser;
@@ -154,4 +157,57 @@ test('what the editor has typed and not applied survives a redraw caused by anot
   assert.deepEqual(other.errors, []);
   await editor.close();
   await other.close();
+});
+
+test('a page following drags through mesh deltas draws the mesh the server sends whole', async () => {
+  const d = await freshDesign('dsm-delta');
+  const editor = await openClient(browser, d.editor);
+  const page = await openClient(browser, d.viewer);
+  // Beside the page's own link (mesh_delta=1), a plain socket of the same
+  // browser without it: every mesh frame whole, kept as bytes by revision.
+  await page.evaluate(([design, token]) => {
+    window.wholeFrames = {};
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    ws.binaryType = 'arraybuffer';
+    ws.onopen = () => ws.send(JSON.stringify({ type: 'hello', protocol: 2, token, design, client_kind: 'tool' }));
+    ws.onmessage = (ev) => {
+      if (typeof ev.data === 'string') return;
+      const b = new Uint8Array(ev.data);
+      if (b[4] !== 3) return;
+      const rev = Number(new DataView(ev.data).getBigUint64(24, true));
+      window.wholeFrames[rev] = Array.from(b);
+    };
+  }, [d.id, d.tokens.viewer]);
+  // A slab topped by a 5 × 4 passing-points net, with a hole through it.
+  const heights = [0.08, 0.1, 0.1, 0.1, 0.08, 0.1, 0.22, 0.26, 0.22, 0.1, 0.1, 0.22, 0.26, 0.22, 0.1, 0.08, 0.1, 0.1, 0.1, 0.08];
+  const dsm = { de: 1, cells: 32, groups: [
+    { op: 'add', primitives: [
+      { id: 1, at: [0, 0, 0], shape: { type: 'box', half: [1.6, 0.8, 0.3] } },
+      { id: 4, at: [0, 0, 0.3], shape: { type: 'net', nu: 5, nv: 4, spacing: [0.7, 0.45], heights, reducing: 3 } },
+    ] },
+    { op: 'subtract', primitives: [{ id: 5, at: [1.15, 0, 0], shape: { type: 'cylinder', radius: 0.15, half_height: 1.5 } }] },
+  ] };
+  await editor.evaluate((s) => window.vsculpt.send({ type: 'create_part', spec: s }), { name: 'slab', shape: { kind: 'dsm', dsm } });
+  const part = await (await editor.waitForFunction(() => [...window.vsculpt.design.parts.values()].find((p) => p.kind === 'dsm')?.id, null, { timeout: 20000 })).jsonValue();
+  let m = await meshAfter(page, part, 0);
+  const edits = [
+    ...[1, 2, 3].map((k) => ({ op: 'drag_node', id: 4, node: 7, height: 0.26 + 0.02 * k })),
+    ...[1, 2, 3].map((k) => ({ op: 'move_primitive', id: 5, at: [1.15, 0.02 * k, 0] })),
+  ];
+  for (const edit of edits) {
+    await editor.evaluate(([p, e]) => window.vsculpt.dsmEdit(p, e), [part, edit]);
+    m = await meshAfter(page, part, m.revision);
+    const bytes = await (await page.waitForFunction((r) => window.wholeFrames[r], m.revision, { timeout: 20000 })).jsonValue();
+    const w = decodeMeshFrame(Uint8Array.from(bytes).buffer);
+    assert.equal(w.part, part);
+    assert.deepEqual(m.positions, Array.from(w.positions), `positions after ${JSON.stringify(edit)}`);
+    assert.deepEqual(m.indices, Array.from(w.indices), `triangles after ${JSON.stringify(edit)}`);
+  }
+  const counts = await page.evaluate(() => ({ applied: window.vsculpt.link.meshes.applied, ignored: window.vsculpt.link.meshes.ignored }));
+  assert.ok(counts.applied >= 3, `${counts.applied} deltas applied`);
+  assert.equal(counts.ignored, 0);
+  assert.deepEqual(editor.errors, []);
+  assert.deepEqual(page.errors, []);
+  await editor.close();
+  await page.close();
 });

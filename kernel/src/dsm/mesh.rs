@@ -1,7 +1,9 @@
 //! Meshing S: dual contouring with Hermite data on a uniform grid, visited through
 //! an octree whose nodes are culled by interval bounds.
 //!
-//! 1. The grid spans [`Model::bounds`] with `cells` cells along its longest side.
+//! 1. The grid spans [`Model::bounds`] with `cells` cells along its longest side
+//!    ([`Grid::on_lattice`]: about that many, on a lattice that stays put while the bounds
+//!    move a little, for incremental re-meshing during a drag).
 //!    An octree over it culls, per node, the primitives whose influence cannot
 //!    reach the node's ball, and classifies the node by interval arithmetic
 //!    ([`Model::classify`]): a node wholly inside or outside S is skipped.
@@ -138,8 +140,42 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The grid for a model at `cells` cells along its longest side.
+    /// The grid for a model at `cells` cells along its longest side, with
+    /// 1.5 cells to spare on every side.
     pub fn for_model(model: &Model, cells: usize) -> Result<Self, DsmError> {
+        let (lo, hi, size) = Self::bounds(model, cells)?;
+        let h = size / cells as f64;
+        let origin = lo - DVec3::splat(1.5 * h);
+        let dims = ((hi - lo) / h).ceil().as_ivec3() + IVec3::splat(3);
+        Ok(Self { origin, h, dims })
+    }
+
+    /// The grid for a model at about `cells` cells along the longest side of
+    /// its bounds, on a lattice so that it stays put while an edit moves the
+    /// bounds a little (an incremental re-mesh, and a mesh frame quantised on
+    /// the grid, need the same grid; the server sends a drag's frames as
+    /// deltas):
+    /// * the cell size is size / cells rounded up to a power of 2^(1/16)
+    ///   (so there are between cells / 1.045 and `cells` cells along the
+    ///   longest side);
+    /// * the origin is the bounds' low corner rounded down to a multiple of
+    ///   the cell size, less two cells, and the grid ends two to three cells
+    ///   beyond the high corner: between two and three cells to spare on
+    ///   every side.
+    ///
+    /// A function of the bounds alone, so a part edited step by step and a
+    /// part built from its final document get the same grid.
+    pub fn on_lattice(model: &Model, cells: usize) -> Result<Self, DsmError> {
+        let (lo, hi, size) = Self::bounds(model, cells)?;
+        let h = ((16.0 * (size / cells as f64).log2()).ceil() / 16.0).exp2();
+        let origin = ((lo / h).floor() - DVec3::splat(2.0)) * h;
+        let dims = ((hi - origin) / h).ceil().as_ivec3() + IVec3::splat(2);
+        Ok(Self { origin, h, dims })
+    }
+
+    /// The model's bounds and their longest side, checked, for a grid of
+    /// `cells` cells.
+    fn bounds(model: &Model, cells: usize) -> Result<(DVec3, DVec3, f64), DsmError> {
         if !(4..=4096).contains(&cells) {
             return Err(DsmError::BadMeshRequest("cells must be in 4..=4096"));
         }
@@ -152,10 +188,7 @@ impl Grid {
                 "the model's bounds are empty or infinite",
             ));
         }
-        let h = size / cells as f64;
-        let origin = lo - DVec3::splat(1.5 * h);
-        let dims = ((hi - lo) / h).ceil().as_ivec3() + IVec3::splat(3);
-        Ok(Self { origin, h, dims })
+        Ok((lo, hi, size))
     }
 
     /// The world position of grid corner c.

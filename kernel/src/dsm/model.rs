@@ -385,19 +385,19 @@ impl Model {
             if !self.density_reaches(k, i, p, margin) {
                 continue;
             }
-            let dp = &g.density[i];
-            let v = dp.value(p, self.ranges[k][i]);
+            // Without cuts of its own (`has_cuts`) the only cut is the
+            // culling range, where F jumps by less than τ D_e: no boundary of
+            // S and no piece of Φ (as in `piece_gradient`).
+            let cut = d.is_some() && self.cuts[k][i];
+            let (v, cd) = g.density[i].value_and_cut(p, self.ranges[k][i], cut);
             if v != 0.0 {
                 any = true;
                 f += v;
             }
-            // Without cuts of its own (`has_cuts`) the only cut is the
-            // culling range, where F jumps by less than τ D_e: no boundary of
-            // S and no piece of Φ (as in `piece_gradient`).
             if let Some(d) = d.as_deref_mut()
-                && self.cuts[k][i]
+                && cut
             {
-                *d = d.min(dp.cut_distance(p, self.ranges[k][i]).0);
+                *d = d.min(cd);
             }
         }
         let mut count = 0i32;

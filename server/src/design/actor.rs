@@ -1027,7 +1027,15 @@ impl Actor {
                     )
                 } else {
                     self.streams.forget(part);
-                    self.model.geometry(self.id, part, self.rev, false)
+                    let previous = set.parts.get(&part);
+                    self.model
+                        .geometry(self.id, part, self.rev, false)
+                        .map(|mut g| {
+                            g.mesh_delta = previous.and_then(|p| {
+                                super::dsm_delta::mesh_delta(p.rev, &p.frame, &g.frame)
+                            });
+                            g
+                        })
                 };
                 if let Some(g) = g {
                     set.parts.insert(part, Arc::new(g));

@@ -396,7 +396,7 @@ fn model_and_grid(data: &DsmData) -> Result<Option<(Model, Grid)>, CommandError>
     if model.bounds().is_none() {
         return Ok(None);
     }
-    let grid = Grid::for_model(&model, data.cells as usize)
+    let grid = Grid::on_lattice(&model, data.cells as usize)
         .map_err(|e| invalid(format!("dsm mesh: {e}")))?;
     Ok(Some((model, grid)))
 }
@@ -470,9 +470,10 @@ impl DsmEngine {
 
 /// The cube (origin, extent) a DSM part's mesh frame is quantised on: its
 /// meshing grid's, which holds every vertex (the grid spans the model's
-/// bounds with 1.5 cells to spare). The grid changes only when the model's
-/// bounds do, so across a drag inside them a vertex the mesher kept keeps
-/// its quantised position, and a frame could be sent as a delta.
+/// bounds with two to three cells to spare). The grid is on a lattice
+/// (`Grid::on_lattice`) and stays put while a drag moves the model's bounds
+/// less than a cell, so a vertex the mesher kept keeps its quantised
+/// position and the frame goes as a delta ([`super::dsm_delta`]).
 pub fn grid_cube(grid: &Grid) -> ([f64; 3], f64) {
     (
         grid.origin.to_array(),

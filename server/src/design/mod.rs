@@ -17,6 +17,7 @@ pub mod deflated_frame;
 pub mod demo;
 pub mod doc;
 pub mod drag_stream;
+pub mod dsm_delta;
 pub mod dsm_engine;
 pub mod edit;
 pub mod engine;

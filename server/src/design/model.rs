@@ -42,6 +42,10 @@ pub struct Geometry {
     /// The same shape as a drag-stream frame, for the clients that asked
     /// for the stream (see [`super::drag_stream`]).
     pub stream: Option<super::drag_stream::StreamFrame>,
+    /// The same mesh frame as a mesh delta from the part's previous frame,
+    /// for the clients that asked (`mesh_delta=1`) and hold that frame
+    /// (see [`super::dsm_delta`]).
+    pub mesh_delta: Option<super::dsm_delta::MeshDeltaFrame>,
     /// `frame` deflated, for the clients that asked (`deflate=1`).
     pub deflated: super::deflated_frame::DeflatedFrame,
     /// `frame` flagged as a joiner's snapshot shape, deflated (the compact
@@ -60,6 +64,7 @@ impl Geometry {
             rev,
             frame,
             stream,
+            mesh_delta: None,
             deflated: Default::default(),
             snapshot_deflated: Default::default(),
         }

@@ -275,6 +275,9 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
                 .get("drag_stream")
                 .is_some_and(|v| v == "1" || v == "true"),
             deflate,
+            mesh_delta: query
+                .get("mesh_delta")
+                .is_some_and(|v| v == "1" || v == "true"),
             pace,
         },
     ));

@@ -50,6 +50,15 @@ struct Held {
     basis: Option<u64>,
 }
 
+/// The forms of binary messages a client asked for besides whole frames.
+#[derive(Clone, Copy, Debug, Default)]
+struct Forms {
+    /// Deflated messages (`deflate=1`, kind 7).
+    deflate: bool,
+    /// Mesh deltas (`mesh_delta=1`, kind 8).
+    mesh_delta: bool,
+}
+
 /// Sends one binary message, counted in the metrics and, for a paced
 /// client, in its [`Pacer`].
 async fn send_binary(
@@ -70,7 +79,9 @@ async fn send_binary(
 /// (every part the first time), and forgets parts that are gone: latest
 /// wins per part, and a frame of one part never stands in for another's.
 /// A client of the drag stream (`held` is `Some`) gets a drag frame where
-/// there is one, preceded by the reference frame and the basis it lacks.
+/// there is one, preceded by the reference frame and the basis it lacks; a
+/// client of mesh deltas gets one where there is one and the last frame it
+/// was sent of that part is the delta's base.
 /// A paced client (`pacer` is `Some`) gets a part's messages only while its
 /// window is open: `Ok(false)` says some part is still owed (the caller
 /// tries again when the client reports what it received), `Ok(true)` that
@@ -80,10 +91,11 @@ async fn send_geometry(
     joined: &mut Joined,
     sent: &mut BTreeMap<u64, u64>,
     mut held: Option<&mut BTreeMap<u64, Held>>,
-    deflate: bool,
+    forms: Forms,
     metrics: &Metrics,
     mut pacer: Option<&mut Pacer>,
 ) -> Result<bool, axum::Error> {
+    let deflate = forms.deflate;
     let set = joined.geometry.borrow_and_update().clone();
     sent.retain(|part, _| set.parts.contains_key(part));
     if let Some(h) = held.as_deref_mut() {
@@ -118,7 +130,12 @@ async fn send_geometry(
                 send_binary(sink, s.frame.clone(), metrics, pacer.as_deref_mut()).await?;
             }
             (held, _) => {
-                let bytes = g.deflated.pick(&g.frame, deflate);
+                let bytes = match &g.mesh_delta {
+                    Some(d) if forms.mesh_delta && sent.get(part) == Some(&d.base) => {
+                        d.deflated.pick(&d.frame, deflate)
+                    }
+                    _ => g.deflated.pick(&g.frame, deflate),
+                };
                 send_binary(sink, bytes, metrics, pacer.as_deref_mut()).await?;
                 if let Some(held) = held {
                     held.insert(
@@ -183,6 +200,8 @@ pub struct Delivery {
     pub drag_stream: bool,
     /// The client asked for deflated messages (`deflate=1` in the URL).
     pub deflate: bool,
+    /// The client asked for mesh deltas (`mesh_delta=1` in the URL).
+    pub mesh_delta: bool,
     /// The client asked for a send rate matched to its link (`pace=1`).
     pub pace: Option<Paced>,
 }
@@ -205,7 +224,7 @@ struct Lagged<'a> {
     skipped: u64,
     compact: bool,
     frames: bool,
-    deflate: bool,
+    forms: Forms,
 }
 
 /// How a resync ended.
@@ -235,7 +254,7 @@ async fn resync(
         skipped,
         compact,
         frames,
-        deflate,
+        forms,
     } = lagged;
     tracing::info!(
         design = handle.id,
@@ -249,7 +268,7 @@ async fn resync(
     *joined = j;
     if sink.send(Message::Text(snap)).await.is_err()
         || (frames
-            && send_geometry(sink, joined, sent, held, deflate, metrics, pacer)
+            && send_geometry(sink, joined, sent, held, forms, metrics, pacer)
                 .await
                 .is_err())
     {
@@ -276,8 +295,13 @@ pub async fn run(
         mut sent,
         drag_stream,
         deflate,
+        mesh_delta,
         pace,
     } = delivery;
+    let forms = Forms {
+        deflate,
+        mesh_delta,
+    };
     // A paced client: its reports and its window.
     let (mut reports, mut pacer) = match pace {
         Some(Paced {
@@ -315,7 +339,7 @@ pub async fn run(
             &mut joined,
             &mut sent,
             held.as_mut(),
-            deflate,
+            forms,
             &metrics,
             pacer.as_mut(),
         )
@@ -349,7 +373,7 @@ pub async fn run(
                                 }
                                 Err(TryRecvError::Lagged(n)) => {
                                     // As below: too far behind, a fresh snapshot.
-                                    let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, deflate };
+                                    let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, forms };
                                     match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics, pacer.as_mut()).await {
                                         Resynced::Done => owed = pacer.is_some(),
                                         Resynced::DesignGone => geometry_live = false,
@@ -398,7 +422,7 @@ pub async fn run(
                         }
                     }
                     Err(RecvError::Lagged(n)) => {
-                        let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, deflate };
+                        let lagged = Lagged { handle: &handle, client, skipped: n, compact, frames, forms };
                         match resync(lagged, &mut sink, &mut joined, &mut sent, held.as_mut(), &metrics, pacer.as_mut()).await {
                             Resynced::Done => owed = pacer.is_some(),
                             Resynced::DesignGone => geometry_live = false,
@@ -470,7 +494,7 @@ pub async fn run(
                     geometry_live = false;
                     continue;
                 }
-                match send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), deflate, &metrics, pacer.as_mut()).await {
+                match send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), forms, &metrics, pacer.as_mut()).await {
                     Ok(all) => owed = !all,
                     Err(_) => break,
                 }
@@ -491,7 +515,7 @@ pub async fn run(
                     p.on_report(total, at);
                 }
                 if owed && geometry_live && frames {
-                    match send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), deflate, &metrics, pacer.as_mut()).await {
+                    match send_geometry(&mut sink, &mut joined, &mut sent, held.as_mut(), forms, &metrics, pacer.as_mut()).await {
                         Ok(all) => owed = !all,
                         Err(_) => break,
                     }
