@@ -99,26 +99,6 @@ fn laplacian_smoothing_does_not_reach_the_sphere() {
 }
 
 #[test]
-fn goals_in_other_measures_are_refused() {
-    let mut mesh = octant(8);
-    let before = mesh.clone();
-    for measure in [
-        Measure::Gaussian,
-        Measure::MaxPrincipal,
-        Measure::MinPrincipal,
-    ] {
-        let options = FairingOptions {
-            measure,
-            ..FairingOptions::default()
-        };
-        let goals = vec![1.0; mesh.len()];
-        let err = fair(&mut mesh, &goals, &options, |_| Control::Continue).unwrap_err();
-        assert!(matches!(err, FairingError::BadValue(_)), "{err}");
-    }
-    assert_eq!(mesh, before);
-}
-
-#[test]
 fn cancelling_restores_the_mesh() {
     let mut mesh = octant(24);
     perturb(&mut mesh, 0.03, 3);

@@ -113,9 +113,9 @@ pub struct FaceSide {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum FairnessMeasure {
-    /// H = (k1 + k2)/2 (the only measure the kernel fairs toward).
+    /// H = (k1 + k2)/2.
     Mean,
-    /// K = k1 k2 (refused by the kernel: `invalid_value`).
+    /// K = k1 k2 (bending away from the normal where K ≥ 0).
     Gaussian,
     /// The larger principal curvature (refused by the kernel).
     MaxPrincipal,

@@ -5,7 +5,7 @@
 //! reaches a second client (new curve through the dragged point, meetings
 //! kept, patches on the new curves); undo, redo, fairing (boundary points
 //! never move), restart persistence, exports; bad input (NaN, huge counts,
-//! unknown ids, a network with no faces, Gaussian goals) is refused with a
+//! unknown ids, a network with no faces, principal-curvature goals) is refused with a
 //! clear error and changes nothing.
 
 mod common;
@@ -447,16 +447,16 @@ async fn bad_network_input_is_refused_and_changes_nothing() {
         "unknown_part",
     )
     .await;
-    // Gaussian goals are refused by the kernel.
+    // Principal-curvature goals are refused by the kernel.
     let m = a
         .refused(
             edit(
-                json!({"op": "fair", "face": 0, "measure": "gaussian", "goal": {"constant": 1.0}}),
+                json!({"op": "fair", "face": 0, "measure": "max_principal", "goal": {"constant": 1.0}}),
             ),
             "out_of_range",
         )
         .await;
-    assert!(m.contains("mean"), "{m}");
+    assert!(m.contains("Gaussian"), "{m}");
     // Huge counts.
     let many: Vec<[f64; 3]> = (0..2000).map(|k| [k as f64, 0.0, 0.0]).collect();
     let mut knots = vec![0.0; 2];

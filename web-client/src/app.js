@@ -1013,7 +1013,7 @@ $('fair-network').addEventListener('click', () => {
   const ids = fairTargets();
   const running = ids.filter((id) => networkView.jobsOf(id).length);
   if (running.length) for (const id of running) networkView.cancelJobs(id);
-  else for (const id of ids) networkView.fairAll(id);
+  else for (const id of ids) networkView.fairAll(id, undefined, { measure: $('fair-measure').value });
 });
 $('ribbon-handles').addEventListener('click', () => {
   const on = !networkView.handles.shown;

@@ -11,14 +11,16 @@
 // (mesh-curvature.js: H, K, k1, k2 and their variations) the patches are
 // coloured by the measure estimated on the drawn mesh; in zebra mode they
 // get the view's stripes, so tangent-plane continuity across the curves
-// shows. The sides' ribbon handles (ribbon-handles.js) are drawn with each
-// part and grabbed before its curves.
+// shows. The sides' ribbon handles (ribbon-handles.js) and the faces'
+// tuning handles (tuning-handles.js) are drawn with each part, shown and
+// hidden together, and grabbed (the nearer one) before its curves.
 
 import * as THREE from 'three';
 import { curveDerivs } from './bspline.js';
 import { curvatureColor } from './view.js';
 import { isMeasure, measureOf, meshCurvature } from './mesh-curvature.js';
 import { RibbonHandles } from './ribbon-handles.js';
+import { TuningHandles } from './tuning-handles.js';
 
 /** Samples per curve for drawing and picking. */
 const SAMPLES = 200;
@@ -68,6 +70,9 @@ export class NetworkView {
     this.lastEnded = null;
     /** The sides' ribbon handles (hidden until `handles.show(true)`). */
     this.handles = new RibbonHandles(view, { send, canEdit });
+    /** The faces' tuning handles (tuning-handles.js), shown and hidden with the ribbon handles. */
+    this.tuning = new TuningHandles(view, { send, canEdit });
+    this.handles.onShow = (on) => this.tuning.show(on);
     const previousMode = view.onModeChange;
     view.onModeChange = () => {
       previousMode.call(view);
@@ -110,6 +115,7 @@ export class NetworkView {
     const d = this.parts.get(id);
     if (!d) return;
     this.handles.remove(id);
+    this.tuning.remove(id);
     this.group.remove(d.root);
     d.root.traverse((o) => o.geometry && o.geometry.dispose());
     this.parts.delete(id);
@@ -142,6 +148,7 @@ export class NetworkView {
       return { curve, samples, line };
     });
     this.handles.update(id, d.root, d.curves.map((c) => c.curve), network);
+    this.tuning.update(id, d.root, d.curves.map((c) => c.curve), network);
     const waiting = this.pending.get(id);
     if (waiting) {
       this.pending.delete(id);
@@ -265,7 +272,11 @@ export class NetworkView {
 
   down(e) {
     if (!this.canEdit() || e.button !== 0) return;
-    if (this.handles.down(...this.pixel(e))) {
+    // The nearer of the ribbon and tuning handles under the pointer.
+    const px = this.pixel(e);
+    const [ribbon, tuning] = [this.handles.nearest(...px), this.tuning.nearest(...px)];
+    const grabbed = tuning && (!ribbon || tuning.dist < ribbon.dist) ? this.tuning.grab(tuning) : this.handles.grab(ribbon);
+    if (grabbed) {
       e.stopImmediatePropagation();
       this.view.controls.enabled = false;
       return;
@@ -283,6 +294,10 @@ export class NetworkView {
   move(e) {
     if (this.handles.drag) {
       this.handles.move(...this.pixel(e));
+      return;
+    }
+    if (this.tuning.drag) {
+      this.tuning.move(...this.pixel(e));
       return;
     }
     if (!this.drag) return;
@@ -310,6 +325,7 @@ export class NetworkView {
   /** The server answered request `req` (ack or error, `failed`): the next drag position may go. */
   answered(req, failed = false) {
     this.handles.answered(req, failed);
+    this.tuning.answered(req, failed);
     if (this.drag && this.drag.inFlight === req) {
       this.drag.inFlight = false;
       this.flush();
@@ -317,7 +333,7 @@ export class NetworkView {
   }
 
   up() {
-    if (this.handles.up()) {
+    if (this.handles.up() || this.tuning.up()) {
       this.view.controls.enabled = true;
       return;
     }
@@ -328,8 +344,8 @@ export class NetworkView {
 
   /**
    * Fairs every face of network part `id` toward its boundary's mean
-   * curvature (`options`: `relaxation`, `tolerance` of the request). Returns
-   * the number of requests sent.
+   * curvature (`options`: `measure` — 'mean' or 'gaussian' —, `relaxation`,
+   * `tolerance` of the request). Returns the number of requests sent.
    */
   fairAll(id, maxIterations = 100, options = {}) {
     const d = this.parts.get(id);

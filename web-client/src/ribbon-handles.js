@@ -15,6 +15,7 @@
 
 import * as THREE from 'three';
 import { curveDerivs } from './bspline.js';
+import { HandleSet } from './network-handles.js';
 
 /** The stem at scale 1: this fraction of the distance to the face's centre. */
 export const REACH = 0.3;
@@ -26,8 +27,6 @@ export const MAX_TWIST = 1.5;
 /** A scale this close to 1, a twist this close to 0 is sent as the default. */
 const SNAP_SCALE = 0.02;
 const SNAP_TWIST = 0.03;
-/** How near (pixels) the pointer must be to a handle to grab it. */
-const GRAB_PX = 12;
 
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
 const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
@@ -80,20 +79,13 @@ export function handleValues(fr, p) {
   return { scale, twist };
 }
 
-export class RibbonHandles {
+export class RibbonHandles extends HandleSet {
   /** `view`: the View; `send(msg)` sends a message; `canEdit()` whether this page may edit. */
-  constructor(view, { send, canEdit }) {
-    this.view = view;
-    this.send = send;
-    this.canEdit = canEdit;
-    /** Whether handles are shown. */
-    this.shown = false;
-    /** Per network part id: { root (THREE.Group), handles: [{ face, side, frame, scale, twist, ball, stem }] }. */
-    this.parts = new Map();
-    /** The drag under way: { part, handle, plane, scale, twist } or null. */
-    this.drag = null;
-    /** The last set_ribbon sent and not yet answered: { req, part, handle }. */
-    this.sent = null;
+  constructor(view, options) {
+    super(view, options);
+    /** Called with `on` whenever the handles are shown or hidden (the faces' tuning handles follow). */
+    this.onShow = null;
+    // `drag`: { part, handle, plane, scale, twist }; `sent`: the last set_ribbon.
     this.ballGeometry = new THREE.SphereGeometry(1, 12, 8);
     this.ballMaterial = new THREE.MeshBasicMaterial({ color: 0xff7a1a, depthTest: false });
     this.stemMaterial = new THREE.LineBasicMaterial({ color: 0xff7a1a, depthTest: false });
@@ -101,18 +93,13 @@ export class RibbonHandles {
 
   /** Shows or hides every part's handles. */
   show(on) {
-    this.shown = on;
-    for (const p of this.parts.values()) p.root.visible = on;
-    this.view.drawn();
+    super.show(on);
+    if (this.onShow) this.onShow(on);
   }
 
   /** Network part `id` (its drawing `root` group, bspline.js `curves`, wire `network`) has new curves or handles. */
   update(id, root, curves, network) {
-    this.remove(id);
-    const group = new THREE.Group();
-    group.name = `network-${id}-ribbon-handles`;
-    group.visible = this.shown;
-    root.add(group);
+    const group = this.group(id, root, `network-${id}-ribbon-handles`);
     const handles = [];
     (network.faces || []).forEach((face, f) => {
       face.sides.forEach((_, k) => {
@@ -123,10 +110,7 @@ export class RibbonHandles {
         ball.name = `network-${id}-ribbon-${f}-${k}`;
         ball.renderOrder = 3;
         ball.scale.setScalar(0.12 * frame.reach);
-        const g = new THREE.BufferGeometry();
-        g.setAttribute('position', new THREE.BufferAttribute(new Float32Array(6), 3));
-        const stem = new THREE.Line(g, this.stemMaterial);
-        stem.renderOrder = 3;
+        const stem = this.stem(this.stemMaterial);
         group.add(ball, stem);
         const handle = { face: f, side: k, frame, scale: h.scale, twist: h.twist, ball, stem };
         this.place(handle, h.scale, h.twist);
@@ -138,50 +122,17 @@ export class RibbonHandles {
 
   /** Puts `h`'s ball and stem at `scale`, `twist`. */
   place(h, scale, twist) {
-    const p = handlePoint(h.frame, scale, twist);
-    h.ball.position.set(...p);
-    const a = h.stem.geometry.getAttribute('position');
-    a.array.set([...h.frame.mid, ...p]);
-    a.needsUpdate = true;
-    h.stem.geometry.computeBoundingSphere();
+    this.setBall(h, h.frame.mid, handlePoint(h.frame, scale, twist));
   }
 
-  remove(id) {
-    const p = this.parts.get(id);
-    if (!p) return;
-    p.root.parent && p.root.parent.remove(p.root);
-    for (const h of p.handles) h.stem.geometry.dispose();
-    this.parts.delete(id);
+  /** Puts `h`'s ball back where its stored values say. */
+  restore(h) {
+    this.place(h, h.scale, h.twist);
   }
 
-  /** Screen position (canvas pixels) of model point `p`. */
-  screen(p, w, h) {
-    const v = new THREE.Vector3(...p);
-    this.view.model.localToWorld(v);
-    v.project(this.view.camera);
-    return [((v.x + 1) / 2) * w, ((1 - v.y) / 2) * h];
-  }
-
-  /** The handle under canvas pixel (x, y) within GRAB_PX: { part, handle } or null. */
-  nearest(x, y, w, h) {
-    if (!this.shown) return null;
-    let best = null;
-    for (const [id, p] of this.parts) {
-      if (!p.root.parent || !p.root.parent.visible) continue;
-      for (const handle of p.handles) {
-        const [px, py] = this.screen(handle.ball.position.toArray(), w, h);
-        const dist = Math.hypot(px - x, py - y);
-        if (dist <= GRAB_PX && (!best || dist < best.dist)) best = { part: id, handle, dist };
-      }
-    }
-    return best;
-  }
-
-  /** A press at canvas pixel (x, y): true when it grabbed a handle (the caller stops the event). */
-  down(x, y, w, h) {
-    if (!this.canEdit()) return false;
-    const hit = this.nearest(x, y, w, h);
-    if (!hit) return false;
+  /** Grabs `hit` (from `nearest`): the ball moves in the plane normal to the curve. */
+  grab(hit) {
+    if (!this.canEdit() || !hit) return false;
     const fr = hit.handle.frame;
     // The ball moves in the plane normal to the curve at the side's middle.
     const origin = new THREE.Vector3(...fr.mid);
@@ -196,11 +147,8 @@ export class RibbonHandles {
   move(x, y, w, h) {
     const d = this.drag;
     if (!d) return;
-    const ray = new THREE.Raycaster();
-    ray.setFromCamera(new THREE.Vector2((x / w) * 2 - 1, 1 - (y / h) * 2), this.view.camera);
-    const world = ray.ray.intersectPlane(d.plane, new THREE.Vector3());
-    if (!world) return;
-    const p = this.view.model.worldToLocal(world).toArray();
+    const p = this.pointerOnPlane(x, y, w, h);
+    if (!p) return;
     Object.assign(d, handleValues(d.handle.frame, p));
     this.place(d.handle, d.scale, d.twist);
     this.view.drawn();
@@ -220,17 +168,5 @@ export class RibbonHandles {
     if (req === null || req === undefined) this.place(h, h.scale, h.twist);
     else this.sent = { req, part: d.part, handle: h };
     return true;
-  }
-
-  /** The server answered request `req` (`failed`: with an error): a refused set_ribbon puts the ball back. */
-  answered(req, failed) {
-    const s = this.sent;
-    if (!s || s.req !== req) return;
-    this.sent = null;
-    const p = this.parts.get(s.part);
-    if (failed && p && p.handles.includes(s.handle)) {
-      this.place(s.handle, s.handle.scale, s.handle.twist);
-      this.view.drawn();
-    }
   }
 }

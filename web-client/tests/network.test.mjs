@@ -14,7 +14,11 @@
 // dragged with the mouse sets its side's scale and then its twist: checked
 // on the server's stored part (REST), in the viewer's network, and in the
 // viewer's patches, whose exact boundary normal at the side's middle turns
-// about the curve the way the ball was turned.
+// about the curve the way the ball was turned. A face's tuning handle
+// dragged with the mouse along its normal sets the face's centre offset:
+// checked on the server's stored part, and in the viewer's patches, whose
+// boundary stays while the interior moves along the offset, the centre by
+// all of it.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -115,7 +119,7 @@ function measure(page) {
       const p = [f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]];
       gap = Math.max(gap, Math.min(...d.curves.map((c) => dist(c.curve, p))));
     }
-    return { gap, quantum: f.step * 0.5 * Math.sqrt(3) + 1e-5, boundary: boundary.size, mid: curveDerivs(d.curves[0].curve, 0.5).p, revision: f.revision };
+    return { gap, quantum: f.step * 0.5 * Math.sqrt(3) + 1e-5, boundary: boundary.size, vertices: [...boundary], mid: curveDerivs(d.curves[0].curve, 0.5).p, revision: f.revision };
   });
 }
 
@@ -444,6 +448,129 @@ test('a ribbon handle dragged with the mouse sets its side\'s scale, then its tw
   const angle = Math.atan2(c.reduce((x, y, i) => x + y * a[i], 0), n0.reduce((x, y, i) => x + y * n1[i], 0));
   console.log(`ribbon handle face ${h.face} side ${h.side}: scale ${scale}, twist ${stored.ribbons.twists.map((x) => x[1])}, normal at the side's middle turned ${angle.toFixed(4)} rad about the curve`);
   assert.ok(angle > 0.25 && angle < 0.56, `normal turned ${angle} rad about the curve's tangent`);
+  assert.deepEqual(editor.errors, []);
+  assert.deepEqual(viewer.errors, []);
+  await editor.close();
+  await viewer.close();
+});
+
+/**
+ * In `page`: every face's tuning handle as the test derives it from the
+ * curves alone (the face's centre: the mean of its sides' middles; its
+ * normal: the Newell normal of those middles on the network's `up` side;
+ * the ball 0.25 of the middles' mean distance from the centre out along
+ * the normal) with the screen positions of the ball at centre offsets 0
+ * and `lifts` × that height along the normal; the face whose two points
+ * are inside the canvas and farthest apart on screen.
+ */
+function tuningScreen(page, lifts) {
+  return page.evaluate(
+    async (lifts) => {
+      const { curveDerivs } = await import('/src/bspline.js');
+      const v = window.vsculpt.view;
+      const d = window.vsculpt.networkView.parts.get(1);
+      const r = v.renderer.domElement.getBoundingClientRect();
+      const screen = (p) => {
+        const q = v.model.localToWorld(new v.camera.position.constructor(...p)).project(v.camera);
+        return { x: r.left + ((q.x + 1) / 2) * r.width, y: r.top + ((1 - q.y) / 2) * r.height };
+      };
+      const inside = (s) => s.x > r.left + 30 && s.x < r.right - 30 && s.y > r.top + 30 && s.y < r.bottom - 30;
+      let best = null;
+      d.network.faces.forEach((fc, f) => {
+        const mids = fc.sides.map((s) => curveDerivs(d.curves[s.curve].curve, (s.t_start + s.t_end) / 2).p);
+        const c = [0, 1, 2].map((x) => mids.reduce((a, m) => a + m[x], 0) / mids.length);
+        const n = [0, 0, 0];
+        mids.forEach((m, k) => {
+          const a = m.map((x, i) => x - c[i]);
+          const b = mids[(k + 1) % mids.length].map((x, i) => x - c[i]);
+          n[0] += a[1] * b[2] - a[2] * b[1];
+          n[1] += a[2] * b[0] - a[0] * b[2];
+          n[2] += a[0] * b[1] - a[1] * b[0];
+        });
+        const len = Math.hypot(...n);
+        const up = d.network.up;
+        const sign = n[0] * up[0] + n[1] * up[1] + n[2] * up[2] < 0 ? -1 : 1;
+        const normal = n.map((x) => (sign * x) / len);
+        const lift = (0.25 * mids.reduce((a, m) => a + Math.hypot(...m.map((x, i) => x - c[i])), 0)) / mids.length;
+        const at = (s) => c.map((x, i) => x + (1 + s) * lift * normal[i]);
+        const pts = [screen(at(0)), screen(at(lifts))];
+        const sep = Math.hypot(pts[0].x - pts[1].x, pts[0].y - pts[1].y);
+        if (!pts.every(inside)) return;
+        if (!best || sep > best.sep) best = { face: f, sides: fc.sides.length, normal, lift, ball: at(0), pts, sep };
+      });
+      return best;
+    },
+    lifts,
+  );
+}
+
+test('a tuning handle dragged with the mouse moves its face\'s interior along the handle and keeps every boundary', async () => {
+  const d = await bottleDesign('bottle-tuning');
+  const editor = await openNetwork(d.editor);
+  const viewer = await openNetwork(d.viewer);
+  assert.equal(await editor.evaluate(() => window.vsculpt.networkView.tuning.shown), false);
+  await editor.click('#ribbon-handles');
+  assert.equal(await editor.evaluate(() => window.vsculpt.networkView.tuning.shown), true, 'the tuning handles show with the ribbon handles');
+
+  const lifts = 1.5;
+  const h = await tuningScreen(editor, lifts);
+  assert.ok(h && h.sep > 25, `no tuning handle to drag on screen: ${JSON.stringify(h)}`);
+  // The page draws the ball where the test puts it.
+  const ball = await editor.evaluate((f) => window.vsculpt.networkView.tuning.parts.get(1).handles.find((x) => x.face === f).ball.position.toArray(), h.face);
+  assert.ok(Math.hypot(...ball.map((x, i) => x - h.ball[i])) < 1e-9 * (1 + h.lift), `ball at ${ball}, expected ${h.ball}`);
+  const before = await viewer.evaluate(() => {
+    const f = window.vsculpt.networkView.parts.get(1).frame;
+    return { positions: Array.from(f.positions), revision: f.revision, quantum: f.step * 0.5 * Math.sqrt(3) + 1e-5 };
+  });
+  // The frame's boundary vertices (edges of one triangle: each face's mesh is its own).
+  const edges = await measure(viewer);
+  assert.equal(edges.revision, before.revision);
+  const boundary = new Set(edges.vertices);
+
+  await mouseDrag(editor, h.pts[0], h.pts[1]);
+  let stored = await storedNetwork(d.editor);
+  for (let k = 0; k < 100 && !(stored.ribbons && stored.ribbons.tuning && stored.ribbons.tuning.length); k++) {
+    await new Promise((r) => setTimeout(r, 100));
+    stored = await storedNetwork(d.editor);
+  }
+  assert.equal(stored.ribbons.tuning.length, 1, JSON.stringify(stored.ribbons));
+  const [face, handles] = stored.ribbons.tuning[0];
+  assert.equal(face, h.face);
+  assert.equal(handles.length, h.sides + 1);
+  const h0 = handles[0];
+  const want = h.normal.map((x) => x * lifts * h.lift);
+  assert.ok(Math.hypot(...h0.map((x, i) => x - want[i])) < 0.05 * Math.hypot(...want), `stored centre offset ${h0}, expected ${want}`);
+  for (const c of handles.slice(1)) assert.deepEqual(c, [0, 0, 0], 'a corner handle changed');
+  assert.deepEqual(stored.ribbons.scales, [], 'the drag grabbed a ribbon handle');
+
+  // The viewer's new patches: the boundary of every face where it was;
+  // every vertex moved along h₀ by at most |h₀| (the centre's weight is 1
+  // at the domain's centre, between 0 and 1 elsewhere), the centre by |h₀|.
+  await viewer.waitForFunction((rev) => window.vsculpt.networkView.parts.get(1).frame.revision > rev, before.revision, { timeout: 15000 });
+  const after = await viewer.evaluate(() => Array.from(window.vsculpt.networkView.parts.get(1).frame.positions));
+  assert.equal(after.length, before.positions.length);
+  const len = Math.hypot(...h0);
+  const dir = h0.map((x) => x / len);
+  const q = 2 * before.quantum;
+  let largest = 0;
+  let boundaryMove = 0;
+  let offLine = 0;
+  for (let i = 0; i < after.length / 3; i++) {
+    const m = [0, 1, 2].map((x) => after[3 * i + x] - before.positions[3 * i + x]);
+    const along = m[0] * dir[0] + m[1] * dir[1] + m[2] * dir[2];
+    const size = Math.hypot(...m);
+    largest = Math.max(largest, size);
+    if (boundary.has(i)) boundaryMove = Math.max(boundaryMove, size);
+    offLine = Math.max(offLine, Math.hypot(...m.map((x, k) => x - along * dir[k])));
+    assert.ok(along > -q, `vertex ${i} moved against the handle by ${along}`);
+  }
+  console.log(`tuning handle face ${h.face} (${h.sides} sides): |h0| ${len.toFixed(4)}, largest move ${largest.toFixed(4)}, boundary ${boundaryMove.toExponential(2)}, off the handle's line ${offLine.toExponential(2)} (quantum ${before.quantum.toExponential(2)})`);
+  assert.ok(boundaryMove <= q, `a boundary vertex moved by ${boundaryMove}`);
+  assert.ok(offLine <= q, `a vertex moved off the handle's line by ${offLine}`);
+  assert.ok(largest <= len + q, `a vertex moved ${largest}, more than |h0| = ${len}`);
+  // The five-sided and four-sided faces' meshes have a vertex at the domain's centre.
+  if (h.sides > 3) assert.ok(largest >= len - q, `the centre moved ${largest}, not |h0| = ${len}`);
+  assert.ok(largest > 10 * q, 'the interior did not move');
   assert.deepEqual(editor.errors, []);
   assert.deepEqual(viewer.errors, []);
   await editor.close();

@@ -34,11 +34,11 @@ use super::error::FairingError;
 use super::iterate::{Control, FairingOptions, FairingReport, Progress};
 use super::local_axes::{LocalAxes, fit_axes, pseudo_centroid};
 use super::mesh::PointMesh;
-use super::quadric::{Measure, goal_weights};
+use super::quadric::{Measure, measure_goal_weights};
 use super::sweep_solver::{SweepSolve, SweepSolver};
 
-/// Fairs `mesh` toward `goals` (mean curvature, one per point) by global
-/// sweeps (each solved iteratively, see [`super::sweep_solver`]).
+/// Fairs `mesh` toward `goals` (one per point, in `options.measure`: mean
+/// or Gaussian curvature) by global sweeps (each solved iteratively, see [`super::sweep_solver`]).
 pub fn fair_implicit(
     mesh: &mut PointMesh,
     goals: &[f64],
@@ -81,11 +81,6 @@ pub fn fair_sweeps(
     mut progress: impl FnMut(&Progress) -> Control,
 ) -> Result<FairingReport, FairingError> {
     super::iterate::validate(mesh, goals, options)?;
-    if options.measure != Measure::Mean {
-        return Err(FairingError::BadValue(
-            "goals must be in mean curvature".into(),
-        ));
-    }
     let threshold = options.tolerance * super::iterate::size(mesh);
     let interior: Vec<usize> = (0..mesh.len()).filter(|&i| !mesh.boundary[i]).collect();
     let mut index = vec![usize::MAX; mesh.len()];
@@ -124,6 +119,9 @@ pub fn fair_sweeps(
         Acceleration::Anderson(m) if options.relaxation == 1.0 => m,
         _ => 0,
     });
+    // Gaussian goals start with umbilic sweeps (`gaussian_goal`).
+    let mut warm_up = options.measure == Measure::Gaussian;
+    let warm_move = super::gaussian_goal::WARM_UP_MOVE * super::iterate::size(mesh);
     let mut current = vec![0.0; dim];
     let mut residual = vec![0.0; dim];
     for iteration in 1..=options.max_iterations {
@@ -144,7 +142,9 @@ pub fn fair_sweeps(
             let at_c = LocalAxes { origin: c, ..axes };
             local.clear();
             local.extend(pts.map(|p| at_c.local(p)));
-            let Some(beta) = goal_weights(&local, goals[i], &mut alpha) else {
+            let Some(beta) =
+                measure_goal_weights(options.measure, &local, goals[i], warm_up, &mut alpha)
+            else {
                 let neighbours = ring.len();
                 mesh.points = original;
                 return Err(FairingError::TooFewNeighbours {
@@ -202,7 +202,7 @@ pub fn fair_sweeps(
                 residual[3 * k + c] = q[c] - p[c];
             }
         }
-        if max_move <= threshold || !max_move.is_finite() {
+        if (max_move <= threshold && !warm_up) || !max_move.is_finite() {
             // The last sweep (or a failed one): the plain step.
             Anderson::new(0).step(&mut current, &residual, options.relaxation);
         } else {
@@ -228,6 +228,12 @@ pub fn fair_sweeps(
             return Err(FairingError::Cancelled {
                 iterations: iteration,
             });
+        }
+        if warm_up && max_move <= warm_move {
+            // The warm-up is over: its history is of another map.
+            warm_up = false;
+            stepper = Anderson::new(stepper.depth());
+            continue;
         }
         if max_move <= threshold {
             converged = true;

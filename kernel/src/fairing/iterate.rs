@@ -9,10 +9,12 @@
 //!    the point's goal ([`goal_height`]);
 //! 4. moves the point by ω·(c + f·z − p), f the quadric's height at c.
 //!
-//! Goals are in mean curvature (the paper's example). Gaussian goals were
-//! tried (the constraint linearised per pass) and are refused: the
-//! 1-ring step's fixed point did not meet them (RMS error 0.19 on the
-//! octant, K = 1), so they are not offered.
+//! Goals are in mean curvature (the paper's example) or Gaussian
+//! curvature: the fit is then the mean-curvature fit whose H meets K with
+//! the fit's own anisotropy, to round-off ([`super::gaussian_goal`]; a
+//! single linearisation per pass, tried first, left the fixed point off
+//! the goal: RMS error 0.19 on the octant, K = 1), after umbilic warm-up
+//! sweeps. Principal-curvature goals are refused.
 //!
 //! The run converges when a sweep moves no point by more than `tolerance`
 //! times the mesh's size (bounding-box diagonal); every sweep is reported
@@ -24,12 +26,13 @@ use glam::DVec3;
 use super::error::FairingError;
 use super::local_axes::{LocalAxes, fit_axes, pseudo_centroid};
 use super::mesh::PointMesh;
-use super::quadric::{Measure, goal_height};
+use super::quadric::{Measure, goal_height, measure_goal_weights};
 
 /// How to fair.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FairingOptions {
-    /// The measure the goals are in (only [`Measure::Mean`] is accepted).
+    /// The measure the goals are in ([`Measure::Mean`] or
+    /// [`Measure::Gaussian`]).
     pub measure: Measure,
     /// Relaxation ω in (0, 2): 1 moves each point to its target.
     pub relaxation: f64,
@@ -93,7 +96,11 @@ pub fn fair(
     let original = mesh.points.clone();
     let mut normals = mesh.triangle_normals();
     let mut local = Vec::with_capacity(16);
+    let mut alpha = Vec::with_capacity(16);
     let mut history = Vec::new();
+    // Gaussian goals start with umbilic sweeps (`gaussian_goal`).
+    let mut warm_up = options.measure == Measure::Gaussian;
+    let warm_move = super::gaussian_goal::WARM_UP_MOVE * size(mesh);
     let mut converged = false;
     for iteration in 1..=options.max_iterations {
         let mut max_move = 0.0f64;
@@ -113,7 +120,12 @@ pub fn fair(
             let at_c = LocalAxes { origin: c, ..axes };
             local.clear();
             local.extend(pts.map(|p| at_c.local(p)));
-            let Some(f) = goal_height(&local, goals[i]) else {
+            let f = match options.measure {
+                Measure::Mean => goal_height(&local, goals[i]),
+                m => measure_goal_weights(m, &local, goals[i], warm_up, &mut alpha)
+                    .map(|beta| beta + alpha.iter().zip(&local).map(|(a, q)| a * q.z).sum::<f64>()),
+            };
+            let Some(f) = f else {
                 let neighbours = ring.len();
                 mesh.points = original;
                 return Err(FairingError::TooFewNeighbours {
@@ -144,6 +156,10 @@ pub fn fair(
             return Err(FairingError::Cancelled {
                 iterations: iteration,
             });
+        }
+        if warm_up && max_move <= warm_move {
+            warm_up = false;
+            continue;
         }
         if max_move <= threshold {
             converged = true;
@@ -207,9 +223,9 @@ pub(crate) fn validate(
             mesh.len()
         )));
     }
-    if options.measure != Measure::Mean {
+    if !matches!(options.measure, Measure::Mean | Measure::Gaussian) {
         return Err(FairingError::BadValue(format!(
-            "fairing goals must be in mean curvature, not {:?}",
+            "fairing goals must be in mean or Gaussian curvature, not {:?}",
             options.measure
         )));
     }

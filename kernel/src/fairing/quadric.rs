@@ -13,7 +13,8 @@
 //!   default, chosen by measurement: `tests/fairing_curvature.rs`).
 //! * [`goal_height`] is the fairing step: the fit of the neighbours alone
 //!   constrained to the goal mean curvature, whose height f at the origin
-//!   is where the point should be.
+//!   is where the point should be; [`measure_goal_weights`] the same as
+//!   weights, toward a mean- or Gaussian-curvature goal.
 
 use glam::DVec3;
 
@@ -95,14 +96,20 @@ pub fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
     b.iter().all(|x| x.is_finite())
 }
 
-/// Curvatures from the Monge coefficients (d, e, a, b, c) in `axes`.
-fn monge(axes: &LocalAxes, d: f64, e: f64, a: f64, b: f64, c: f64) -> Curvatures {
+/// The mean and Gaussian curvature at the origin of the Monge patch
+/// z = d u + e v + a u² + b uv + c v² (bending away from the normal
+/// positive).
+pub(crate) fn mean_gaussian(d: f64, e: f64, a: f64, b: f64, c: f64) -> (f64, f64) {
     let w2 = 1.0 + d * d + e * e;
     let w = w2.sqrt();
     let hm = (a * (1.0 + e * e) - b * d * e + c * (1.0 + d * d)) / (w2 * w);
     let km = (4.0 * a * c - b * b) / (w2 * w2);
-    // Bending away from the normal is positive.
-    let (mean, gaussian) = (-hm, km);
+    (-hm, km)
+}
+
+/// Curvatures from the Monge coefficients (d, e, a, b, c) in `axes`.
+fn monge(axes: &LocalAxes, d: f64, e: f64, a: f64, b: f64, c: f64) -> Curvatures {
+    let (mean, gaussian) = mean_gaussian(d, e, a, b, c);
     let disc = (mean * mean - gaussian).max(0.0).sqrt();
     Curvatures {
         mean,
@@ -157,6 +164,23 @@ pub fn curvatures(
     Some(monge(axes, r[0], r[1], r[2], r[3], r[4]))
 }
 
+/// Light holds in the goal fits' normal equations `m` (row stride
+/// `stride`, unknowns f, d, e, a, b, c first) for `count` neighbours whose
+/// largest squared distance from the origin is `scale`: on the slopes d, e
+/// (the local axes make the true slopes small), which keeps rings of fewer
+/// than six neighbours solvable; and for four neighbours on the twist b
+/// too: four points in a cross aligned with the axes have uv = 0 at every
+/// point, so nothing else fixes b (the height at the origin does not
+/// depend on it there).
+pub(crate) fn hold_small_rings(m: &mut [f64], stride: usize, count: usize, scale: f64) {
+    let hold = if count < 6 { 1e-3 } else { 1e-9 } * scale;
+    m[stride + 1] += hold;
+    m[2 * stride + 2] += hold;
+    if count < 5 {
+        m[4 * stride + 4] += 1e-3 * scale * scale;
+    }
+}
+
 /// The height f at the origin of the quadric fitted to `neighbours`
 /// (local coordinates; at least 4) whose mean curvature at the origin is
 /// `goal`; `None` for a singular fit. The constraint
@@ -181,11 +205,7 @@ pub fn goal_height(neighbours: &[DVec3], goal: f64) -> Option<f64> {
         }
         scale = scale.max(q.x * q.x + q.y * q.y);
     }
-    // A light hold on the slopes keeps small rings (fewer than six
-    // neighbours) solvable; the local axes make the true slopes small.
-    let hold = if neighbours.len() < 6 { 1e-3 } else { 1e-9 } * scale;
-    ata[7] += hold;
-    ata[14] += hold;
+    hold_small_rings(&mut ata, 6, neighbours.len(), scale);
     let (mut d0, mut e0) = (0.0, 0.0);
     let mut f = 0.0;
     for _ in 0..2 {
@@ -221,29 +241,37 @@ pub fn goal_weights(neighbours: &[DVec3], goal: f64, alpha: &mut Vec<f64>) -> Op
     if let Some((d, e)) = goal_slopes(neighbours, goal) {
         (d0, e0) = (d, e);
     }
-    let mut m = [0.0; 49];
-    let mut scale = 0.0f64;
-    for q in neighbours {
-        let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
-        for i in 0..6 {
-            for j in 0..6 {
-                m[i * 7 + j] += row[i] * row[j];
-            }
-        }
-        scale = scale.max(q.x * q.x + q.y * q.y);
-    }
-    let hold = if neighbours.len() < 6 { 1e-3 } else { 1e-9 } * scale;
-    m[8] += hold;
-    m[16] += hold;
+    let (mut m, _) = goal_normal_equations(neighbours);
     let w2: f64 = 1.0 + d0 * d0 + e0 * e0;
     let g = [1.0 + e0 * e0, -d0 * e0, 1.0 + d0 * d0];
     for k in 0..3 {
         m[(3 + k) * 7 + 6] = g[k];
         m[6 * 7 + 3 + k] = g[k];
     }
-    // y = K⁻¹ e_f (K symmetric), then f = yᵀ [Aᵀ z; r].
+    kkt_weights(m, neighbours, -goal * w2 * w2.sqrt(), alpha)
+}
+
+/// The normal equations of a goal fit of `neighbours` (local coordinates):
+/// the 7 × 7 matrix of the unknowns f, d, e, a, b, c (the constraint's row
+/// and column left zero) with the holds of [`hold_small_rings`], and the
+/// right-hand side (the constraint's entry zero).
+pub(crate) fn goal_normal_equations(neighbours: &[DVec3]) -> ([f64; 49], [f64; 7]) {
+    let (mut m, mut r) = goal_normal_equations(neighbours);
+    (m, r)
+}
+
+/// A goal fit's height at the origin as weights of the neighbours'
+/// heights, from its KKT matrix `kkt` and constraint value `rhs`:
+/// y = K⁻¹ e_f (K symmetric), then f = yᵀ [Aᵀ z; rhs] = Σ_j α_j z_j + β.
+/// Fills `alpha`, returns β; `None` for a singular matrix.
+pub(crate) fn kkt_weights(
+    mut kkt: [f64; 49],
+    neighbours: &[DVec3],
+    rhs: f64,
+    alpha: &mut Vec<f64>,
+) -> Option<f64> {
     let mut y = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-    if !solve_dense(&mut m, &mut y, 7) {
+    if !solve_dense(&mut kkt, &mut y, 7) {
         return None;
     }
     alpha.clear();
@@ -251,27 +279,34 @@ pub fn goal_weights(neighbours: &[DVec3], goal: f64, alpha: &mut Vec<f64>) -> Op
         let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
         (0..6).map(|k| y[k] * row[k]).sum::<f64>()
     }));
-    Some(y[6] * (-goal * w2 * w2.sqrt()))
+    Some(y[6] * rhs)
+}
+
+/// The goal-constrained fit as weights (f = Σ_j α_j z_j + β, see
+/// [`goal_weights`]) for a goal in `measure`: mean curvature
+/// ([`goal_weights`]) or Gaussian curvature
+/// ([`super::gaussian_goal::gaussian_goal_weights`], its warm-up's fit with
+/// `warm_up`); `None` for a singular fit or a measure fairing does not take
+/// (the principal curvatures).
+pub fn measure_goal_weights(
+    measure: Measure,
+    neighbours: &[DVec3],
+    goal: f64,
+    warm_up: bool,
+    alpha: &mut Vec<f64>,
+) -> Option<f64> {
+    match measure {
+        Measure::Mean => goal_weights(neighbours, goal, alpha),
+        Measure::Gaussian => {
+            super::gaussian_goal::gaussian_goal_weights(neighbours, goal, warm_up, alpha)
+        }
+        Measure::MaxPrincipal | Measure::MinPrincipal => None,
+    }
 }
 
 /// The slopes (d, e) of the goal-constrained fit with flat slopes assumed.
 fn goal_slopes(neighbours: &[DVec3], goal: f64) -> Option<(f64, f64)> {
-    let mut m = [0.0; 49];
-    let mut r = [0.0; 7];
-    let mut scale = 0.0f64;
-    for q in neighbours {
-        let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
-        for i in 0..6 {
-            for j in 0..6 {
-                m[i * 7 + j] += row[i] * row[j];
-            }
-            r[i] += row[i] * q.z;
-        }
-        scale = scale.max(q.x * q.x + q.y * q.y);
-    }
-    let hold = if neighbours.len() < 6 { 1e-3 } else { 1e-9 } * scale;
-    m[8] += hold;
-    m[16] += hold;
+    let (mut m, mut r) = goal_normal_equations(neighbours);
     for k in 0..3 {
         let g = [1.0, 0.0, 1.0][k];
         m[(3 + k) * 7 + 6] = g;

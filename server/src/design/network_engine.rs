@@ -46,7 +46,7 @@ pub const REFIT_TOLERANCE: f64 = 1e-5;
 pub enum MeasureDoc {
     /// Mean curvature.
     Mean,
-    /// Gaussian curvature (the kernel refuses it).
+    /// Gaussian curvature.
     Gaussian,
     /// Larger principal curvature (the kernel refuses it).
     MaxPrincipal,
@@ -620,7 +620,7 @@ impl NetworkEngine {
     /// What a fairing run of `f` needs, taken from the face as it is now
     /// (a snapshot a job can run on elsewhere); refused here: an unknown
     /// face, a sweep count out of range, goals in another measure than the
-    /// mean curvature.
+    /// mean or Gaussian curvature.
     pub fn fairing_input(&self, f: &FairingDoc) -> Result<FairingInput, CommandError> {
         let face = self
             .faces
@@ -637,9 +637,9 @@ impl NetworkEngine {
             MeasureDoc::MaxPrincipal => Measure::MaxPrincipal,
             MeasureDoc::MinPrincipal => Measure::MinPrincipal,
         };
-        if measure != Measure::Mean {
+        if !matches!(measure, Measure::Mean | Measure::Gaussian) {
             return Err(invalid(format!(
-                "fairing toward {measure:?} curvature goals is refused: the kernel fairs toward mean-curvature goals only"
+                "fairing toward {measure:?} curvature goals is refused: the kernel fairs toward mean- or Gaussian-curvature goals only"
             )));
         }
         let dm = face.sampler.mesh();
