@@ -256,7 +256,20 @@ pub fn goal_weights(neighbours: &[DVec3], goal: f64, alpha: &mut Vec<f64>) -> Op
 /// and column left zero) with the holds of [`hold_small_rings`], and the
 /// right-hand side (the constraint's entry zero).
 pub(crate) fn goal_normal_equations(neighbours: &[DVec3]) -> ([f64; 49], [f64; 7]) {
-    let (mut m, mut r) = goal_normal_equations(neighbours);
+    let mut m = [0.0; 49];
+    let mut r = [0.0; 7];
+    let mut scale = 0.0f64;
+    for q in neighbours {
+        let row = [1.0, q.x, q.y, q.x * q.x, q.x * q.y, q.y * q.y];
+        for i in 0..6 {
+            for j in 0..6 {
+                m[i * 7 + j] += row[i] * row[j];
+            }
+            r[i] += row[i] * q.z;
+        }
+        scale = scale.max(q.x * q.x + q.y * q.y);
+    }
+    hold_small_rings(&mut m, 7, neighbours.len(), scale);
     (m, r)
 }
 
