@@ -139,7 +139,8 @@ test('a plate bound to a body from the parts panel follows a lattice point moved
   const relation = await viewer.evaluate(() => [...window.vsculpt.design.relations.values()].find((r) => r.kind === 'ffd'));
   assert.deepEqual([relation.body, relation.part], [bodyId, plate.id]);
   assert.match(await viewer.textContent('#relations'), /ffd: .* follows body cage/);
-  assert.equal(await editor.isDisabled('#ffd button[name="ffd-bind"]'), true);
+  // The editor's panel follows the relation when its own copy of it arrives (it may come after the viewer's).
+  await editor.waitForFunction(() => document.querySelector('#ffd button[name="ffd-bind"]').disabled, null, { timeout: 15000 });
   assert.equal(await editor.isVisible('#ffd button[name="ffd-unbind"]'), true);
 
   // The drawing as the viewer holds it: the plate's frame points and its drawn mesh's bounds.
