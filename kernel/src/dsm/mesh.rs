@@ -545,7 +545,7 @@ fn hermite(
 ) -> (DVec3, DVec3) {
     let p0 = grid.corner(a);
     let d = e.as_dvec3() * grid.h;
-    let t = root(field, p0, d, phi0, phi1, 1e-10);
+    let t = root(field, p0, d, (phi0, phi1), inside0, 1e-10);
     let p = p0 + d * t;
     let g = field.normal(p);
     // Outward: from the inside end to the outside end.
@@ -554,27 +554,42 @@ fn hermite(
     (p, if n == DVec3::ZERO { out.normalize() } else { n })
 }
 
-/// The parameter t ∈ [0, 1] where Φ(p0 + t d) changes sign (Illinois method with a
-/// bisection guard), to `tol` in t.
-fn root(field: &Field, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol: f64) -> f64 {
+/// The parameter t ∈ [0, 1] where membership along p0 + t d changes (Illinois
+/// method on Φ with a bisection guard), to `tol` in t; `f` is Φ at the ends
+/// and `ina` the membership of p0 (given, not read from Φ's sign: Φ is +0 or
+/// −0 on the boundary itself, and a p0 there would take the wrong side).
+///
+/// The bracket is kept by membership, so the result is within `tol` of the
+/// boundary whatever Φ's shape; Φ only chooses where to sample. A secant
+/// estimate closer than `tol` / 2 to an end of the bracket is moved to
+/// `tol` / 2 from it: once the estimate is on the root (Φ is near linear over
+/// a cell, so after one or two steps), the next sample then lands just past
+/// it and closes the bracket, instead of bisecting the far side down to `tol`
+/// (about 33 samples a root). Bisection is kept for a step that follows two
+/// steps which together did not halve the bracket.
+fn root(field: &Field, p0: DVec3, d: DVec3, f: (f64, f64), ina: bool, tol: f64) -> f64 {
     let mut scratch = Vec::new();
     let (mut a, mut b) = (0.0, 1.0);
-    let (mut fa, mut fb) = (f0, f1);
-    let ina = fa > 0.0;
+    let (mut fa, mut fb) = f;
     let mut side = 0i8;
+    // Bracket widths before the last two steps.
+    let mut widths = [f64::INFINITY; 2];
     for _ in 0..80 {
-        if b - a <= tol {
+        let w = b - a;
+        if w <= tol {
             break;
         }
-        let mut t = if fa != fb {
+        let stalled = w > 0.5 * widths[0];
+        widths = [widths[1], w];
+        let mut t = if fa != fb && !stalled {
             (a * fb - b * fa) / (fb - fa)
         } else {
             0.5 * (a + b)
         };
-        let w = b - a;
-        if !(t > a + 0.01 * w && t < b - 0.01 * w) {
+        if !(t >= a && t <= b) {
             t = 0.5 * (a + b);
         }
+        t = t.clamp(a + 0.5 * tol, b - 0.5 * tol);
         let s = field.sample(p0 + d * t, &mut scratch);
         let ft = s.phi;
         if s.inside == ina {
@@ -609,7 +624,7 @@ fn project(field: &Field, grid: &Grid, v: DVec3, n: DVec3) -> Option<DVec3> {
         let p1 = v + dir * (step * grid.h);
         let s1 = field.sample(p1, &mut scratch);
         if s1.inside != s0.inside {
-            let t = root(field, v, p1 - v, s0.phi, s1.phi, 1e-12);
+            let t = root(field, v, p1 - v, (s0.phi, s1.phi), s0.inside, 1e-12);
             return Some(v + (p1 - v) * t);
         }
     }
