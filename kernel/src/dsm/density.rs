@@ -385,6 +385,46 @@ impl DensityPrimitive {
         local.rotate(&self.placement.rotation())
     }
 
+    /// F with its world gradient, without the Hessian of [`Self::jet`]: what
+    /// the mesher's normals need. Sphere-, pipe-based and blobby primitives
+    /// differentiate e^{−a r} directly (equal to the jet's value and gradient
+    /// to rounding); sheets take the jet's.
+    pub fn value_grad(&self, p: DVec3, range: f64) -> (f64, DVec3) {
+        let l = self.local(p);
+        if !self.in_support(&l, range) {
+            return (0.0, DVec3::ZERO);
+        }
+        let q = l.q;
+        let a = self.reducing;
+        let (v, g) = match &self.shape {
+            DensityShape::Sphere { .. } => {
+                let n = q.length();
+                let u = if n == 0.0 { DVec3::ZERO } else { q / n };
+                let v = self.density * (-a * l.r).exp();
+                (v, u * (-a * v))
+            }
+            DensityShape::Pipe { .. } => {
+                let n = (q.x * q.x + q.y * q.y).sqrt();
+                let u = if n == 0.0 {
+                    DVec3::ZERO
+                } else {
+                    DVec3::new(q.x / n, q.y / n, 0.0)
+                };
+                let v = self.density * (-a * l.r).exp();
+                (v, u * (-a * v))
+            }
+            DensityShape::Blobby => {
+                let v = self.density * (-a * l.r * l.r).exp();
+                (v, q * (-2.0 * a * v))
+            }
+            _ => {
+                let j = self.jet(p, range);
+                return (j.value, j.grad);
+            }
+        };
+        (v, self.placement.rotation() * g)
+    }
+
     /// Distance (a 1-Lipschitz lower bound, exact for planes) from `p` to the
     /// nearest boundary of the support (range surface, shell bore, clip planes,
     /// pipe ends, sheet edges) and the unit gradient of that distance function.

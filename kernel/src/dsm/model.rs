@@ -477,7 +477,7 @@ impl Model {
                 let jet = g.geometric[j as usize].jet(p);
                 take(jet.value, jet.grad);
             }
-            let mut f = super::jet::Jet::constant(0.0);
+            let (mut f, mut fg) = (0.0, DVec3::ZERO);
             let mut any = false;
             for &i in &act.density[k] {
                 if !self.density_reaches(k, i as usize, p, margin) {
@@ -489,16 +489,17 @@ impl Model {
                     let (cd, cg) = dp.cut_distance(p, r);
                     take(cd, cg);
                 }
-                let jet = dp.jet(p, r);
-                if jet.value != 0.0 {
+                let (v, vg) = dp.value_grad(p, r);
+                if v != 0.0 {
                     any = true;
-                    f = f.plus(jet);
+                    f += v;
+                    fg += vg;
                 }
             }
             if any {
                 let s = 1.0 / (self.scales[k] * self.de);
-                take(f.value * s, f.grad * s);
-                take((f.value - self.de) * s, f.grad * s);
+                take(f * s, fg * s);
+                take((f - self.de) * s, fg * s);
             }
         }
         best.1.normalize_or_zero()
