@@ -112,6 +112,40 @@ pub struct DensityPrimitive {
     pub clip: Vec<HalfSpace>,
 }
 
+/// A sphere-based or blobby primitive without clipping, reduced to what its
+/// value needs: F depends on |p − centre| alone, so no transform to local
+/// coordinates and no support tests beyond the range (the mesher's hot loop,
+/// [`super::model::Model::sample`]). Equal to [`DensityPrimitive::value`] to
+/// rounding (bit for bit with an identity rotation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RadialCharge {
+    centre: DVec3,
+    /// Reference radius ρ₀ (0 for blobby).
+    radius: f64,
+    density: f64,
+    reducing: f64,
+    /// Blinn's Gaussian e^{−a r²} instead of e^{−a r}.
+    gaussian: bool,
+}
+
+impl RadialCharge {
+    /// F at p with influence range `range`.
+    #[inline]
+    pub(crate) fn value(&self, p: DVec3, range: f64) -> f64 {
+        let r = (p - self.centre).length() - self.radius;
+        if !(r >= 0.0 && r <= range) {
+            return 0.0;
+        }
+        // The same operations, in the same order, as `value_at`.
+        let x = if self.gaussian {
+            -self.reducing * r * r
+        } else {
+            -self.reducing * r
+        };
+        self.density * x.exp()
+    }
+}
+
 /// Local distance r, its jet, and whether the point is inside the support.
 struct Local {
     q: DVec3,
@@ -248,6 +282,26 @@ impl DensityPrimitive {
             _ => l / self.reducing,
         };
         cull.min(self.range)
+    }
+
+    /// The primitive as a [`RadialCharge`] when it is one (sphere-based or
+    /// blobby, no clip half-spaces).
+    pub(crate) fn radial_charge(&self) -> Option<RadialCharge> {
+        if !self.clip.is_empty() {
+            return None;
+        }
+        let (radius, gaussian) = match self.shape {
+            DensityShape::Sphere { radius } => (radius, false),
+            DensityShape::Blobby => (0.0, true),
+            _ => return None,
+        };
+        Some(RadialCharge {
+            centre: self.placement.translation(),
+            radius,
+            density: self.density,
+            reducing: self.reducing,
+            gaussian,
+        })
     }
 
     fn local(&self, p: DVec3) -> Local {
@@ -635,4 +689,65 @@ fn sheet_jet(s: &Sheet, u: Jet, v: Jet, r: Jet, a: f64, density: f64) -> Jet {
         }
     };
     d.times(e.exp_neg()).scale(density)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A radial charge's value against the primitive's own (through its local
+    /// frame): bit for bit at an axis-aligned placement, to rounding when
+    /// rotated; 0 inside a shell's bore and beyond the range; clipped
+    /// primitives and other shapes are not radial charges.
+    #[test]
+    fn radial_charges_have_the_primitives_values() {
+        let rot = glam::DMat3::from_axis_angle(DVec3::new(1.0, -2.0, 0.5).normalize(), 0.9);
+        let placed = [
+            Placement::at(DVec3::new(0.3, -0.2, 0.1)),
+            Placement::new(rot, DVec3::new(-0.4, 0.7, 0.2)).unwrap(),
+        ];
+        for (k, pl) in placed.into_iter().enumerate() {
+            let prims = [
+                DensityPrimitive::new(DensityShape::Sphere { radius: 0.0 }, pl, 1.6, 1.5).unwrap(),
+                DensityPrimitive::new(DensityShape::Sphere { radius: 0.5 }, pl, -0.7, 2.5).unwrap(),
+                DensityPrimitive::new(DensityShape::Blobby, pl, 2.0, 0.8).unwrap(),
+            ];
+            for d in &prims {
+                let rc = d.radial_charge().expect("radial");
+                for i in 0..200 {
+                    let t = i as f64 * 0.37;
+                    let p = pl.translation()
+                        + DVec3::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin()) * (0.02 * i as f64);
+                    for range in [1.0, 3.5] {
+                        let (a, b) = (rc.value(p, range), d.value(p, range));
+                        if k == 0 {
+                            assert_eq!(a.to_bits(), b.to_bits(), "{d:?} at {p}");
+                        } else {
+                            // |p − c| to rounding, which exp(−a r) scales by a r.
+                            assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} vs {b}");
+                        }
+                        if (p - pl.translation()).length() > range + 0.6 {
+                            assert_eq!(a, 0.0);
+                        }
+                    }
+                }
+            }
+        }
+        let bore = DensityPrimitive::sphere(DVec3::ZERO, 1.0, 1.0).unwrap();
+        assert!(bore.radial_charge().is_some());
+        let clipped = bore.clone().clipped(HalfSpace::new(DVec3::X, 0.0).unwrap());
+        assert!(clipped.radial_charge().is_none());
+        let pipe = DensityPrimitive::pipe(DVec3::ZERO, DVec3::X, 1.0, 1.0).unwrap();
+        assert!(pipe.radial_charge().is_none());
+        let shell = DensityPrimitive::new(
+            DensityShape::Sphere { radius: 0.5 },
+            Placement::IDENTITY,
+            1.0,
+            1.0,
+        )
+        .unwrap()
+        .radial_charge()
+        .unwrap();
+        assert_eq!(shell.value(DVec3::new(0.2, 0.0, 0.0), 9.0), 0.0);
+    }
 }
