@@ -144,6 +144,26 @@ impl RadialCharge {
         };
         self.density * x.exp()
     }
+
+    /// F and its world gradient at p ([`DensityPrimitive::value_grad`] to
+    /// rounding).
+    #[inline]
+    pub(crate) fn value_grad(&self, p: DVec3, range: f64) -> (f64, DVec3) {
+        let d = p - self.centre;
+        let n = d.length();
+        let v = self.value(p, range);
+        if v == 0.0 {
+            return (0.0, DVec3::ZERO);
+        }
+        let g = if self.gaussian {
+            d * (-2.0 * self.reducing * v)
+        } else if n > 0.0 {
+            d * (-self.reducing * v / n)
+        } else {
+            DVec3::ZERO
+        };
+        (v, g)
+    }
 }
 
 /// Local distance r, its jet, and whether the point is inside the support.
@@ -695,8 +715,9 @@ fn sheet_jet(s: &Sheet, u: Jet, v: Jet, r: Jet, a: f64, density: f64) -> Jet {
 mod tests {
     use super::*;
 
-    /// A radial charge's value against the primitive's own (through its local
-    /// frame): bit for bit at an axis-aligned placement, to rounding when
+    /// A radial charge's value and gradient against the primitive's own
+    /// (through its local frame): the value bit for bit at an axis-aligned
+    /// placement, both to rounding when
     /// rotated; 0 inside a shell's bore and beyond the range; clipped
     /// primitives and other shapes are not radial charges.
     #[test]
@@ -726,6 +747,11 @@ mod tests {
                             // |p − c| to rounding, which exp(−a r) scales by a r.
                             assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} vs {b}");
                         }
+                        let (v, g) = rc.value_grad(p, range);
+                        let (w, h) = d.value_grad(p, range);
+                        assert_eq!(v, a);
+                        assert!((v - w).abs() <= 1e-13 * w.abs(), "{v} vs {w}");
+                        assert!((g - h).length() <= 1e-12 * (1.0 + h.length()), "{g} vs {h}");
                         if (p - pl.translation()).length() > range + 0.6 {
                             assert_eq!(a, 0.0);
                         }

@@ -497,7 +497,10 @@ impl Model {
                     let (cd, cg) = dp.cut_distance(p, r);
                     take(cd, cg);
                 }
-                let (v, vg) = dp.value_grad(p, r);
+                let (v, vg) = match self.radial[k][i as usize] {
+                    Some(rc) => rc.value_grad(p, r),
+                    None => dp.value_grad(p, r),
+                };
                 if v != 0.0 {
                     any = true;
                     f += v;
