@@ -38,7 +38,6 @@ use super::interval::Tri;
 use super::model::{Active, Model};
 use super::qef::Qef;
 use glam::{DVec3, IVec3};
-use std::collections::HashMap;
 
 /// Leaf size in cells.
 pub(crate) const LEAF: i32 = 8;
@@ -455,7 +454,10 @@ fn contour(
     let (inside, phi) = (&leaf.inside, &leaf.phi);
     let mut verts = Vec::new();
     let mut contoured = 0;
-    let mut edges: HashMap<(IVec3, u8), (DVec3, DVec3)> = HashMap::new();
+    // Hermite samples of the leaf's edges, shared by the (up to 4) cells
+    // around each: per (corner, axis), 1 + an index into `hermites`, or 0.
+    let mut edge_slot = vec![0u32; 3 * corner_index(IVec3::splat(LEAF)) + 3];
+    let mut hermites: Vec<(DVec3, DVec3)> = Vec::new();
     for z in 0..LEAF {
         for y in 0..LEAF {
             for x in 0..LEAF {
@@ -493,8 +495,9 @@ fn contour(
                         if i0 == i1 {
                             continue;
                         }
-                        let (p, n) = *edges.entry((a0, axis)).or_insert_with(|| {
-                            hermite(
+                        let slot = &mut edge_slot[3 * corner_index(a0) + axis as usize];
+                        if *slot == 0 {
+                            hermites.push(hermite(
                                 field,
                                 grid,
                                 origin + a0,
@@ -502,8 +505,10 @@ fn contour(
                                 phi[corner_index(a0)],
                                 phi[corner_index(a1)],
                                 i0,
-                            )
-                        });
+                            ));
+                            *slot = hermites.len() as u32;
+                        }
+                        let (p, n) = hermites[*slot as usize - 1];
                         qef.add(p, n);
                     }
                 }
