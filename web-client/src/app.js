@@ -1287,7 +1287,6 @@ let prewarmed = false;
 function prewarmOnce() {
   if (prewarmed) return;
   prewarmed = true;
-  mark('hello');
   perf.prewarm = view.prewarm().then(() => {
     perf.prewarmedAt = performance.now();
     mark('prewarmed');
@@ -1303,11 +1302,17 @@ const link = token
       onMessage,
       onFrame,
       onStatus: status,
-      onHello: prewarmOnce,
+      onHello: () => {
+        mark('hello');
+        prewarmOnce();
+      },
       // The last visit's shape, drawn at once (geometry-cache.js); `?geometry_cache=0` joins without it.
       cache: params.get('geometry_cache') === '0' ? null : new GeometryCache(),
     })
   : { send: () => null, open: false };
+// The studio program compiles now, while the link opens and the kept geometry is read: a warm
+// visit draws that geometry before any hello is answered, so the compile must not wait for one.
+if (token) prewarmOnce();
 if (!token) {
   $('shell-title').textContent = 'vsculpt';
   $('shell-stage').innerHTML =

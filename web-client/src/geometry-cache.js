@@ -13,8 +13,11 @@ const STORE = 'joins';
 /** How many designs' geometry is kept (the least recently saved goes first). */
 export const KEEP_DESIGNS = 4;
 
-/** The cache's database, opened once per page; rejects where the browser has no IndexedDB (or refuses it). */
-let opened = null;
+/** The read index.html started while the code loaded ({ design, db, entry }), if any: taken once. */
+let early = window.vsculptEarlyGeometry || null;
+
+/** The cache's database, opened once per page (by index.html when it could); rejects where the browser has no IndexedDB (or refuses it). */
+let opened = early ? early.db : null;
 function database() {
   if (!opened) {
     opened = new Promise((resolve, reject) => {
@@ -42,9 +45,16 @@ export class GeometryCache {
   /** Design `design`'s last join geometry, or null (nothing kept, or no IndexedDB here). Never rejects. */
   async load(design) {
     try {
-      const db = await database();
-      const tx = db.transaction(STORE, 'readonly');
-      const entry = await done(tx, tx.objectStore(STORE).get(design));
+      const started = early && early.design === design ? early.entry : null;
+      early = null;
+      let entry;
+      if (started) {
+        entry = await started;
+      } else {
+        const db = await database();
+        const tx = db.transaction(STORE, 'readonly');
+        entry = await done(tx, tx.objectStore(STORE).get(design));
+      }
       const valid = entry && typeof entry.hash === 'string' && Array.isArray(entry.frames) && entry.frames.every((f) => f instanceof ArrayBuffer);
       return valid ? entry : null;
     } catch (e) {
