@@ -6,7 +6,9 @@
 // server's: the design's control points equal the REST document's, and the
 // drawn meshes equal those of a page that joined without the cache. When the
 // design changed in between (another client's drag), the server sends the new
-// frames and the page ends up drawing the new shape, not the kept one.
+// frames and the page ends up drawing the new shape, not the kept one. The
+// demo (surfaces, a curve, a body part's frames) goes through the cache
+// without a page error.
 // Real server, real headless Chromium; the other client is tests/ws-client.mjs
 // (Node 20 has WebSocket behind a flag: without it this file runs itself again
 // with the flag).
@@ -33,6 +35,7 @@ if (typeof WebSocket === 'undefined') {
   });
   test('a warm visit draws the kept frames, the server confirms them and sends none, and the shape is the server\'s', warmVisit);
   test('a design changed since the frames were kept gets the new shape, not the kept one', changedDesign);
+  test('the demo (surfaces, a curve, a body) draws from the kept frames without a page error, and is the server\'s', demoVisit);
 }
 
 /** Resolves once the page has joined, drawn its first picture, and every surface's drawing shows its part's current shape. */
@@ -131,6 +134,33 @@ async function warmVisit() {
     assert.equal(page.binaryFrames, 0, 'the server sent no frame: the picture came from the cache');
     assertSamePoints(await shownPoints(page), await restPoints(design), 'control points against the REST document');
     assertSamePoints(await drawnMeshes(page), await freshMeshes(url), 'drawn meshes against a page without the cache', 0);
+  } finally {
+    await context.close();
+  }
+}
+
+/** The demo's parts of every kind through the cache: its viewer link, reloaded. */
+async function demoVisit() {
+  const context = await browser.newContext({ viewport: { width: 1100, height: 700 } });
+  try {
+    const page = await open(context, server.viewer);
+    const errors = [];
+    page.on('pageerror', (e) => errors.push(String(e)));
+    await settled(page);
+    await page.evaluate(() => window.vsculpt.link.cacheUse.saved);
+    page.binaryFrames = 0;
+    await page.reload();
+    await settled(page);
+    const use = await page.evaluate(() => window.vsculpt.link.cacheUse);
+    assert.ok(use.replayed >= 5, `frames drawn from the cache: ${use.replayed}`);
+    assert.equal(use.confirmed, true);
+    assert.equal(page.binaryFrames, 0);
+    assert.deepEqual(errors, []);
+    const demo = new URL(server.viewer);
+    const id = Number(demo.searchParams.get('design'));
+    const res = await fetch(`${server.base}/api/designs/${id}?token=${demo.searchParams.get('token')}`);
+    assertSamePoints(await shownPoints(page), documentPoints((await res.json()).design), 'control points against the REST document');
+    assertSamePoints(await drawnMeshes(page), await freshMeshes(server.viewer), 'drawn meshes against a page without the cache', 0);
   } finally {
     await context.close();
   }
