@@ -21,11 +21,11 @@ try {
   const page = await context.newPage();
   await page.goto(server.viewer, { waitUntil: 'commit' });
   console.log('cold local', await page.evaluate(firstPicture));
-  const marks = () => page.evaluate(() => performance.getEntriesByType('mark').filter((m) => m.name.startsWith('vsculpt:')).map((m) => `${m.name.slice(8)}@${Math.round(m.startTime)}`).join(' '));
+  const pageMarks = () => page.evaluate(() => performance.getEntriesByType('mark').filter((m) => m.name.startsWith('vsculpt:')).map((m) => `${m.name.slice(8)}@${Math.round(m.startTime)}`).join(' '));
   for (let i = 0; i < 3; i++) {
     await new Promise((r) => setTimeout(r, 2000));
     await page.reload({ waitUntil: 'commit' });
-    console.log('warm local', await page.evaluate(firstPicture), await marks());
+    console.log('warm local', await page.evaluate(firstPicture), await pageMarks());
   }
   const progs = await page.evaluate(() => window.vsculpt.view.renderer.info.programs.map(p => [p.name, p.cacheKey.slice(0, 120)]));
   console.log('programs', progs.length); for (const p of progs) console.log('  ', p[0], '|', p[1]);
