@@ -1284,10 +1284,10 @@ $('enter-vr').addEventListener('click', () => {
 
 /** The first picture's shader programs compile while the design is on its way (once: they stay cached). */
 let prewarmed = false;
-function prewarmOnce() {
+function prewarmOnce(options) {
   if (prewarmed) return;
   prewarmed = true;
-  perf.prewarm = view.prewarm().then(() => {
+  perf.prewarm = view.prewarm(options).then(() => {
     perf.prewarmedAt = performance.now();
     mark('prewarmed');
   });
@@ -1302,17 +1302,17 @@ const link = token
       onMessage,
       onFrame,
       onStatus: status,
+      // The first picture's programs compile while the design is on its way; a warm visit, whose
+      // kept geometry is drawn before any hello is answered, also the plain ones it draws, and
+      // draws them once (view.prewarm).
       onHello: () => {
         mark('hello');
-        prewarmOnce();
+        prewarmOnce({ plain: link.cacheUse.replayed > 0 });
       },
       // The last visit's shape, drawn at once (geometry-cache.js); `?geometry_cache=0` joins without it.
       cache: params.get('geometry_cache') === '0' ? null : new GeometryCache(),
     })
   : { send: () => null, open: false };
-// The studio program compiles now, while the link opens and the kept geometry is read: a warm
-// visit draws that geometry before any hello is answered, so the compile must not wait for one.
-if (token) prewarmOnce();
 if (!token) {
   $('shell-title').textContent = 'vsculpt';
   $('shell-stage').innerHTML =

@@ -124,22 +124,25 @@ export class View {
    * compile where it has one (`compileAsync`, KHR_parallel_shader_compile).
    * The programs are found again by their cache keys (the material's kind
    * and options, the attributes, the lights), not by the material object.
-   * Resolves when they are compiled.
+   * Resolves when they are compiled. `plain: false` compiles the studio
+   * program alone and draws nothing (a cold visit: measured, the plain
+   * programs and the draw then only delayed the demo's cold picture).
    */
-  prewarm() {
+  prewarm({ plain = true } = {}) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, 0, 1, 0, 0, 0, 1, 0], 3));
     g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
     const shaded = this.studio.light(new THREE.MeshStandardMaterial({ side: THREE.DoubleSide }));
     // The plain programs a warm visit's first picture also draws (from the geometry cache, before
     // the snapshot): a curve's comb (lines), a body's iso-lines (lines with vertex colours), seams.
-    const plain = [new THREE.LineBasicMaterial(), new THREE.LineBasicMaterial({ vertexColors: true }), new THREE.MeshBasicMaterial()];
+    const lines = [new THREE.LineBasicMaterial(), new THREE.LineBasicMaterial({ vertexColors: true }), new THREE.MeshBasicMaterial()];
     const probes = new THREE.Scene();
     // (A program's key depends on the attributes drawn: only the iso-lines' probe has colours.)
     const coloured = new THREE.BufferGeometry();
     coloured.setAttribute('position', g.getAttribute('position'));
     coloured.setAttribute('color', new THREE.Float32BufferAttribute([1, 1, 1, 1, 1, 1, 1, 1, 1], 3));
-    probes.add(new THREE.Mesh(g, shaded), new THREE.LineSegments(g, plain[0]), new THREE.LineSegments(coloured, plain[1]), new THREE.Mesh(g, plain[2]));
+    probes.add(new THREE.Mesh(g, shaded));
+    if (plain) probes.add(new THREE.LineSegments(g, lines[0]), new THREE.LineSegments(coloured, lines[1]), new THREE.Mesh(g, lines[2]));
     // The scene's lights (copies): the programs' keys count them, for the compile and for the draw.
     for (const light of this.scene.children.filter((o) => o.isLight)) probes.add(light.clone());
     const done = () => {
@@ -147,7 +150,7 @@ export class View {
       // pipeline for this canvas at its first draw (a few hundred ms on SwiftShader, even when
       // the browser's program cache made the link itself quick); the next frame clears it.
       try {
-        this.renderer.render(probes, this.camera);
+        if (plain) this.renderer.render(probes, this.camera);
       } catch (e) {
         console.warn('shader prewarm draw failed', e);
       }
