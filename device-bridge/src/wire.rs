@@ -169,6 +169,7 @@ impl Wire for ProtocolWire {
             client_name: CLIENT_NAME.to_owned(),
             client_kind: ClientKind::Bridge,
             geometry_first: false,
+            cached_geometry: None,
         })
     }
 

@@ -68,6 +68,7 @@ async fn watch_hand(addr: std::net::SocketAddr, token: &str) -> mpsc::UnboundedR
             client_name: "watcher".into(),
             client_kind: ClientKind::Tool,
             geometry_first: false,
+            cached_geometry: None,
         },
     };
     tx.send(Message::text(serde_json::to_string(&hello).unwrap()))

@@ -51,6 +51,15 @@ pub enum ClientMessage {
         /// once, in binary, instead of twice (JSON and binary).
         #[serde(default)]
         geometry_first: bool,
+        /// The geometry this client holds from an earlier visit (optional;
+        /// only with `geometry_first`): the `geometry` hash a `welcome` named
+        /// when the client last received a compact join of this design. When
+        /// it equals the hash of the frames the join would send now, the
+        /// server skips them (the `welcome` says `geometry_cached`) and the
+        /// client draws the frames it kept; any other value (stale, forged,
+        /// malformed) gets the frames as usual.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        cached_geometry: Option<String>,
     },
     /// List the designs (answered with `designs`, carrying `req`).
     ListDesigns,

@@ -23,6 +23,18 @@ pub enum ServerMessage {
         design: u64,
         /// The server's protocol version.
         protocol: u32,
+        /// The compact join only (`geometry_first`): the SHA-256, in lower-case
+        /// hex, of the geometry frames this join carries (each part's frame
+        /// flagged as the snapshot's shape, inflated, in the order sent, each
+        /// preceded by its length as a little-endian u32). It changes whenever
+        /// any part's frame changes. A client may keep those frames under this
+        /// name and offer it in a later hello's `cached_geometry`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        geometry: Option<String>,
+        /// The hello's `cached_geometry` equals `geometry`: the join's frames
+        /// are not sent; the client draws the ones it kept (absent: false).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        geometry_cached: bool,
     },
     /// A request succeeded.
     Ack {

@@ -88,6 +88,7 @@ async fn first_position_icon(url: &str) -> [f64; 3] {
             client_name: "probe".into(),
             client_kind: ClientKind::Tool,
             geometry_first: false,
+            cached_geometry: None,
         },
     };
     tx.send(tokio_tungstenite::tungstenite::Message::text(

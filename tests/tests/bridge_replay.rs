@@ -227,6 +227,7 @@ async fn frames_before_pong(url: &str) -> bool {
             client_name: "e2e-device".into(),
             client_kind: ClientKind::Bridge,
             geometry_first: false,
+            cached_geometry: None,
         },
     };
     tx.send(Message::text(serde_json::to_string(&hello).unwrap()))

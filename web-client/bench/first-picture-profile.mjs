@@ -2,7 +2,10 @@
 // demo's viewer page (cold, then three warm reloads, on loopback), lists the
 // shader programs compiled by the first picture, then profiles one more warm
 // reload with the DevTools CPU profiler and prints the self time per
-// function and per script, and the page's resource timings.
+// function and per script, and the page's resource timings. Each warm reload
+// (2 s after the previous picture) prints the page's own marks (vsculpt:*, ms
+// since navigation start: module evaluation, hello, welcome, the first frame
+// — from the geometry cache on a warm visit —, the first redraw, the picture).
 //
 //   VSCULPT_SERVER_BIN=../target/release/vsculpt-server node bench/first-picture-profile.mjs
 import { mkdtempSync, rmSync } from 'node:fs';
@@ -18,7 +21,12 @@ try {
   const page = await context.newPage();
   await page.goto(server.viewer, { waitUntil: 'commit' });
   console.log('cold local', await page.evaluate(firstPicture));
-  for (let i = 0; i < 3; i++) { await page.reload({ waitUntil: 'commit' }); console.log('warm local', await page.evaluate(firstPicture)); }
+  const pageMarks = () => page.evaluate(() => performance.getEntriesByType('mark').filter((m) => m.name.startsWith('vsculpt:')).map((m) => `${m.name.slice(8)}@${Math.round(m.startTime)}`).join(' '));
+  for (let i = 0; i < 3; i++) {
+    await new Promise((r) => setTimeout(r, 2000));
+    await page.reload({ waitUntil: 'commit' });
+    console.log('warm local', await page.evaluate(firstPicture), await pageMarks());
+  }
   const progs = await page.evaluate(() => window.vsculpt.view.renderer.info.programs.map(p => [p.name, p.cacheKey.slice(0, 120)]));
   console.log('programs', progs.length); for (const p of progs) console.log('  ', p[0], '|', p[1]);
   const cdp = await context.newCDPSession(page);

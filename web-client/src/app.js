@@ -14,6 +14,7 @@ import { TessellationWorker } from './tessellate.js';
 import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
+import { GeometryCache } from './geometry-cache.js';
 import { XRSculpt } from './xr.js';
 import { Design, domainOf, relationParts } from './design.js';
 import { PartsView } from './parts-view.js';
@@ -27,6 +28,15 @@ import { Follow } from './follow.js';
 import { Measure } from './measure.js';
 import { Comments } from './comments.js';
 import { MEASURES, isMeasure, isSigned } from './mesh-curvature.js';
+
+/** A named moment of the page's load (performance marks `vsculpt:NAME`, once each), read by bench/first-picture-profile.mjs. */
+const marked = new Set();
+const mark = (name) => {
+  if (marked.has(name)) return;
+  marked.add(name);
+  performance.mark(`vsculpt:${name}`);
+};
+mark('app-evaluating');
 
 const params = new URLSearchParams(location.search);
 const designId = Number(params.get('design') || 1);
@@ -203,6 +213,7 @@ let pictured = false;
 
 /** Full redraw: every part's drawing filled on the main thread, exact bounds, icons rebuilt. */
 function redraw() {
+  mark('first-redraw');
   perf.redraws++;
   partsView.sync(design, { hidden: state.hidden, selected: state.selectedPart });
   networkView.sync(design, state.hidden);
@@ -217,6 +228,7 @@ function redraw() {
   attachGizmo();
   updateCompare();
   comments.update();
+  mark('first-redrawn');
 }
 
 /** The selected part, or undefined. */
@@ -370,6 +382,7 @@ function escape(s) {
 }
 
 function onMessage(msg) {
+  mark(msg.type);
   if (msg.type === 'ack' || msg.type === 'error') {
     networkView.answered(msg.req, msg.type === 'error');
     bodyView.answered(msg);
@@ -500,6 +513,7 @@ function setHistory(canUndo, canRedo) {
 }
 
 function onFrame(f) {
+  mark('first-frame');
   state.frames++;
   if (f.kind === 'body') {
     bodyView.apply(f, design.parts.get(f.part));
@@ -578,6 +592,7 @@ function partShown(id, seq, tess, g) {
   if (seq <= (partShownSeq.get(id) || 0)) return;
   partShownSeq.set(id, seq);
   perf.shown++;
+  mark('first-shown');
   pictured = true;
   const part = design.parts.get(id);
   if (tess && part) partsView.surfaceFilled(id, tess, g);
@@ -1269,15 +1284,34 @@ $('enter-vr').addEventListener('click', () => {
 
 /** The first picture's shader programs compile while the design is on its way (once: they stay cached). */
 let prewarmed = false;
-function prewarmOnce() {
+function prewarmOnce(options) {
   if (prewarmed) return;
   prewarmed = true;
-  perf.prewarm = view.prewarm().then(() => (perf.prewarmedAt = performance.now()));
+  perf.prewarm = view.prewarm(options).then(() => {
+    perf.prewarmedAt = performance.now();
+    mark('prewarmed');
+  });
 }
 
 // Without a token this page is the bare server address: say what to open instead of failing to join.
 const link = token
-  ? new Link({ design: designId, token, name: params.get('name') || 'browser', onMessage, onFrame, onStatus: status, onHello: prewarmOnce })
+  ? new Link({
+      design: designId,
+      token,
+      name: params.get('name') || 'browser',
+      onMessage,
+      onFrame,
+      onStatus: status,
+      // The first picture's programs compile while the design is on its way; a warm visit, whose
+      // kept geometry is drawn before any hello is answered, also the plain ones it draws, and
+      // draws them once (view.prewarm).
+      onHello: () => {
+        mark('hello');
+        prewarmOnce({ plain: link.cacheUse.replayed > 0 });
+      },
+      // The last visit's shape, drawn at once (geometry-cache.js); `?geometry_cache=0` joins without it.
+      cache: params.get('geometry_cache') === '0' ? null : new GeometryCache(),
+    })
   : { send: () => null, open: false };
 if (!token) {
   $('shell-title').textContent = 'vsculpt';
@@ -1301,6 +1335,7 @@ view.renderer.setAnimationLoop(() => {
   // The shell stays until the first picture is framed (view.settle).
   if (!shellDone && pictured && (view.fitted || !view.boundingSphere())) {
     perf.firstPicture = performance.now();
+    mark('first-picture');
     dismissShell();
     // Where the browser has a headset, the VR controllers' code comes now, after the picture.
     xr.prefetch();
@@ -1308,3 +1343,4 @@ view.renderer.setAnimationLoop(() => {
 });
 
 window.vsculpt = { state, design, follow, measure, comments, dsmView, dsmEdit, addDsm, send, view, partsView, networkView, bodyView, icons, pick, select, selectPart, createIcon, finishCurve, addPlane, addCurve, gizmoAttached: () => !!gizmo.object, link, xr, perf, toast, compareWith, stopCompare };
+mark('app-evaluated');

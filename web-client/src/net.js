@@ -26,9 +26,22 @@ export const REFUSALS = {
  */
 export const LINK_QUERY = 'drag_stream=1&deflate=1&pace=1&mesh_delta=1';
 
+/** How long the first hello waits for the geometry cache's answer (an IndexedDB read takes a few ms). */
+const CACHE_WAIT_MS = 500;
+
+/** `p`, or null after `ms`. */
+const withTimeout = (p, ms) => Promise.race([p, new Promise((resolve) => setTimeout(() => resolve(null), ms))]);
+
 export class Link {
-  constructor({ design, token, name, onMessage, onFrame, onStatus, onHello = () => {} }) {
+  /**
+   * `cache` (a GeometryCache, or null): this design's frames kept from the last visit are drawn
+   * at once, their name goes in the first hello, and each compact join's frames are kept for the next.
+   */
+  constructor({ design, token, name, onMessage, onFrame, onStatus, onHello = () => {}, cache = null }) {
     this.design = design;
+    this.cache = cache;
+    /** What the geometry cache did on this page: frames drawn from it, the name offered, whether the server confirmed it (null until the welcome). */
+    this.cacheUse = { replayed: 0, offered: null, confirmed: null, saved: null };
     /** Called each time a hello has been sent (the page prepares its first picture meanwhile). */
     this.onHello = onHello;
     this.token = token;
@@ -42,6 +55,17 @@ export class Link {
     this.closedByServer = false;
     this.refusal = null;
     this.welcomed = false;
+    this.connections = 0;
+    // The kept frames are drawn as soon as they are read (the first connection's frame path, so a
+    // mesh frame is the base of later deltas as if it had come now); the first hello waits for them.
+    this.cached = (cache ? withTimeout(cache.load(design), CACHE_WAIT_MS) : Promise.resolve(null)).then((entry) => {
+      if (!entry || this.welcomed) return null;
+      let read = 0;
+      for (const f of entry.frames) if (this.replay(f.slice(0))) read++;
+      this.cacheUse.replayed = read;
+      // A frame that cannot be read is not offered: the server then sends them all, and they replace what was drawn.
+      return read === entry.frames.length ? entry : null;
+    });
     this.connect();
   }
 
@@ -63,7 +87,12 @@ export class Link {
     ws.binaryType = 'arraybuffer';
     this.ws = ws;
     this.onStatus('connecting', 'connecting to the server…');
-    const hello = () => {
+    const first = this.connections++ === 0;
+    const hello = async () => {
+      // The first hello offers the frames drawn from the cache; a reconnect joins afresh.
+      const kept = first ? await this.cached : null;
+      if (ws.readyState !== WebSocket.OPEN) return;
+      this.cacheUse.offered = kept ? kept.hash : null;
       ws.send(JSON.stringify({
         type: 'hello',
         protocol: PROTOCOL_VERSION,
@@ -73,11 +102,14 @@ export class Link {
         client_kind: 'browser',
         // The compact join: the shape first, in binary, then a snapshot without points.
         geometry_first: true,
+        ...(kept ? { cached_geometry: kept.hash } : {}),
       }));
       this.onHello();
     };
     if (ws.readyState === WebSocket.OPEN) hello();
     else ws.onopen = hello;
+    // The join's frames (between a welcome that names them and the snapshot), kept for the next visit.
+    let joinFrames = null;
     const text = (data) => {
       let msg;
       try {
@@ -87,6 +119,8 @@ export class Link {
         return;
       }
       if (msg.type === 'welcome') {
+        if (this.cacheUse.offered && this.cacheUse.confirmed === null) this.cacheUse.confirmed = !!msg.geometry_cached;
+        joinFrames = this.cache && msg.geometry && !msg.geometry_cached ? { hash: msg.geometry, frames: [] } : null;
         this.backoff = 250;
         this.onStatus('connected', `connected as ${msg.access}`);
       }
@@ -95,16 +129,28 @@ export class Link {
         this.refusal = msg.code;
       }
       if (msg.type === 'welcome') this.welcomed = true;
+      if (msg.type === 'snapshot' && joinFrames) {
+        const kept = joinFrames;
+        joinFrames = null;
+        this.cacheUse.saved = this.cache.save(this.design, kept.hash, kept.frames).then(() => kept.hash);
+      }
       this.onMessage(msg);
     };
+    /** Takes one binary frame in; false when it could not be read. */
     const binary = (buf) => {
+      // A copy: decoding may hand the frame's buffer on (to the tessellation worker).
+      if (joinFrames) joinFrames.frames.push(buf.slice(0));
       try {
         const f = meshes.take(stream.take(decodeFrame(buf)));
         if (f) this.onFrame(f);
+        return true;
       } catch (e) {
         this.onStatus('error', `bad geometry frame: ${e.message}`);
+        return false;
       }
     };
+    /** Draws a frame kept from an earlier visit, as if this connection had received it. */
+    this.replay = binary;
     // A deflated message (deflate=1) inflates asynchronously: it and every
     // message after it wait in `inbox`, so all are handled in the order
     // they came.

@@ -109,36 +109,60 @@ export class View {
 
   /** The sphere around the drawn bounds, or null. */
   /**
-   * Compiles the first picture's costly shader program (the studio-lit
-   * shaded surface, the one program every design's first picture draws)
-   * while the design is still on its way, so that the first frame drawn
-   * finds it ready: on a software renderer it takes a few hundred
-   * milliseconds, which would otherwise come after the last byte of the
-   * design. Only this probe is compiled (in a scene of their own, with this scene's
-   * lights, which the programs' keys depend on), not the whole scene,
-   * whose hidden helpers the first picture never draws. Uses the browser's
-   * parallel compile where it has one (`compileAsync`,
-   * KHR_parallel_shader_compile), so the page stays responsive. The
-   * programs are found again by their cache keys (the material's kind and
-   * options, the lights), not by the material object. Resolves when they
-   * are compiled.
+   * Compiles the first picture's shader programs before there is anything
+   * to draw (the page calls it as its code finishes loading): the
+   * studio-lit shaded surface, the one costly program every design's first
+   * picture draws, and the plain programs a warm visit's first picture
+   * also draws from the geometry cache (a curve's comb, a body's coloured
+   * iso-lines, seams). On a software renderer each takes tens to a few
+   * hundred milliseconds, which would otherwise come after the geometry.
+   * Only these probes are compiled (in a scene of their own with copies of
+   * this scene's lights, which the programs' keys count), not the whole
+   * scene, whose hidden helpers the first picture never draws; then drawn
+   * once under the page shell, since a software renderer builds a
+   * program's pipeline at its first draw. Uses the browser's parallel
+   * compile where it has one (`compileAsync`, KHR_parallel_shader_compile).
+   * The programs are found again by their cache keys (the material's kind
+   * and options, the attributes, the lights), not by the material object.
+   * Resolves when they are compiled. `plain: false` compiles the studio
+   * program alone and draws nothing (a cold visit: measured, the plain
+   * programs and the draw then only delayed the demo's cold picture).
    */
-  prewarm() {
+  prewarm({ plain = true } = {}) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, 0, 1, 0, 0, 0, 1, 0], 3));
     g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
     const shaded = this.studio.light(new THREE.MeshStandardMaterial({ side: THREE.DoubleSide }));
+    // The plain programs a warm visit's first picture also draws (from the geometry cache, before
+    // the snapshot): a curve's comb (lines), a body's iso-lines (lines with vertex colours), seams.
+    const lines = [new THREE.LineBasicMaterial(), new THREE.LineBasicMaterial({ vertexColors: true }), new THREE.MeshBasicMaterial()];
     const probes = new THREE.Scene();
+    // (A program's key depends on the attributes drawn: only the iso-lines' probe has colours.)
+    const coloured = new THREE.BufferGeometry();
+    coloured.setAttribute('position', g.getAttribute('position'));
+    coloured.setAttribute('color', new THREE.Float32BufferAttribute([1, 1, 1, 1, 1, 1, 1, 1, 1], 3));
     probes.add(new THREE.Mesh(g, shaded));
+    if (plain) probes.add(new THREE.LineSegments(g, lines[0]), new THREE.LineSegments(coloured, lines[1]), new THREE.Mesh(g, lines[2]));
+    // The scene's lights (copies): the programs' keys count them, for the compile and for the draw.
+    for (const light of this.scene.children.filter((o) => o.isLight)) probes.add(light.clone());
     const done = () => {
+      // One draw of the probe, under the page shell: a software renderer builds the program's
+      // pipeline for this canvas at its first draw (a few hundred ms on SwiftShader, even when
+      // the browser's program cache made the link itself quick); the next frame clears it.
+      try {
+        if (plain) this.renderer.render(probes, this.camera);
+      } catch (e) {
+        console.warn('shader prewarm draw failed', e);
+      }
       this.studio.materials.delete(shaded);
       g.dispose();
+      coloured.dispose();
       // The materials are not disposed: that would release the programs
       // (three counts each program's users) before the parts take them.
     };
     let compiled;
     try {
-      compiled = this.renderer.compileAsync ? this.renderer.compileAsync(probes, this.camera, this.scene) : Promise.resolve(this.renderer.compile(probes, this.camera, this.scene));
+      compiled = this.renderer.compileAsync ? this.renderer.compileAsync(probes, this.camera) : Promise.resolve(this.renderer.compile(probes, this.camera));
     } catch (e) {
       compiled = Promise.reject(e);
     }

@@ -116,6 +116,8 @@ pub struct Hello {
     pub name: String,
     /// The compact join: the shape first, in binary; snapshots without points.
     pub geometry_first: bool,
+    /// The name of the join geometry the client kept from an earlier visit.
+    pub cached_geometry: Option<String>,
 }
 
 /// A decoded client message (after the hello).
@@ -199,6 +201,7 @@ pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
             design,
             client_name,
             geometry_first,
+            cached_geometry,
             ..
         } => {
             if protocol != wire::PROTOCOL_VERSION {
@@ -215,6 +218,7 @@ pub fn decode_hello(text: &str) -> Result<Hello, WireError> {
                 design,
                 name: client_name,
                 geometry_first,
+                cached_geometry,
             })
         }
         _ => Err(WireError::handshake("the first message must be a hello")),
@@ -587,13 +591,22 @@ pub(crate) fn text(m: &ServerMessage) -> Utf8Bytes {
     serde_json::to_string(m).unwrap_or_default().into()
 }
 
-/// `welcome`.
-pub fn welcome(client: u64, design: DesignId, role: Role) -> Utf8Bytes {
+/// `welcome`; `geometry` names a compact join's frames, `geometry_cached`
+/// says the client kept them (so they are not sent).
+pub fn welcome(
+    client: u64,
+    design: DesignId,
+    role: Role,
+    geometry: Option<String>,
+    geometry_cached: bool,
+) -> Utf8Bytes {
     text(&ServerMessage::Welcome {
         client_id: client,
         access: access(role),
         design,
         protocol: wire::PROTOCOL_VERSION,
+        geometry,
+        geometry_cached,
     })
 }
 

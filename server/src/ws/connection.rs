@@ -5,6 +5,7 @@
 //! edit) gets an error reply with a stable code; the connection and the
 //! server stay up and the design is unchanged.
 
+use super::join_geometry;
 use super::rate::{self, RateLimiter};
 use super::writer::{self, Out};
 use crate::app::{AppState, Caller};
@@ -211,15 +212,28 @@ pub async fn run(mut socket: WebSocket, state: AppState, query: HashMap<String, 
     let deflate = query
         .get("deflate")
         .is_some_and(|v| v == "1" || v == "true");
-    let welcome = socket
-        .send(Message::Text(convert::welcome(client, design, role)))
-        .await;
     let mut sent = std::collections::BTreeMap::new();
+    // The join's frames and their name; not sent again to a client that kept
+    // the very frames that name (its browser's geometry cache).
+    let geometry = compact.then(|| join_geometry::join_geometry(&mut joined, &mut sent, deflate));
+    let cached = geometry
+        .as_ref()
+        .is_some_and(|g| hello.cached_geometry.as_deref() == Some(g.hash.as_str()));
+    let welcome = socket
+        .send(Message::Text(convert::welcome(
+            client,
+            design,
+            role,
+            geometry.as_ref().map(|g| g.hash.clone()),
+            cached,
+        )))
+        .await;
     let mut shape = Ok(());
     let mut joined_bytes = 0u64;
-    if welcome.is_ok() && compact {
-        for frame in writer::snapshot_frames(&mut joined, &mut sent, deflate, &state.metrics) {
+    if let (Ok(()), Some(g), false) = (&welcome, geometry, cached) {
+        for frame in g.messages {
             joined_bytes += frame.len() as u64;
+            state.metrics.frame_sent(frame.len());
             shape = socket.send(Message::Binary(frame)).await;
             if shape.is_err() {
                 break;

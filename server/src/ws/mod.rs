@@ -5,6 +5,7 @@
 //! [`pace`]: a send rate matched to a client's link).
 
 pub mod connection;
+pub mod join_geometry;
 pub mod pace;
 pub mod rate;
 pub mod writer;

@@ -161,30 +161,6 @@ async fn ev_send(sink: &mut Sink, ev: &DesignEvent, compact: bool) -> Result<(),
     }
 }
 
-/// Every part's current frame flagged as the snapshot's shape (the compact
-/// join sends these before the snapshot); records them as sent.
-pub fn snapshot_frames(
-    joined: &mut Joined,
-    sent: &mut BTreeMap<u64, u64>,
-    deflate: bool,
-    metrics: &Metrics,
-) -> Vec<Bytes> {
-    let set = joined.geometry.borrow_and_update().clone();
-    set.parts
-        .iter()
-        .map(|(part, g)| {
-            sent.insert(*part, g.rev);
-            let flagged = Bytes::from(vsculpt_protocol::frame::with_flags(
-                &g.frame,
-                vsculpt_protocol::frame::FLAG_SNAPSHOT,
-            ));
-            let bytes = g.snapshot_deflated.pick(&flagged, deflate);
-            metrics.frame_sent(bytes.len());
-            bytes
-        })
-        .collect()
-}
-
 /// How geometry reaches one client.
 #[derive(Debug)]
 pub struct Delivery {

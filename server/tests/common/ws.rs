@@ -59,6 +59,15 @@ pub fn hello(design: u64, token: &str, name: &str) -> Value {
     })
 }
 
+/// Reads the next message as it came; panics when none comes within WAIT or the socket fails.
+pub async fn next_message(ws: &mut Stream) -> Message {
+    tokio::time::timeout(WAIT, ws.next())
+        .await
+        .expect("no message")
+        .expect("closed")
+        .expect("socket error")
+}
+
 /// Reads the next message (text parsed as JSON, binary decoded as a frame).
 pub async fn next(ws: &mut Stream) -> Got {
     loop {
@@ -274,6 +283,19 @@ impl Client {
                 _ => {}
             }
         }
+    }
+
+    /// Creates a load icon at (u, v) on `part` and grabs it for a drag: its id.
+    pub async fn grab_load_icon(&mut self, part: u64, u: f64, v: f64) -> u64 {
+        let created = self
+            .request(json!({"type": "create_icon", "part": part,
+                "spec": {"anchor": {"kind": "point", "u": u, "v": v}, "role": {"kind": "load"}}}))
+            .await;
+        assert_eq!(created["type"], "ack", "{created}");
+        let icon = created["icon"].as_u64().unwrap();
+        self.ok(json!({"type": "drag_start", "part": part, "icon": icon}))
+            .await;
+        icon
     }
 
     /// `request` that must be acked.

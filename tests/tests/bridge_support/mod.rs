@@ -130,6 +130,7 @@ pub async fn join(
             client_name: "e2e".into(),
             client_kind: ClientKind::Tool,
             geometry_first: false,
+            cached_geometry: None,
         },
     };
     tx.send(Message::text(serde_json::to_string(&hello).unwrap()))
@@ -164,6 +165,7 @@ pub async fn watch_frames(addr: SocketAddr, token: &str) -> mpsc::UnboundedRecei
             client_name: "e2e-frames".into(),
             client_kind: ClientKind::Tool,
             geometry_first: false,
+            cached_geometry: None,
         },
     };
     tx.send(Message::text(serde_json::to_string(&hello).unwrap()))
