@@ -325,12 +325,14 @@ fn a_bar_through_the_spool_s_waist_unites_closed_with_the_volume_of_both_less_th
     let sigma = bar_volume * (f * (1.0 - f) / n as f64).sqrt();
     let expected = spool_volume + bar_volume - overlap;
     assert!(f > 0.2 && f < 0.8, "the bar is not through the waist: {f}");
-    // Known limit: coarser, the weld fails on this union — at 4 samples per
-    // span two edges stay in two triangles running the same way, at 3 the
-    // surface closes with the wrong genus (χ = −2): the seam's two sides,
-    // each a chord polyline of the other body, zigzag about each other by
-    // more than they can be put in one order (kernel/README.md, "Union").
-    for per_span in [5, 6, 8] {
+    // At 3 samples per span the bar's samples along its length (1.33
+    // apart) straddle the waist (1.4 across): its sides keep a band through
+    // the spool, so the union refuses (too coarse) rather than give a torus.
+    assert!(matches!(
+        union(&[spool.clone(), bar.clone()], 3),
+        Err(BodyError::TooCoarse { per_span: 3, .. })
+    ));
+    for per_span in [4, 5, 6, 8] {
         // The spool's own tessellation error at this sampling (the bar's
         // is zero: planar faces).
         let alone = union(std::slice::from_ref(&spool), per_span).unwrap();
@@ -347,4 +349,91 @@ fn a_bar_through_the_spool_s_waist_unites_closed_with_the_volume_of_both_less_th
         );
         assert!(mesh.body.contains(&0) && mesh.body.contains(&1));
     }
+}
+
+/// A box of sides `sides` centred at `centre`, turned by `angle` about z
+/// and then `tilt` about x.
+fn turned_bar(centre: DVec3, sides: [f64; 3], angle: f64, tilt: f64) -> BSplineVolume {
+    let turn = glam::DMat3::from_rotation_x(tilt) * glam::DMat3::from_rotation_z(angle);
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z]
+        .map(|a| turn * a)
+        .into_iter()
+        .zip(sides)
+        .map(|(a, s)| a * s)
+        .collect::<Vec<_>>();
+    let origin = centre - (axes[0] + axes[1] + axes[2]) / 2.0;
+    BSplineVolume::affine(origin, [axes[0], axes[1], axes[2]], [1, 1, 1], [2, 2, 2]).unwrap()
+}
+
+#[test]
+fn bars_through_the_spool_at_every_sampling_unite_closed_or_are_refused_as_too_coarse() {
+    // Seeded bars through the waist, moved and turned; every sampling from
+    // 2 to 10 per span gives a closed, consistently oriented surface of
+    // genus 0 whose volume is the two bodies' less their overlap (Monte
+    // Carlo), or says the sampling is too coarse — never a broken mesh.
+    let spool = spool().unwrap();
+    let spool_volume = interior::volume(&spool);
+    let inv = Inverter::new(&spool);
+    let tol = 1e-9 * 3.0;
+    let mut rng = Rng(0x5ee0_ba25);
+    let mut refused = Vec::new();
+    for case in 0..4 {
+        let centre = DVec3::new(
+            0.2 * (rng.next() - 0.5),
+            0.2 * (rng.next() - 0.5),
+            0.3 * (rng.next() - 0.5),
+        );
+        let sides = [0.3 + 0.3 * rng.next(), 4.0, 0.4 + 0.4 * rng.next()];
+        let (angle, tilt) = (1.2 * (rng.next() - 0.5), 0.3 * (rng.next() - 0.5));
+        let bar = turned_bar(centre, sides, angle, tilt);
+        let bar_volume = sides[0] * sides[1] * sides[2];
+        let n = 8000;
+        let hits = (0..n)
+            .filter(|_| {
+                let uvw = [rng.next(), rng.next(), rng.next()];
+                inside(&inv, bar.point(uvw[0], uvw[1], uvw[2]), tol)
+            })
+            .count();
+        let f = hits as f64 / n as f64;
+        assert!(
+            f > 0.1 && f < 0.9,
+            "case {case}: not through the waist ({f})"
+        );
+        let sigma = bar_volume * (f * (1.0 - f) / n as f64).sqrt();
+        let expected = spool_volume + bar_volume * (1.0 - f);
+        for per_span in 2..=10 {
+            match union(&[spool.clone(), bar.clone()], per_span) {
+                Ok(mesh) => {
+                    assert_eq!(
+                        closed_manifold(&mesh),
+                        2,
+                        "case {case}, {per_span}: {:?}",
+                        mesh.weld
+                    );
+                    let alone = union(std::slice::from_ref(&spool), per_span).unwrap();
+                    let chord = (alone.enclosed_volume() - spool_volume).abs();
+                    let got = mesh.enclosed_volume();
+                    assert!(
+                        (got - expected).abs() < 4.0 * sigma + 2.0 * chord,
+                        "case {case}, {per_span}: volume {got} against {expected} (σ {sigma}, chord {chord})"
+                    );
+                }
+                Err(BodyError::TooCoarse {
+                    per_span: p,
+                    reason,
+                }) => {
+                    assert_eq!(p, per_span);
+                    println!("case {case}, {per_span}: refused: {reason}");
+                    refused.push((case, per_span));
+                }
+                Err(e) => panic!("case {case}, {per_span}: {e}"),
+            }
+        }
+    }
+    // Known limit (kernel/README.md, "Union"): some turned bars are refused
+    // at fine samplings too, where a bar's edge pokes through a spool
+    // triangle none of whose samples lies in the bar. Never a broken
+    // mesh; at most a quarter of the 36 refused.
+    assert!(refused.len() <= 9, "refused too often: {refused:?}");
+    println!("refused as too coarse: {refused:?}");
 }

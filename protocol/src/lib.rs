@@ -46,6 +46,7 @@ pub mod frame;
 pub mod limits;
 pub mod mesh_delta;
 pub mod mesh_frame;
+pub mod mesh_patch;
 pub mod network;
 pub mod parts;
 pub mod schema;

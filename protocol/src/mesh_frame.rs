@@ -118,6 +118,40 @@ pub(crate) fn read_records(bytes: &[u8], at: usize, (v, t): (usize, usize), ib: 
     )
 }
 
+/// Position `p` quantised on the cube of `origin` and `step` (as a frame
+/// stores them: the f32 origin and step): round((p − origin) / step) per
+/// axis, clamped to 0 … 65 535. With `strict`, a position more than a step
+/// outside the cube is refused (`out_of_range`) instead of clamped.
+pub fn quantise_position(
+    origin: [f32; 3],
+    step: f32,
+    p: [f64; 3],
+    strict: bool,
+) -> Result<[u16; 3], ProtocolError> {
+    let mut q = [0u16; 3];
+    if step == 0.0 {
+        return Ok(q);
+    }
+    for a in 0..3 {
+        let t = (p[a] - origin[a] as f64) / step as f64;
+        if strict && !(-1.0..=65536.0).contains(&t) {
+            return Err(ProtocolError::new(
+                ErrorCode::OutOfRange,
+                "mesh position outside the frame's cube",
+            ));
+        }
+        q[a] = t.round().clamp(0.0, 65535.0) as u16;
+    }
+    Ok(q)
+}
+
+/// Normal `n` as i16 snorm of its unit vector (zero stays zero).
+pub fn quantise_normal(n: [f64; 3]) -> [i16; 3] {
+    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let s = if l > 0.0 { 32767.0 / l } else { 0.0 };
+    n.map(|c| (c * s).round().clamp(-32767.0, 32767.0) as i16)
+}
+
 /// As many normals as positions, all finite.
 fn check_vertices(positions: &[[f64; 3]], normals: &[[f64; 3]]) -> Result<(), ProtocolError> {
     if positions.len() != normals.len() {
@@ -212,24 +246,10 @@ impl MeshFrame {
         }
         let origin = origin.map(|x| x as f32);
         let step = (extent / 65535.0) as f32;
-        let mut quantised = Vec::with_capacity(positions.len());
-        for p in positions {
-            let mut q = [0u16; 3];
-            for a in 0..3 {
-                if step == 0.0 {
-                    continue;
-                }
-                let t = (p[a] - origin[a] as f64) / step as f64;
-                if strict && !(-1.0..=65536.0).contains(&t) {
-                    return Err(ProtocolError::new(
-                        ErrorCode::OutOfRange,
-                        "mesh position outside the frame's cube",
-                    ));
-                }
-                q[a] = t.round().clamp(0.0, 65535.0) as u16;
-            }
-            quantised.push(q);
-        }
+        let quantised = positions
+            .iter()
+            .map(|p| quantise_position(origin, step, *p, strict))
+            .collect::<Result<Vec<_>, _>>()?;
         let frame = Self {
             design: ids.0,
             part: ids.1,
@@ -238,14 +258,7 @@ impl MeshFrame {
             origin,
             step,
             positions: quantised,
-            normals: normals
-                .iter()
-                .map(|n| {
-                    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                    let s = if l > 0.0 { 32767.0 / l } else { 0.0 };
-                    n.map(|c| (c * s).round().clamp(-32767.0, 32767.0) as i16)
-                })
-                .collect(),
+            normals: normals.iter().map(|n| quantise_normal(*n)).collect(),
             triangles: triangles.to_vec(),
         };
         frame.check()?;

@@ -16,13 +16,22 @@
 //!   body's display re-evaluated; the bound mesh's vertices in the point's
 //!   support recomputed with the normals around them; the document
 //!   synchronised), then `DesignModel::geometry` of every part it moved
-//!   (the body frame and the DSM part's mesh frame, the bytes sent);
-//! * `lattice_move/before` — the same path with every vertex and normal
-//!   recomputed (`set_ffd_full_recompute`) and every proof made afresh
-//!   (`body_proof::forget`): the server as it was before locality.
+//!   (the body frame and the DSM part's mesh frame, kept encoded and
+//!   patched at the moved vertices, with the mesh delta a `mesh_delta=1`
+//!   client gets: `server/src/design/ffd_frame.rs`);
+//! * `lattice_move/whole_frame` — the same with the DSM mesh frame encoded
+//!   afresh at every move and compared with the one before for a delta (the
+//!   server before the frame was kept);
+//! * `lattice_move/before` — every vertex and normal recomputed
+//!   (`set_ffd_full_recompute`, which also drops the kept frame: a whole
+//!   encoding) and every proof made afresh (`body_proof::forget`): the
+//!   server as it was before locality.
+//!
+//! Each variant prints the bytes a delta client gets per move.
 //!
 //! Run: `cargo bench -p vsculpt-server --bench ffd`.
 
+use axum::body::Bytes;
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use std::hint::black_box;
@@ -31,14 +40,26 @@ use vsculpt_protocol::dsm::{DsmData, DsmGroup, DsmOp, DsmPrimitive, DsmPrimitive
 use vsculpt_server::design::body_part::{BodyPart, LatticeDoc, LatticeSelect};
 use vsculpt_server::design::body_proof;
 use vsculpt_server::design::doc::DesignDoc;
-use vsculpt_server::design::dsm_engine::{DsmEngine, DsmPart};
+use vsculpt_server::design::dsm_delta::mesh_delta;
+use vsculpt_server::design::dsm_engine::{DsmEngine, DsmPart, mesh_frame};
 use vsculpt_server::design::edit::{Edit, PartEdit};
 use vsculpt_server::design::ffd_binding::DsmFfds;
 use vsculpt_server::design::model::DesignModel;
 use vsculpt_server::design::part::{PartBody, RelationKind};
 
-/// Cells of the DSM sphere's mesh (≈ 100 000 vertices).
-const CELLS: u32 = 146;
+/// How a bench variant publishes the moved parts.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// Every vertex and proof afresh, the whole frame encoded.
+    Before,
+    /// Locality, the whole frame encoded afresh and compared for a delta.
+    WholeFrame,
+    /// Locality, the frame kept encoded and patched, the delta sent.
+    After,
+}
+
+/// Cells of the DSM sphere's mesh (≥ 100 000 vertices: the grid step is snapped to 2^(k/16), so 146 gives 96 494 since issue 12's lattice grid).
+const CELLS: u32 = 153;
 
 fn sphere() -> DsmPart {
     DsmPart::new(DsmData {
@@ -125,7 +146,7 @@ fn bench(c: &mut Criterion) {
             k += 1;
             let d = if k.is_multiple_of(2) { &doc } else { &moved };
             ffds.sync(d, &dsm).unwrap();
-            black_box(ffds.frame(1, 2, k, true).unwrap().len())
+            black_box(ffds.frame(1, 2, k, true).unwrap().0.len())
         })
     });
     g.finish();
@@ -138,14 +159,20 @@ fn bench(c: &mut Criterion) {
     // proof kept whole).
     let mut g = c.benchmark_group("lattice_move");
     g.sample_size(10);
-    for (name, fresh) in [("before", true), ("after", false)] {
+    for (name, mode) in [
+        ("before", Mode::Before),
+        ("whole_frame", Mode::WholeFrame),
+        ("after", Mode::After),
+    ] {
         let mut m = model();
-        m.set_ffd_full_recompute(fresh);
+        m.set_ffd_full_recompute(mode == Mode::Before);
         let mut k = 0u64;
+        let mut previous: Option<Bytes> = None;
+        let (mut sent, mut whole, mut moves) = (0usize, 0usize, 0usize);
         g.bench_function(name, |b| {
             b.iter(|| {
                 k += 1;
-                if fresh {
+                if mode == Mode::Before {
                     body_proof::forget();
                 }
                 let a = 0.05 * k as f64;
@@ -159,13 +186,33 @@ fn bench(c: &mut Criterion) {
                     })
                     .unwrap();
                 assert!(parts.contains(&1) && parts.contains(&2));
-                let bytes: usize = parts
-                    .iter()
-                    .map(|&p| m.geometry(1, p, k, false).unwrap().frame.len())
-                    .sum();
-                black_box(bytes)
+                let body = m.geometry(1, 1, k, false).unwrap().frame.len();
+                let mesh = if mode == Mode::WholeFrame {
+                    // As the server did before the frame was kept: the whole
+                    // frame encoded afresh (on the mesh's box), then compared
+                    // with the one before for a delta.
+                    let frame = mesh_frame(m.dsm_mesh(2).unwrap(), 1, 2, k, false, None).unwrap();
+                    let delta = previous.as_ref().and_then(|p| mesh_delta(k - 1, p, &frame));
+                    let n = delta.map_or(frame.len(), |d| d.frame.len());
+                    whole += frame.len();
+                    previous = Some(frame);
+                    n
+                } else {
+                    // What a delta client gets: the delta when there is one.
+                    let g = m.geometry(1, 2, k, false).unwrap();
+                    whole += g.frame.len();
+                    g.mesh_delta.map_or(g.frame.len(), |d| d.frame.len())
+                };
+                sent += body + mesh;
+                moves += 1;
+                black_box(body + mesh)
             })
         });
+        println!(
+            "{name}: {:.0} kB to a delta client per move (whole mesh frame {:.0} kB)",
+            sent as f64 / moves.max(1) as f64 / 1e3,
+            whole as f64 / moves.max(1) as f64 / 1e3
+        );
     }
     g.finish();
 }

@@ -55,4 +55,16 @@ pub enum BodyError {
     /// An iterative method did not reach its tolerance.
     #[error("no convergence: {0}")]
     NoConvergence(String),
+    /// A union's sampling is too coarse to resolve where the bodies meet:
+    /// its pieces could not be welded into one closed, consistently
+    /// oriented manifold (sample finer).
+    #[error(
+        "a union at {per_span} samples per span is too coarse to resolve where the bodies meet: {reason}; sample finer"
+    )]
+    TooCoarse {
+        /// The samples per knot span asked.
+        per_span: usize,
+        /// What could not be welded.
+        reason: String,
+    },
 }

@@ -36,9 +36,12 @@
 //! bodies is cut on each side separately; the pieces are then welded into
 //! one closed, manifold mesh ([`super::weld`]: copies of a vertex merged,
 //! each side's seam vertices inserted into the other side's seam edges,
-//! what is left open — where three bodies meet — fanned shut). A
-//! body poking through the inside of a triangle without containing any of
-//! its vertices is missed: sample finer than the features that meet.
+//! what is left open — where three bodies meet — fanned shut; checked,
+//! and where that leaves it broken, each seam's two border loops zipped
+//! by a strip). A body poking deep through the inside of a sampled
+//! triangle without containing any of its vertices is refused, as is a
+//! mesh that cannot be welded: [`BodyError::TooCoarse`] — sample finer
+//! than the features that meet.
 
 use glam::DVec3;
 
@@ -425,6 +428,78 @@ fn crossing(
     Ok((p.lerp(q, lo), m.lerp(n, lo).normalize_or_zero()))
 }
 
+/// How deep inside another body, relative to its longest edge, the centre
+/// of an uncut triangle may lie and still be taken as a corner of that body
+/// poking through the triangle (the chord error the union accepts).
+const DEEP: f64 = 0.1;
+
+/// How far from `x` (inside `other`) along ±`n` the first point not
+/// inside it lies, up to `reach` (bisection to 2⁻²⁰ of the reach).
+fn depth(
+    other: &Solid,
+    x: DVec3,
+    n: DVec3,
+    reach: f64,
+    keep_shared: bool,
+) -> Result<f64, BodyError> {
+    let mut best = reach;
+    for dir in [n, -n] {
+        if other.fate(x + dir * reach, dir, keep_shared)? == Fate::Drop {
+            continue;
+        }
+        let (mut lo, mut hi) = (0.0, reach);
+        for _ in 0..20 {
+            let mid = 0.5 * (lo + hi);
+            if other.fate(x + dir * mid, dir, keep_shared)? == Fate::Drop {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        best = best.min(hi);
+    }
+    Ok(best)
+}
+
+/// Refuses a clipped skin with a triangle of samples only (not cut: its
+/// vertices are the first `samples`) whose centre lies inside `other`
+/// deeper than [`DEEP`] of its longest edge: the
+/// other body's boundary crosses its edges twice between the samples (the
+/// ends kept, the middle inside), which vertex classification cannot see —
+/// the sampling is too coarse there. (A cut triangle whose chord clips a
+/// corner of the other body is the chord error the union accepts.)
+fn unresolved(
+    skin: &Skin,
+    samples: usize,
+    other: &Solid,
+    keep_shared: bool,
+) -> Result<(), BodyError> {
+    for t in skin
+        .triangles
+        .iter()
+        .filter(|t| t.iter().all(|&i| i < samples))
+    {
+        let [a, b, c] = t.map(|i| skin.positions[i]);
+        let centre = (a + b + c) / 3.0;
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        let size = [a.distance(b), b.distance(c), c.distance(a)]
+            .into_iter()
+            .fold(0.0, f64::max);
+        if other.fate(centre, n, keep_shared)? == Fate::Drop
+            && depth(other, centre, n, size, keep_shared)? > DEEP * size
+        {
+            return Err(BodyError::TooCoarse {
+                per_span: 0,
+                reason: format!(
+                    "triangle centred at ({:.4}, {:.4}, {:.4}) lies inside",
+                    centre.x, centre.y, centre.z
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The boundary of the union of `bodies`, each face sampled `per_span`
 /// times per knot span (at least 1). Each body must be injective
 /// (det J > 0: [`super::check_injective`]) for its inside to be its
@@ -445,9 +520,21 @@ pub fn union(bodies: &[BSplineVolume], per_span: usize) -> Result<UnionMesh, Bod
     let mut mesh = UnionMesh::default();
     for (i, body) in bodies.iter().enumerate() {
         let mut skin = boundary(body, per_span);
+        let samples = skin.positions.len();
         for (j, other) in solids.iter().enumerate() {
             if j != i {
                 clip(&mut skin, other, i < j)?;
+            }
+        }
+        for (j, other) in solids.iter().enumerate() {
+            if j != i {
+                unresolved(&skin, samples, other, i < j).map_err(|e| match e {
+                    BodyError::TooCoarse { reason, .. } => BodyError::TooCoarse {
+                        per_span,
+                        reason: format!("body {i}'s {reason} body {j}"),
+                    },
+                    e => e,
+                })?;
             }
         }
         let base = mesh.positions.len();
@@ -472,7 +559,8 @@ pub fn union(bodies: &[BSplineVolume], per_span: usize) -> Result<UnionMesh, Bod
         triangles: mesh.triangles,
         body: mesh.body,
     };
-    let report = weld(&mut pieces, WELD * size.max(f64::MIN_POSITIVE));
+    let report = weld(&mut pieces, WELD * size.max(f64::MIN_POSITIVE))
+        .map_err(|reason| BodyError::TooCoarse { per_span, reason })?;
     Ok(UnionMesh {
         positions: pieces.positions,
         triangles: pieces.triangles,

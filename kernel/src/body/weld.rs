@@ -27,10 +27,21 @@
 //!    error).
 //! 4. **Compact**: vertices no triangle uses are dropped.
 //!
-//! The result has every edge in exactly two triangles, with opposite
-//! directions (`tests/body_union.rs` checks it with the Euler
-//! characteristic); no vertex moves, so the welded mesh encloses the same
-//! volume as the pieces but for the slivers of step 3.
+//! The result is then **checked** ([`check_manifold`]: every edge in
+//! exactly two triangles with opposite directions, one fan of triangles
+//! round every vertex). Where the two sides of a curved seam zigzag about
+//! each other more than steps 2–3 can order (coarse samplings), the check
+//! fails; the merged pieces are then **zipped** instead ([`zip_seams`]):
+//! each border loop is paired with the nearest loop of another body, and
+//! the two are stitched by a strip of triangles — an annulus glued along
+//! two circles, so the surface is closed, oriented and of the pieces'
+//! Euler characteristic by construction. Before either, each body's piece
+//! is checked to be a piece of a sphere (χ = 2 − its border loops per
+//! connected part). What still fails is an error: the union reports the
+//! sampling as too coarse (`BodyError::TooCoarse`), never a broken mesh.
+//!
+//! No vertex moves (but for snapping), so the welded mesh encloses the same
+//! volume as the pieces but for the slivers of steps 2–3 or the strips.
 
 use std::collections::HashMap;
 
@@ -83,12 +94,48 @@ pub struct WeldReport {
 }
 
 /// Welds `m` (see the module doc), vertices closer than `tol` being one.
-pub(super) fn weld(m: &mut Pieces, tol: f64) -> WeldReport {
+/// The result is checked ([`check_manifold`]); when the T-junction welding
+/// leaves it broken, the pieces are zipped instead ([`zip_seams`]) and
+/// checked again; an error says what is still broken (the caller reports
+/// the sampling as too coarse).
+pub(super) fn weld(m: &mut Pieces, tol: f64) -> Result<WeldReport, String> {
     let mut report = WeldReport {
         merged: merge(m, tol),
         ..WeldReport::default()
     };
     cancel_duplicates(m);
+    check_pieces(m)?;
+    let pieces = m.clone();
+    let first = junctions(m, tol, &mut report);
+    compact(m);
+    let first = first.and_then(|()| check_manifold(m));
+    if first.is_ok() {
+        return Ok(report);
+    }
+    // The two sides of a seam could not be put in one order: stitch each
+    // pair of border loops with a strip instead.
+    *m = pieces;
+    let mut zipped = WeldReport {
+        merged: report.merged,
+        ..WeldReport::default()
+    };
+    let result = zip_seams(m, &mut zipped).and_then(|()| {
+        compact(m);
+        check_manifold(m)
+    });
+    match result {
+        Ok(()) => Ok(zipped),
+        Err(e) => Err(format!(
+            "{} (T-junction weld: {})",
+            e,
+            first.err().unwrap_or_default()
+        )),
+    }
+}
+
+/// Steps 2 and 3 of the module doc: snapping, T-junction splitting, closing
+/// what is left, dropping doubled edges' triangles.
+fn junctions(m: &mut Pieces, tol: f64, report: &mut WeldReport) -> Result<(), String> {
     report.snapped = snap(m);
     cancel_duplicates(m);
     // Each vertex's body: that of the first triangle using it (a vertex
@@ -125,8 +172,252 @@ pub(super) fn weld(m: &mut Pieces, tol: f64) -> WeldReport {
         report.closed += closed;
         report.fan_triangles += fans;
     }
-    compact(m);
-    report
+    Ok(())
+}
+
+/// Checks that every body's piece is a piece of a sphere (a body's
+/// boundary is one): each connected part of it (triangles of one body
+/// joined by edges) has Euler characteristic 2 − its border loops. A part
+/// that does not — a body crossing a triangle without containing one of
+/// its vertices leaves a handle or a pinch — cannot be welded right.
+fn check_pieces(m: &Pieces) -> Result<(), String> {
+    let n = m.triangles.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    // Undirected edges of each body, with the triangles holding them.
+    let mut edges: HashMap<(usize, usize, usize), Vec<usize>> = HashMap::new();
+    for (i, t) in m.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges
+                .entry((m.body[i], a.min(b), a.max(b)))
+                .or_default()
+                .push(i);
+        }
+    }
+    for ts in edges.values() {
+        for w in ts.windows(2) {
+            let (a, b) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
+            parent[a] = b;
+        }
+    }
+    // Per part: vertices, edges, faces, and its border edges' vertices
+    // joined into loops.
+    #[derive(Default)]
+    struct Part {
+        vertices: std::collections::HashSet<usize>,
+        edges: usize,
+        faces: usize,
+        border: Vec<(usize, usize)>,
+    }
+    let mut parts: HashMap<usize, Part> = HashMap::new();
+    for (i, t) in m.triangles.iter().enumerate() {
+        let p = parts.entry(root(&mut parent, i)).or_default();
+        p.faces += 1;
+        p.vertices.extend(t.iter().copied());
+    }
+    for (&(_, a, b), ts) in &edges {
+        let p = parts.entry(root(&mut parent, ts[0])).or_default();
+        p.edges += 1;
+        if ts.len() == 1 {
+            p.border.push((a, b));
+        }
+    }
+    for p in parts.values() {
+        let mut up: HashMap<usize, usize> = HashMap::new();
+        fn find(up: &mut HashMap<usize, usize>, v: usize) -> usize {
+            let mut r = v;
+            while let Some(&u) = up.get(&r).filter(|&&u| u != r) {
+                r = u;
+            }
+            r
+        }
+        let mut loops = 0i64;
+        let mut seen = std::collections::HashSet::new();
+        for &(a, b) in &p.border {
+            for v in [a, b] {
+                if seen.insert(v) {
+                    up.insert(v, v);
+                    loops += 1;
+                }
+            }
+            let (ra, rb) = (find(&mut up, a), find(&mut up, b));
+            if ra != rb {
+                up.insert(ra, rb);
+                loops -= 1;
+            }
+        }
+        let chi = p.vertices.len() as i64 - p.edges as i64 + p.faces as i64;
+        if chi != 2 - loops {
+            let at = m.positions[*p.vertices.iter().next().unwrap_or(&0)];
+            return Err(format!(
+                "a body's piece near {at:?} is not a piece of its boundary (χ = {chi} with {loops} border loops): another body crosses a triangle without containing any of its vertices"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `m` is a closed, consistently oriented 2-manifold: no triangle
+/// repeats a vertex, every directed edge occurs once and its reverse once,
+/// and the triangles around every vertex form one fan (a vertex where two
+/// fans touch is a pinch). Says what is wrong, and where, otherwise.
+pub(super) fn check_manifold(m: &Pieces) -> Result<(), String> {
+    let mut next: HashMap<(usize, usize), usize> = HashMap::new();
+    for t in &m.triangles {
+        if t[0] == t[1] || t[1] == t[2] || t[2] == t[0] {
+            return Err(format!("a triangle repeats a vertex: {t:?}"));
+        }
+        for k in 0..3 {
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            if next.insert((a, b), c).is_some() {
+                return Err(format!(
+                    "the edge {:?} → {:?} runs the same way in two triangles",
+                    m.positions[a], m.positions[b]
+                ));
+            }
+        }
+    }
+    if let Some((a, b)) = next.keys().find(|(a, b)| !next.contains_key(&(*b, *a))) {
+        return Err(format!(
+            "the edge {:?} → {:?} is open (in one triangle)",
+            m.positions[*a], m.positions[*b]
+        ));
+    }
+    // Around vertex a, triangle (a, b, c) is followed by the one holding
+    // (a, c): one cycle through all of a's triangles.
+    let mut around: HashMap<usize, Vec<usize>> = HashMap::new();
+    for &(a, b) in next.keys() {
+        around.entry(a).or_default().push(b);
+    }
+    for (&a, firsts) in &around {
+        let mut b = firsts[0];
+        let mut steps = 0;
+        loop {
+            b = next[&(a, b)];
+            steps += 1;
+            if b == firsts[0] || steps > firsts.len() {
+                break;
+            }
+        }
+        if steps != firsts.len() {
+            return Err(format!(
+                "the surface pinches at {:?} ({} triangles there, one fan of {steps})",
+                m.positions[a],
+                firsts.len()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Zips the seams of `m` (pieces merged, not yet welded): every loop of
+/// border edges is paired with the nearest loop of the other side running
+/// the other way, and the two are stitched by a strip of triangles (from
+/// the nearest pair of vertices on, each step advancing the loop whose
+/// next diagonal is shorter). Each strip is an annulus glued along two
+/// circles, so the Euler characteristic is the pieces'. Fails when a
+/// border vertex has several border edges out or in (the pieces pinch), or
+/// a loop has no partner (three bodies meet on it).
+fn zip_seams(m: &mut Pieces, report: &mut WeldReport) -> Result<(), String> {
+    let border = borders(m);
+    let mut out: HashMap<usize, (usize, usize)> = HashMap::new();
+    let mut ins: HashMap<usize, usize> = HashMap::new();
+    for &(a, b, t) in &border {
+        if out.insert(a, (b, t)).is_some() || ins.insert(b, a).is_some() {
+            return Err(format!(
+                "the pieces pinch at {:?} (two seams through it)",
+                m.positions[if out.contains_key(&a) { a } else { b }]
+            ));
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    let mut loops: Vec<(Vec<usize>, usize)> = Vec::new();
+    for &(a, _, t) in &border {
+        if seen.contains(&a) {
+            continue;
+        }
+        let mut lp = Vec::new();
+        let mut v = a;
+        while seen.insert(v) {
+            lp.push(v);
+            v = out[&v].0;
+        }
+        loops.push((lp, m.body[t]));
+    }
+    // How far loop p's vertices lie from loop q's, on average.
+    let gap = |p: &[usize], q: &[usize]| {
+        p.iter()
+            .map(|&i| {
+                q.iter()
+                    .map(|&j| m.positions[i].distance(m.positions[j]))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .sum::<f64>()
+            / p.len() as f64
+    };
+    let best = |k: usize| {
+        (0..loops.len())
+            .filter(|&l| l != k && loops[l].1 != loops[k].1)
+            .min_by(|&x, &y| {
+                gap(&loops[k].0, &loops[x].0).total_cmp(&gap(&loops[k].0, &loops[y].0))
+            })
+    };
+    let partner: Vec<Option<usize>> = (0..loops.len()).map(best).collect();
+    for k in 0..loops.len() {
+        let Some(l) = partner[k].filter(|&l| partner[l] == Some(k)) else {
+            let at = m.positions[loops[k].0[0]];
+            return Err(format!("a seam at {at:?} has no partner on another body"));
+        };
+        if l < k {
+            continue;
+        }
+        let body = loops[k].1;
+        let p = &loops[k].0;
+        // The partner backwards, from its vertex nearest p[0]: it then runs
+        // along p.
+        let q = &loops[l].0;
+        let start = (0..q.len())
+            .min_by(|&x, &y| {
+                let d = |j: usize| m.positions[q[j]].distance(m.positions[p[0]]);
+                d(x).total_cmp(&d(y))
+            })
+            .unwrap_or(0);
+        let r: Vec<usize> = (0..q.len())
+            .map(|j| q[(start + q.len() - j) % q.len()])
+            .collect();
+        let (n, s) = (p.len(), r.len());
+        let (mut i, mut j) = (0, 0);
+        while i < n || j < s {
+            let d = |a: usize, b: usize| m.positions[a].distance(m.positions[b]);
+            let advance_p =
+                j == s || (i < n && d(p[(i + 1) % n], r[j % s]) <= d(r[(j + 1) % s], p[i % n]));
+            let t = if advance_p {
+                i += 1;
+                [p[i % n], p[(i - 1) % n], r[j % s]]
+            } else {
+                j += 1;
+                [r[(j - 1) % s], r[j % s], p[i % n]]
+            };
+            if t[0] == t[1] || t[1] == t[2] || t[2] == t[0] {
+                return Err(format!(
+                    "two seams share the vertex {:?}",
+                    m.positions[t[2]]
+                ));
+            }
+            m.triangles.push(t);
+            m.body.push(body);
+            report.fan_triangles += 1;
+        }
+        report.closed += 1;
+    }
+    Ok(())
 }
 
 type Cell = (i64, i64, i64);

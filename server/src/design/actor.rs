@@ -1031,9 +1031,13 @@ impl Actor {
                     self.model
                         .geometry(self.id, part, self.rev, false)
                         .map(|mut g| {
-                            g.mesh_delta = previous.and_then(|p| {
-                                super::dsm_delta::mesh_delta(p.rev, &p.frame, &g.frame)
-                            });
+                            // A bound DSM part's frame comes with its delta
+                            // (kept encoded and patched); others are compared.
+                            if g.mesh_delta.is_none() {
+                                g.mesh_delta = previous.and_then(|p| {
+                                    super::dsm_delta::mesh_delta(p.rev, &p.frame, &g.frame)
+                                });
+                            }
                             g
                         })
                 };

@@ -55,6 +55,7 @@ use super::body_part::LatticeDoc;
 use super::doc::{DerivativeDoc, DesignDoc, IconDoc, IconRoleDoc};
 use super::dsm_engine::DsmEngine;
 use super::error::{CommandError, ErrorKind};
+use super::ffd_frame::FfdFrame;
 use super::part::{PartBody, RelationKind};
 use glam::{DMat3, DVec3};
 use std::collections::BTreeMap;
@@ -351,6 +352,9 @@ struct DsmFfd {
     listed: Vec<u32>,
     tris: Vec<u32>,
     verts: Vec<u32>,
+    /// The mesh frame, kept encoded and patched where an update moved
+    /// vertices ([`super::ffd_frame`]).
+    frame: FfdFrame,
 }
 
 impl DsmFfd {
@@ -411,6 +415,7 @@ impl DsmFfd {
             listed: Vec::new(),
             tris: Vec::new(),
             verts: Vec::new(),
+            frame: FfdFrame::default(),
             mesh: out,
             start,
             around,
@@ -442,6 +447,7 @@ impl DsmFfd {
                 .deform_all(&self.emb, &mut self.mesh.positions)
                 .map_err(kernel)?;
             renormal(&mut self.mesh);
+            self.frame.forget();
             let m = &self.mesh;
             for (c, t) in self.cross.iter_mut().zip(&m.triangles) {
                 let [a, b, c3] = t.map(|i| m.positions[i as usize]);
@@ -457,6 +463,11 @@ impl DsmFfd {
         }
         if !moved.is_empty() {
             self.renormal_listed();
+            // The vertices whose position or normal may have changed: the
+            // listed ones and those sharing a triangle with one.
+            let listed = self.listed.iter().copied();
+            self.frame
+                .moved(&self.mesh, listed.chain(self.verts.iter().copied()));
         }
         Ok(moved.len())
     }
@@ -606,9 +617,19 @@ impl DsmFfds {
         self.parts.get(&id).map(|e| &e.mesh)
     }
 
-    /// Part `id`'s deformed mesh frame (kind 3) at revision `rev`.
-    pub fn frame(&self, design: u64, id: u64, rev: u64, drag: bool) -> Option<axum::body::Bytes> {
-        super::dsm_engine::mesh_frame(self.mesh(id)?, design, id, rev, drag, None)
+    /// Part `id`'s deformed mesh frame (kind 3) at revision `rev`, with the
+    /// mesh delta (kind 8) from the frame of it handed out before when there
+    /// is one ([`super::ffd_frame`]: the frame is kept encoded and patched
+    /// where lattice edits moved vertices).
+    pub fn frame(
+        &self,
+        design: u64,
+        id: u64,
+        rev: u64,
+        drag: bool,
+    ) -> Option<(axum::body::Bytes, Option<super::dsm_delta::MeshDeltaFrame>)> {
+        let e = self.parts.get(&id)?;
+        e.frame.frame(&e.mesh, design, id, rev, drag)
     }
 }
 

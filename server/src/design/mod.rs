@@ -25,6 +25,7 @@ pub mod error;
 pub mod exchange;
 pub mod fairing_job;
 pub mod ffd_binding;
+pub mod ffd_frame;
 pub mod hub;
 pub mod legacy;
 pub mod model;

@@ -528,9 +528,16 @@ impl DesignModel {
             .morphs
             .mesh(part)
             .and_then(|m| super::dsm_engine::mesh_frame(m, design, part, rev, drag, None))
-            .or_else(|| self.ffds.frame(design, part, rev, drag))
-            .or_else(|| self.engine.dsm().frame(design, part, rev, drag))
         {
+            return Some(Geometry::new(rev, frame, None));
+        }
+        if let Some((frame, delta)) = self.ffds.frame(design, part, rev, drag) {
+            // Kept encoded and patched: the delta comes with the frame.
+            let mut g = Geometry::new(rev, frame, None);
+            g.mesh_delta = delta;
+            return Some(g);
+        }
+        if let Some(frame) = self.engine.dsm().frame(design, part, rev, drag) {
             return Some(Geometry::new(rev, frame, None));
         }
         if let Some(body) = self.bodies.get(part) {
