@@ -45,6 +45,7 @@ use faer::Mat;
 use glam::DVec3;
 
 use super::factor::{Factor, Forward};
+use super::pin_update::PinUpdate;
 
 use super::{Equation, Group, GroupKey, Problem, ScalarRow, SolveError};
 use crate::energy::Stiffness;
@@ -291,8 +292,14 @@ pub struct Solver {
     /// K with the pinned control points eliminated (see
     /// [`Stiffness::with_pinned`]), factored.
     factor: Factor,
-    /// Which control points `factor` has eliminated.
+    /// The pinned control points of the problem: eliminated from the
+    /// unknowns (by the factor, or by `update`).
     pinned: Vec<bool>,
+    /// Which control points `factor` has eliminated.
+    factored: Vec<bool>,
+    /// When `pinned` differs from `factored`: the change answered through
+    /// the factor of `factored` without a refactor (see [`PinUpdate`]).
+    update: Option<PinUpdate>,
     /// Equations folded into the factor (see [`Folded`]).
     folded: Vec<Folded>,
     /// K + Σ ρ a aᵀ over `folded`: the matrix the factor eliminates the
@@ -327,6 +334,10 @@ pub struct Solver {
     /// The forward halves L⁻¹Pa of the pending columns' rows (from the
     /// Gram's forward solves): a pending column costs only the backward half.
     pending_forward: Vec<Forward>,
+    /// With `update`: per pending column its corrected forward half, the
+    /// base column it adds (when the row's column over the factor was at
+    /// hand) and the freed points' values (see [`PendingFix`]).
+    pending_fix: Vec<PendingFix>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -347,6 +358,9 @@ impl Solver {
         let factor = Factor::new(stiffness.clone())?;
         Ok(Self {
             pinned: vec![false; stiffness.dim()],
+            factored: vec![false; stiffness.dim()],
+            update: None,
+            pending_fix: Vec::new(),
             folded: Vec::new(),
             augmented: stiffness.clone(),
             stiffness,
@@ -437,8 +451,76 @@ impl Solver {
         self.z.clear();
         self.pending.clear();
         self.pending_forward.clear();
+        self.pending_fix.clear();
         self.retired.clear();
         self.response = None;
+    }
+
+    /// Answers the pinned set `pinned` through the current factor (see
+    /// [`PinUpdate`]) instead of refactoring: `false` (nothing changed) when
+    /// that is not possible or would cost more than the refactor. The
+    /// columns of the factor's own operator are kept (`retired`) for when
+    /// the pinned set goes back to the factor's.
+    fn repin(&mut self, pinned: &[bool]) -> bool {
+        let update = if pinned == self.factored.as_slice() {
+            None
+        } else {
+            match PinUpdate::new(&self.factor, &self.augmented, &self.factored, pinned) {
+                Some(u) => Some(u),
+                None => return false,
+            }
+        };
+        if self.update.is_none() {
+            // The current columns are the factor's own: keep them.
+            let all: Vec<Column> = Vec::new();
+            self.retire(&all);
+        }
+        self.rows.clear();
+        self.free_rows.clear();
+        self.z.clear();
+        self.g.clear();
+        self.pending.clear();
+        self.pending_forward.clear();
+        self.pending_fix.clear();
+        self.response = None;
+        self.s_exact = false;
+        self.update = update;
+        self.pinned = pinned.to_vec();
+        true
+    }
+
+    /// Whether a change of the pinned set is being answered through the
+    /// factor of an earlier set (see [`Self::settle_pins`]).
+    pub fn pins_pending(&self) -> bool {
+        self.update.is_some()
+    }
+
+    /// Refactors for the current pinned set when a change of it is being
+    /// answered through the factor of an earlier one (a numeric
+    /// refactorisation and the problem's columns: the cost a pin change
+    /// deferred). Answers are the same before and after (to round-off);
+    /// later frames and solves cost what they cost without a pending
+    /// change. `Ok(false)` when nothing was pending. On error nothing
+    /// changes.
+    pub fn settle_pins(&mut self) -> Result<bool, SolveError> {
+        if self.update.is_none() {
+            return Ok(false);
+        }
+        let pinned = self.pinned.clone();
+        let folded = self.folded.clone();
+        let old_factored = self.factored.clone();
+        self.rebuild_factor(pinned, folded)?;
+        let problem = std::mem::take(&mut self.problem);
+        if let Err(e) = self.set_problem(problem.clone()) {
+            // Back to the earlier factor and the update over it.
+            let folded = self.folded.clone();
+            let pinned = self.pinned.clone();
+            self.rebuild_factor(old_factored, folded)?;
+            self.repin(&pinned);
+            self.set_problem(problem)?;
+            return Err(e);
+        }
+        Ok(true)
     }
 
     /// The current problem.
@@ -594,8 +676,10 @@ impl Solver {
             foldable.clone()
         };
         let mut refactored = false;
-        let (z, pending, forward, g, s_pinv, rank_deficiency, s_exact) = loop {
-            if pinned != self.pinned || !same_folds(&fold, &self.folded) {
+        let (z, pending, forward, fixes, g, s_pinv, rank_deficiency, s_exact) = loop {
+            if same_folds(&fold, &self.folded) && pinned != self.pinned && self.repin(&pinned) {
+                refactored = true;
+            } else if pinned != self.pinned || !same_folds(&fold, &self.folded) {
                 if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
                     if refactored {
                         self.restore_factor(old);
@@ -604,7 +688,12 @@ impl Solver {
                 }
                 refactored = true;
             }
-            let (z, pending, forward, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
+            let (z, pending, forward, fixes, g, s) = if self.update.is_some() {
+                self.schur_updated(&rows, &free_rows, &eqs)
+            } else {
+                let (z, pending, forward, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
+                (z, pending, forward, Vec::new(), g, s)
+            };
             // Same factor: S⁻¹ by block updates of the current one when
             // they are exact enough, else from scratch.
             let updated = if refactored {
@@ -622,7 +711,9 @@ impl Solver {
                     // the factor and try again.
                     fold = foldable.clone();
                 }
-                Ok((p, dropped, exact)) => break (z, pending, forward, g, p, dropped, exact),
+                Ok((p, dropped, exact)) => {
+                    break (z, pending, forward, fixes, g, p, dropped, exact);
+                }
                 Err(e) => {
                     if refactored {
                         self.restore_factor(old);
@@ -661,13 +752,17 @@ impl Solver {
                 .zip(&z)
                 .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
         let response = self.response.take().filter(|_| same_structure);
-        self.retire(&z);
+        if self.update.is_none() {
+            // Columns of an update's operator are not the factor's own.
+            self.retire(&z);
+        }
         self.problem = problem;
         self.rows = rows;
         self.free_rows = free_rows;
         self.z = z;
         self.pending = pending;
         self.pending_forward = forward;
+        self.pending_fix = fixes;
         self.g = g;
         self.eqs = eqs;
         self.loads = loads;
@@ -836,22 +931,149 @@ impl Solver {
                 }
             }
         }
-        // S = C K⁻¹ Cᵀ and its pseudo-inverse.
-        let m = eqs.len();
-        let mut s = Mat::<f64>::zeros(m, m);
-        for (e, ee) in eqs.iter().enumerate() {
-            for (f, ff) in eqs.iter().enumerate().skip(e) {
-                let mut v = 0.0;
-                for t in &ee.terms {
-                    for u in ff.terms.iter().filter(|u| u.k == t.k) {
-                        v += t.coef * u.coef * g[t.col * nc + u.col];
+        let s = assemble_s(eqs, &g, nc);
+        (z, pending, forward.unwrap_or_default(), g, s)
+    }
+
+    /// [`Self::schur`] while a pinned-set change is answered through the
+    /// factor of the old set ([`PinUpdate`]): Z = A₁⁻¹[free rows] with
+    /// A₁ = K̃ with the current pins eliminated. Columns already solved for
+    /// this update are kept; the others are left pending, their entries of
+    /// G from Gᵢⱼ = a₀ᵢᵀ Ã⁻¹ a₀ⱼ + αᵢᵀ R⁻¹ αⱼ (see `pin_update`): the first
+    /// term from the row's column over the factor when one is at hand (kept
+    /// from before the change: a dot product) or from forward halves, α
+    /// from the same. No full sparse solve.
+    fn schur_updated(
+        &mut self,
+        rows: &[ScalarRow],
+        free_rows: &[ScalarRow],
+        eqs: &[ScalarEq],
+    ) -> SchurUpdated {
+        let Some(update) = self.update.as_ref() else {
+            unreachable!("schur_updated without an update");
+        };
+        let n = self.dim();
+        let old: HashMap<RowKey, usize> = self
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(c, r)| (row_key(r), c))
+            .collect();
+        let mut was_pending = vec![false; self.z.len()];
+        for &c in &self.pending {
+            was_pending[c] = true;
+        }
+        let mut z: Vec<Column> = rows
+            .iter()
+            .map(|r| match old.get(&row_key(r)) {
+                Some(&oc) if !was_pending[oc] => self.z[oc].clone(),
+                _ => Column::pending(),
+            })
+            .collect();
+        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].norm.is_nan()).collect();
+        // Per missing row: a₀ (its free part over the factor's free
+        // points), b_F, and its base column Ã⁻¹a₀ when kept (a row that
+        // touches no newly pinned point: its part over the factor's free
+        // points is a₀).
+        let parts: Vec<(SparseRhs, Vec<f64>, Option<Column>)> = missing
+            .iter()
+            .map(|&c| {
+                let (rest, b_f) = update.split_sparse(&free_rows[c].indices, &free_rows[c].weights);
+                let base = if update.touches_newly(&rows[c].indices) {
+                    None
+                } else {
+                    let key = row_key(&rows[c]);
+                    self.retired
+                        .iter()
+                        .find(|(k, _)| *k == key)
+                        .map(|(_, col)| col.clone())
+                };
+                (rest, b_f, base)
+            })
+            .collect();
+        let need: Vec<(&[usize], &[f64])> = parts
+            .iter()
+            .filter(|p| p.2.is_none())
+            .map(|p| (p.0.0.as_slice(), p.0.1.as_slice()))
+            .collect();
+        let mut fresh = self
+            .factor
+            .forward_sparse(&need)
+            .unwrap_or_default()
+            .into_iter();
+        let forward: Vec<Option<Forward>> = parts
+            .iter()
+            .map(|p| if p.2.is_none() { fresh.next() } else { None })
+            .collect();
+        let xis: Vec<(Vec<f64>, Vec<f64>)> = parts
+            .iter()
+            .zip(&forward)
+            .map(|((_, b_f, base), f)| {
+                let alpha = match (base, f) {
+                    (Some(col), _) => update.alpha_of_column(&col.values, b_f),
+                    (None, Some(f)) => update.alpha_of_forward(&self.factor, f.values(), b_f),
+                    (None, None) => vec![0.0; b_f.len()],
+                };
+                let xi = update.xi(&alpha);
+                (alpha, xi)
+            })
+            .collect();
+        let nc = rows.len();
+        let mut at = vec![usize::MAX; nc];
+        for (m, &c) in missing.iter().enumerate() {
+            at[c] = m;
+        }
+        let sparse_dot = |(i, w): &SparseRhs, x: &[f64]| -> f64 {
+            i.iter().zip(w).map(|(&i, &w)| w * x[i]).sum()
+        };
+        let dot = |row: &ScalarRow, col: &Column| -> f64 {
+            row.indices
+                .iter()
+                .zip(&row.weights)
+                .map(|(&i, &w)| w * col.values[i])
+                .sum()
+        };
+        let mut g = vec![0.0; nc * nc];
+        for a in 0..nc {
+            for b in a..nc {
+                let v = match (at[a], at[b]) {
+                    (usize::MAX, _) => dot(&free_rows[b], &z[a]),
+                    (_, usize::MAX) => dot(&free_rows[a], &z[b]),
+                    (i, j) => {
+                        let first = match (&parts[i].2, &parts[j].2, &forward[i], &forward[j]) {
+                            (_, Some(zb), _, _) => sparse_dot(&parts[i].0, &zb.values),
+                            (Some(za), _, _, _) => sparse_dot(&parts[j].0, &za.values),
+                            (_, _, Some(fa), Some(fb)) => self.factor.dot_on_reach(fa, fb.values()),
+                            _ => 0.0,
+                        };
+                        let cross: f64 = xis[i].0.iter().zip(&xis[j].1).map(|(x, y)| x * y).sum();
+                        first + cross
                     }
-                }
-                s[(e, f)] = v;
-                s[(f, e)] = v;
+                };
+                g[a * nc + b] = v;
+                g[b * nc + a] = v;
             }
         }
-        (z, pending, forward.unwrap_or_default(), g, s)
+        let nf = update.freed().len();
+        let fixes: Vec<PendingFix> = parts
+            .into_iter()
+            .zip(forward)
+            .zip(xis)
+            .map(|(((_, _, base), f), (_, xi))| {
+                let mut values = f.map_or_else(|| vec![0.0; n], Forward::into_values);
+                update.subtract(&self.factor, &xi, &mut values);
+                PendingFix {
+                    forward: values,
+                    base,
+                    freed: xi[..nf].to_vec(),
+                }
+            })
+            .collect();
+        for &c in &missing {
+            z[c] = Column::pending();
+        }
+        let s = assemble_s(eqs, &g, nc);
+        (z, missing, Vec::new(), fixes, g, s)
     }
 
     /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
@@ -872,6 +1094,9 @@ impl Solver {
     /// factor serves them all. Dense columns of K̃⁻¹ per right-hand side,
     /// in `extra`'s order.
     fn solve_batch(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
+        if self.update.is_some() {
+            return self.solve_batch_updated(extra);
+        }
         let n = self.dim();
         let pending = std::mem::take(&mut self.pending);
         let forward = std::mem::take(&mut self.pending_forward);
@@ -910,6 +1135,172 @@ impl Solver {
             self.z[c] = Column::new(x.col_as_slice(e + m));
         }
         x
+    }
+
+    /// [`Self::solve_batch`] while a pinned-set change is answered through
+    /// the factor of the old set ([`PinUpdate`]): the extra right-hand
+    /// sides' forward halves are corrected (α, ξ), the pending columns'
+    /// were corrected when they were left pending, and one backward pass
+    /// serves them all; the freed points then take their values, a pending
+    /// column adds its base column.
+    fn solve_batch_updated(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
+        let n = self.dim();
+        let pending = std::mem::take(&mut self.pending);
+        let fixes = std::mem::take(&mut self.pending_fix);
+        self.pending_forward.clear();
+        let Some(update) = self.update.as_ref() else {
+            unreachable!("solve_batch_updated without an update");
+        };
+        let e = extra.len();
+        let mut x = Mat::<f64>::zeros(n, e + pending.len());
+        let split: Vec<(SparseRhs, Vec<f64>)> = extra
+            .iter()
+            .map(|(i, w)| update.split_sparse(i, w))
+            .collect();
+        let refs: Vec<(&[usize], &[f64])> = split
+            .iter()
+            .map(|((i, w), _)| (i.as_slice(), w.as_slice()))
+            .collect();
+        let halves = self.factor.forward_sparse(&refs).unwrap_or_default();
+        let mut freed_values = Vec::with_capacity(e);
+        for (m, (half, (_, b_f))) in halves.into_iter().zip(&split).enumerate() {
+            let mut values = half.into_values();
+            freed_values.push(update.correct(&self.factor, &mut values, b_f));
+            x.col_mut(m).copy_from(faer::ColRef::from_slice(&values));
+        }
+        for (m, fix) in fixes.iter().enumerate() {
+            x.col_mut(e + m)
+                .copy_from(faer::ColRef::from_slice(&fix.forward));
+        }
+        self.factor.backward_in_place(x.as_mut());
+        let Some(update) = self.update.as_ref() else {
+            unreachable!("solve_batch_updated without an update");
+        };
+        for (m, x_f) in freed_values.iter().enumerate() {
+            update.finish(x_f, |i, v| x[(i, m)] = v);
+        }
+        for (m, fix) in fixes.iter().enumerate() {
+            if let Some(base) = &fix.base {
+                for (xi, &b) in x.col_as_slice_mut(e + m).iter_mut().zip(base.values.iter()) {
+                    *xi += b;
+                }
+            }
+            update.finish(&fix.freed, |i, v| x[(i, e + m)] = v);
+        }
+        let mut b = Mat::<f64>::zeros(n, e + pending.len());
+        for (m, (i, w)) in extra.iter().enumerate() {
+            for (&i, &w) in i.iter().zip(w) {
+                b[(i, m)] += w;
+            }
+        }
+        for (m, &c) in pending.iter().enumerate() {
+            let row = &self.free_rows[c];
+            for (&i, &w) in row.indices.iter().zip(&row.weights) {
+                b[(i, e + m)] += w;
+            }
+        }
+        self.polish(&b, &mut x);
+        for (m, &c) in pending.iter().enumerate() {
+            self.z[c] = Column::new(x.col_as_slice(e + m));
+        }
+        x
+    }
+
+    /// Overwrites every column of `rhs` (dim × k, zero at the pinned
+    /// points) with the solve of the problem's operator: K̃⁻¹ over the free
+    /// points, through [`PinUpdate`] while one is pending (forward half,
+    /// correction, backward half: the cost of one solve).
+    fn solve_dense(&mut self, rhs: &mut Mat<f64>) {
+        if self.update.is_none() {
+            self.factor.solve_in_place(rhs.as_mut());
+            return;
+        }
+        let b = rhs.clone();
+        self.updated_dense(rhs);
+        self.polish(&b, rhs);
+    }
+
+    /// Iterative refinement of solves through a [`PinUpdate`] against the
+    /// problem's operator A₁ (K̃ over the free points): x += Â⁻¹(b − A₁x)
+    /// while the componentwise backward error max |r| / (|b| + |K̃||x|)
+    /// exceeds [`NOISE_BACKWARD_ERROR`] and a step still halves it. R's
+    /// conditioning (neighbouring pinned points: K⁻¹ is smooth) costs the
+    /// one-shot solve digits; each step here gains them back.
+    fn polish(&mut self, b: &Mat<f64>, x: &mut Mat<f64>) {
+        let n = self.dim();
+        let k = x.ncols();
+        let mut last = vec![f64::INFINITY; k];
+        let mut active: Vec<bool> = vec![true; k];
+        for _ in 0..MAX_REFINEMENT_STEPS {
+            let mut r = Mat::<f64>::zeros(n, k);
+            let mut any = false;
+            for j in 0..k {
+                if !active[j] {
+                    continue;
+                }
+                let (mut y, mut y_abs) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+                mul_with_bound_x(&self.augmented, x.col_as_slice(j), &mut y, &mut y_abs);
+                let mut worst = 0.0f64;
+                for i in 0..n {
+                    if self.pinned[i] {
+                        continue;
+                    }
+                    let ri = b[(i, j)] - y[i].x;
+                    r[(i, j)] = ri;
+                    let size = b[(i, j)].abs() + y_abs[i].x;
+                    if ri != 0.0 {
+                        worst = worst.max(if size > 0.0 {
+                            ri.abs() / size
+                        } else {
+                            f64::INFINITY
+                        });
+                    }
+                }
+                if worst <= NOISE_BACKWARD_ERROR || worst >= 0.5 * last[j] {
+                    active[j] = false;
+                } else {
+                    last[j] = worst;
+                    any = true;
+                }
+            }
+            if !any {
+                return;
+            }
+            self.counts.refinement_steps += 1;
+            self.updated_dense(&mut r);
+            for j in (0..k).filter(|&j| active[j]) {
+                for i in 0..n {
+                    x[(i, j)] += r[(i, j)];
+                }
+            }
+        }
+    }
+
+    /// One solve through the [`PinUpdate`] (no refinement): forward half,
+    /// correction, backward half.
+    fn updated_dense(&mut self, rhs: &mut Mat<f64>) {
+        let Some(update) = self.update.as_ref() else {
+            self.factor.solve_in_place(rhs.as_mut());
+            return;
+        };
+        let k = rhs.ncols();
+        let b_f: Vec<Vec<f64>> = (0..k)
+            .map(|j| update.split_dense(rhs.col_as_slice_mut(j)))
+            .collect();
+        self.factor.forward_in_place(rhs.as_mut());
+        let Some(update) = self.update.as_ref() else {
+            return;
+        };
+        let x_f: Vec<Vec<f64>> = (0..k)
+            .map(|j| update.correct(&self.factor, rhs.col_as_slice_mut(j), &b_f[j]))
+            .collect();
+        self.factor.backward_in_place(rhs.as_mut());
+        let Some(update) = self.update.as_ref() else {
+            return;
+        };
+        for (j, x_f) in x_f.iter().enumerate() {
+            update.finish(x_f, |i, v| rhs[(i, j)] = v);
+        }
     }
 
     /// S⁻¹ for the new equations `eqs` (over `rows`, S = `s`) from the
@@ -1007,6 +1398,8 @@ impl Solver {
     fn rebuild_factor(&mut self, pinned: Vec<bool>, folded: Vec<Folded>) -> Result<(), SolveError> {
         let augmented = fold(&self.stiffness, &folded);
         self.factor.refactor(augmented.with_pinned(&pinned))?;
+        self.factored = pinned.clone();
+        self.update = None;
         self.pinned = pinned;
         self.folded = folded;
         self.augmented = augmented;
@@ -1754,7 +2147,7 @@ impl Solver {
                 }
             }
         }
-        self.factor.solve_in_place(rhs.as_mut());
+        self.solve_dense(&mut rhs);
         for (c, &(p, k)) in columns.iter().enumerate() {
             if let Some((_, u)) = &mut out[p] {
                 u.resize(n, DVec3::ZERO);
@@ -2062,7 +2455,7 @@ impl Solver {
             }
         }
         if !columns.is_empty() {
-            self.factor.solve_in_place(y.as_mut());
+            self.solve_dense(&mut y);
         }
         for (p, (sigma, _)) in pending.iter().enumerate() {
             if !active[p] {
@@ -2296,6 +2689,50 @@ type SparseRhs = (Vec<usize>, Vec<f64>);
 /// What `Solver::schur` builds: Z (pending placeholders included), the
 /// pending columns and their forward halves, G (row-major) and S.
 type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
+
+/// What `Solver::schur_updated` builds: [`Schur`] with the pending
+/// columns' [`PendingFix`]es (and no plain forward halves).
+type SchurUpdated = (
+    Vec<Column>,
+    Vec<usize>,
+    Vec<Forward>,
+    Vec<PendingFix>,
+    Vec<f64>,
+    Mat<f64>,
+);
+
+/// A column of Z left pending while a [`PinUpdate`] is in force:
+/// z = Pᵀ L⁻ᵀ `forward` (+ `base`), then the freed points set to `freed`
+/// and the newly pinned ones to zero.
+#[derive(Debug)]
+struct PendingFix {
+    /// The corrected forward half L⁻¹P(a₀ − Vξ), or −L⁻¹PVξ when `base`
+    /// carries Ã⁻¹a₀.
+    forward: Vec<f64>,
+    /// Ã⁻¹a₀ (the row's column over the factor), when it was at hand.
+    base: Option<Column>,
+    /// x_F: the freed points' values.
+    freed: Vec<f64>,
+}
+
+/// S = C K⁻¹ Cᵀ over the scalar equations from G (row-major, nc × nc).
+fn assemble_s(eqs: &[ScalarEq], g: &[f64], nc: usize) -> Mat<f64> {
+    let m = eqs.len();
+    let mut s = Mat::<f64>::zeros(m, m);
+    for (e, ee) in eqs.iter().enumerate() {
+        for (f, ff) in eqs.iter().enumerate().skip(e) {
+            let mut v = 0.0;
+            for t in &ee.terms {
+                for u in ff.terms.iter().filter(|u| u.k == t.k) {
+                    v += t.coef * u.coef * g[t.col * nc + u.col];
+                }
+            }
+            s[(e, f)] = v;
+            s[(f, e)] = v;
+        }
+    }
+    s
+}
 
 /// One input of a batched refinement: σ = d − C P_ref − C δ, and per
 /// coordinate the stationarity residual ρ_k when it needs a refinement step.
