@@ -1,9 +1,11 @@
 //! A change of the pinned set (region and edge icons pin control points:
-//! added, removed, switched) is answered through the factor of the old set
-//! without a refactor (`solve::pin_update`). Every answer — full solves and
-//! drag frames with a load pulling — is checked against a fresh solver on
-//! the same problem and against a dense KKT solve independent of the
-//! solver; the same after the deferred refactor is installed.
+//! added, removed, switched) is held over the factor of the old set without
+//! a refactor (`solve::pin_update`), the refactor deferred to
+//! `Solver::settle_pins` (called by a solve that moves the shape, a grab,
+//! or a host when idle). Every answer — full solves and drag frames with a
+//! load pulling, before and after the deferred refactor — is checked
+//! against a fresh solver on the same problem and against a dense KKT
+//! solve independent of the solver.
 
 use glam::DVec3;
 use vsculpt_kernel::bspline::BSplineSurface;
@@ -275,4 +277,115 @@ fn pins_added_removed_and_switched_answer_like_a_fresh_solver() {
             );
         }
     }
+}
+
+/// A region that holds the shape where it is (no load pulling): the pin
+/// change is held over the old factor, the solve proves the shape unchanged
+/// without a refactor (still pending), the answer is the dense KKT's; the
+/// deferred refactor then changes nothing; switching back to the base
+/// problem goes back to the factor's own pins.
+#[test]
+fn a_region_that_holds_the_shape_costs_no_refactor_and_stays_exact() {
+    let s = plate(N);
+    let p = s.points().to_vec();
+    let k = Stiffness::surface(s.u_knots(), s.v_knots(), &material(1.0)).unwrap();
+    let mut solver = Solver::new(k.clone()).unwrap();
+    let clamp = pins(&s, 22, &clamp_rows(), DVec3::ZERO);
+    let base = Problem {
+        groups: vec![clamp, point(&s, 1, 0.2, 0.3), point(&s, 2, 0.7, 0.8)],
+    };
+    solver.set_problem(base.clone()).unwrap();
+    let mut got = vec![DVec3::ZERO; p.len()];
+    solver.solve(&p, &mut got).unwrap();
+    for (what, region) in [
+        ("region", pins(&s, 20, &block(12, 14, 6, 5), DVec3::ZERO)),
+        (
+            "clamp switched",
+            pins(&s, 21, &block(4, 20, 4, 4), DVec3::ZERO),
+        ),
+    ] {
+        let mut groups = base.groups.clone();
+        if what == "clamp switched" {
+            groups.remove(0);
+        }
+        groups.push(region);
+        let problem = Problem { groups };
+        solver.set_problem(problem.clone()).unwrap();
+        assert!(solver.pins_pending(), "{what}: held over the old factor");
+        let report = solver.solve(&p, &mut got).unwrap();
+        assert!(solver.pins_pending(), "{what}: no refactor to prove it");
+        let dense = dense_answer(&k, &p, &problem, None);
+        assert!(report.constraint_residual <= 1e-12, "{what}: {report:?}");
+        let gap = max_gap(&got, &dense);
+        assert!(gap <= 1e-9, "{what}: {gap:e}");
+        assert!(solver.settle_pins().unwrap(), "{what}: settled");
+        let mut settled = vec![DVec3::ZERO; p.len()];
+        solver.solve(&p, &mut settled).unwrap();
+        let gap = max_gap(&settled, &dense);
+        assert!(gap <= 1e-9, "{what}: settled {gap:e}");
+        solver.set_problem(base.clone()).unwrap();
+        solver.solve(&p, &mut got).unwrap();
+    }
+}
+
+/// A random sequence of pin changes (region blocks and an edge clamp
+/// switched on and off, some lifted, a point constraint and a load
+/// pulling): every answer either meets the dense KKT solve to 1e-9 or is
+/// an error — never a silent miss.
+#[test]
+fn a_random_sequence_of_pin_changes_never_misses_silently() {
+    let s = plate(N);
+    let p = s.points().to_vec();
+    let k = Stiffness::surface(s.u_knots(), s.v_knots(), &material(1.0)).unwrap();
+    let candidates = [
+        pins(&s, 20, &block(12, 14, 6, 5), DVec3::new(0.0, 0.0, 0.02)),
+        pins(&s, 21, &block(4, 20, 4, 4), DVec3::ZERO),
+        pins(&s, 22, &clamp_rows(), DVec3::ZERO),
+        pins(&s, 23, &block(20, 4, 3, 7), DVec3::new(0.01, 0.0, -0.01)),
+        pins(&s, 24, &block(24, 24, 2, 2), DVec3::ZERO),
+    ];
+    let mut solver = Solver::new(k.clone()).unwrap();
+    let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+    let mut on = [false; 5];
+    let (mut exact, mut updated) = (0, 0);
+    for step in 0..24 {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        let flip = (seed % 5) as usize;
+        on[flip] = !on[flip];
+        if step == 12 {
+            solver.settle_pins().unwrap();
+        }
+        let mut groups = vec![point(&s, 1, 0.7, 0.8), load(&s, 9, 0.5, 0.55)];
+        groups.extend(
+            candidates
+                .iter()
+                .zip(on)
+                .filter(|(_, o)| *o)
+                .map(|(g, _)| g.clone()),
+        );
+        let problem = Problem { groups };
+        solver.set_problem(problem.clone()).unwrap();
+        updated += usize::from(solver.pins_pending());
+        let mut got = vec![DVec3::ZERO; p.len()];
+        let t = DVec3::new(0.0, 0.01, 0.05);
+        let answers = [
+            solver.solve(&p, &mut got).map(|_| (got.clone(), None)),
+            solver
+                .drag(9, t, &p, &mut got)
+                .map(|_| (got.clone(), Some((9, t)))),
+        ];
+        for answer in answers {
+            // An error is allowed (never silent); an Ok answer is exact.
+            if let Ok((got, dragged)) = answer {
+                let dense = dense_answer(&k, &p, &problem, dragged);
+                let gap = max_gap(&got, &dense);
+                assert!(gap <= 1e-9, "step {step} {on:?}: {gap:e}");
+                exact += 1;
+            }
+        }
+    }
+    assert!(exact >= 40, "{exact} exact answers");
+    assert!(updated > 0, "no change was answered without a refactor");
 }

@@ -23,13 +23,17 @@
 //! Every product with Ã⁻¹ here is a pair of forward halves: with
 //! Ã = Pᵀ L Lᵀ P, Vᵀ Ã⁻¹ b₀ = (L⁻¹PV)ᵀ (L⁻¹P b₀), so a solve is the forward
 //! half of b₀, |V| dot products and a |V| × |V| product with R⁻¹, the
-//! forward half corrected by −(L⁻¹PV) ξ, and the backward half: the cost of
-//! one ordinary solve plus O(|V| · reach). Building the update costs the
-//! forward halves of V (only the elimination-tree paths of their non-zeros,
-//! [`Factor::forward_sparse`]), their Gram matrix and a dense LU of R — no
-//! numeric refactorisation. In exact arithmetic the answers are A₁⁻¹'s; the
-//! solver's refinement (residuals measured with K and P₁) removes the
-//! rounding R's conditioning adds.
+//! forward half corrected by −(L⁻¹PV) ξ, and the backward half. Building
+//! the update costs the forward halves of V (only the elimination-tree
+//! paths of their non-zeros, [`Factor::forward_sparse`]), their Gram matrix
+//! and a dense LU of R — no numeric refactorisation. The solver uses it for
+//! S over the new pinned set: aᵀA₁⁻¹b = a₀ᵀÃ⁻¹b₀ + αₐᵀ R⁻¹ α_b with
+//! α = [a_F; 0] − Vᵀ Ã⁻¹ a₀, from the columns it kept over the old factor
+//! (dot products) or forward halves. Solves through the update (the unit
+//! test below) need refinement against K with P₁, since R's conditioning
+//! costs digits; measured on the paper scene, the first grab after a pin
+//! change cost more that way than refactoring first, so the solver settles
+//! (refactors) before any solve that moves the shape.
 //!
 //! [`Stiffness::with_pinned`]: crate::energy::Stiffness::with_pinned
 
@@ -67,10 +71,11 @@ pub(crate) struct PinUpdate {
 /// (boundary points have long elimination-tree paths) against ~60 ms.
 pub(crate) const MAX_UPDATED_POINTS: usize = 160;
 
-/// Bound on R's (equilibrated) condition number for an update: a one-shot
-/// solve is then good to ~1e-5, and the solver's refinement of it
-/// (`Solver::polish`) converges in a few steps. Beyond it the caller
-/// refactors.
+/// Bound on R's (equilibrated) condition number for an update, so that the
+/// Gram entries of S built through it lose at most ~6 digits (the solver's
+/// refinement recovers them). Beyond it the caller refactors: a region
+/// next to nothing pinned, with a tiny `rest`, makes R as ill-conditioned
+/// as K's soft modes.
 const MAX_CONDITION: f64 = 1e6;
 
 impl PinUpdate {
@@ -173,11 +178,6 @@ impl PinUpdate {
         })
     }
 
-    /// The newly freed points F (free now, eliminated in the factor).
-    pub(crate) fn freed(&self) -> &[usize] {
-        &self.freed
-    }
-
     /// Whether any of `indices` is newly pinned.
     pub(crate) fn touches_newly(&self, indices: &[usize]) -> bool {
         indices.iter().any(|i| self.newly.binary_search(i).is_ok())
@@ -200,6 +200,7 @@ impl PinUpdate {
         (rest, b_f)
     }
 
+    #[cfg(test)]
     /// Takes b_F out of a dense right-hand side (original order): returns
     /// it and zeroes those entries.
     pub(crate) fn split_dense(&self, b: &mut [f64]) -> Vec<f64> {
@@ -245,6 +246,7 @@ impl PinUpdate {
             .collect()
     }
 
+    #[cfg(test)]
     /// f −= (L⁻¹PV) ξ: the forward half of b₀ − V ξ.
     pub(crate) fn subtract(&self, factor: &Factor, xi: &[f64], f: &mut [f64]) {
         for (fv, &x) in self.forward.iter().zip(xi) {
@@ -254,6 +256,7 @@ impl PinUpdate {
         }
     }
 
+    #[cfg(test)]
     /// Corrects the forward half f = L⁻¹P b₀ in place into that of
     /// b₀ − V ξ; returns x_F (the freed points' values, ξ's first part).
     pub(crate) fn correct(&self, factor: &Factor, f: &mut [f64], b_f: &[f64]) -> Vec<f64> {
@@ -262,6 +265,7 @@ impl PinUpdate {
         xi[..self.freed.len()].to_vec()
     }
 
+    #[cfg(test)]
     /// Finishes a solve (original order, `get`/`set` on one column): the
     /// freed points take x_F, the newly pinned ones are exactly zero.
     pub(crate) fn finish(&self, x_f: &[f64], mut set: impl FnMut(usize, f64)) {

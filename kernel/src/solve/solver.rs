@@ -24,7 +24,18 @@
 //!
 //! Pins (a vector equation on one control point) are not rows of C: the
 //! factor is of K with them eliminated (see [`Stiffness::with_pinned`]),
-//! their values enter as a moved reference. When S is not provably well
+//! their values enter as a moved reference. A change of the pinned set (a
+//! region or edge icon added, removed or switched) keeps the factor of the
+//! old set when the change is small and well conditioned: S over the new
+//! pinned set is built through it (see `pin_update`: forward halves of the
+//! changed points' columns, a small dense R, the columns kept over the old
+//! factor), with no refactor and no full sparse solve, so an edit that
+//! holds the shape where it is (proved by `still_optimal`) costs no
+//! refactor at all. The refactor is deferred to [`Solver::settle_pins`]: a
+//! host calls it when idle, and a solve that must move the shape or the
+//! first frame of a grab calls it first (measured: solving through the
+//! update cost more than refactoring, see kernel/README.md). When S is not
+//! provably well
 //! conditioned, the vector equations whose rows lie in K's pattern are
 //! folded into the factor (K + Σ ρ a aᵀ, see `Folded`).
 //!
@@ -297,9 +308,13 @@ pub struct Solver {
     pinned: Vec<bool>,
     /// Which control points `factor` has eliminated.
     factored: Vec<bool>,
-    /// When `pinned` differs from `factored`: the change answered through
-    /// the factor of `factored` without a refactor (see [`PinUpdate`]).
+    /// When `pinned` differs from `factored`: the change held over the
+    /// factor of `factored`, its refactor deferred (see [`PinUpdate`],
+    /// [`Self::settle_pins`]).
     update: Option<PinUpdate>,
+    /// Whether a problem was set since the factor was made (see
+    /// [`Self::repin`]).
+    served: bool,
     /// Equations folded into the factor (see [`Folded`]).
     folded: Vec<Folded>,
     /// K + Σ ρ a aᵀ over `folded`: the matrix the factor eliminates the
@@ -334,10 +349,6 @@ pub struct Solver {
     /// The forward halves L⁻¹Pa of the pending columns' rows (from the
     /// Gram's forward solves): a pending column costs only the backward half.
     pending_forward: Vec<Forward>,
-    /// With `update`: per pending column its corrected forward half, the
-    /// base column it adds (when the row's column over the factor was at
-    /// hand) and the freed points' values (see [`PendingFix`]).
-    pending_fix: Vec<PendingFix>,
     g: Vec<f64>,
     eqs: Vec<ScalarEq>,
     loads: Vec<LoadCol>,
@@ -360,7 +371,7 @@ impl Solver {
             pinned: vec![false; stiffness.dim()],
             factored: vec![false; stiffness.dim()],
             update: None,
-            pending_fix: Vec::new(),
+            served: false,
             folded: Vec::new(),
             augmented: stiffness.clone(),
             stiffness,
@@ -451,17 +462,22 @@ impl Solver {
         self.z.clear();
         self.pending.clear();
         self.pending_forward.clear();
-        self.pending_fix.clear();
         self.retired.clear();
         self.response = None;
     }
 
-    /// Answers the pinned set `pinned` through the current factor (see
+    /// Takes the pinned set `pinned` over the current factor (see
     /// [`PinUpdate`]) instead of refactoring: `false` (nothing changed) when
     /// that is not possible or would cost more than the refactor. The
     /// columns of the factor's own operator are kept (`retired`) for when
-    /// the pinned set goes back to the factor's.
+    /// the pinned set goes back to the factor's (free) or for the update's
+    /// Gram entries.
     fn repin(&mut self, pinned: &[bool]) -> bool {
+        if !self.served {
+            // A fresh solver's first pins: its factor has served nothing
+            // yet, so the refactor is the lasting choice.
+            return false;
+        }
         let update = if pinned == self.factored.as_slice() {
             None
         } else {
@@ -481,7 +497,6 @@ impl Solver {
         self.g.clear();
         self.pending.clear();
         self.pending_forward.clear();
-        self.pending_fix.clear();
         self.response = None;
         self.s_exact = false;
         self.update = update;
@@ -489,19 +504,18 @@ impl Solver {
         true
     }
 
-    /// Whether a change of the pinned set is being answered through the
-    /// factor of an earlier set (see [`Self::settle_pins`]).
+    /// Whether a change of the pinned set is held over the factor of an
+    /// earlier set, its refactor deferred (see [`Self::settle_pins`]).
     pub fn pins_pending(&self) -> bool {
         self.update.is_some()
     }
 
-    /// Refactors for the current pinned set when a change of it is being
-    /// answered through the factor of an earlier one (a numeric
-    /// refactorisation and the problem's columns: the cost a pin change
-    /// deferred). Answers are the same before and after (to round-off);
-    /// later frames and solves cost what they cost without a pending
-    /// change. `Ok(false)` when nothing was pending. On error nothing
-    /// changes.
+    /// Refactors for the current pinned set when a change of it is held
+    /// over the factor of an earlier one (a numeric refactorisation and the
+    /// problem's columns: the cost a pin change deferred). [`Self::solve`]
+    /// (when the shape must move) and [`Self::drag`] call it first; a host
+    /// may call it when idle so that neither pays. `Ok(false)` when nothing
+    /// was pending. On error nothing changes.
     pub fn settle_pins(&mut self) -> Result<bool, SolveError> {
         if self.update.is_none() {
             return Ok(false);
@@ -676,7 +690,7 @@ impl Solver {
             foldable.clone()
         };
         let mut refactored = false;
-        let (z, pending, forward, fixes, g, s_pinv, rank_deficiency, s_exact) = loop {
+        let (z, pending, forward, g, s_pinv, rank_deficiency, s_exact) = loop {
             if same_folds(&fold, &self.folded) && pinned != self.pinned && self.repin(&pinned) {
                 refactored = true;
             } else if pinned != self.pinned || !same_folds(&fold, &self.folded) {
@@ -688,11 +702,10 @@ impl Solver {
                 }
                 refactored = true;
             }
-            let (z, pending, forward, fixes, g, s) = if self.update.is_some() {
+            let (z, pending, forward, g, s) = if self.update.is_some() {
                 self.schur_updated(&rows, &free_rows, &eqs)
             } else {
-                let (z, pending, forward, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
-                (z, pending, forward, Vec::new(), g, s)
+                self.schur(&rows, &free_rows, &eqs, &loads)
             };
             // Same factor: S⁻¹ by block updates of the current one when
             // they are exact enough, else from scratch.
@@ -711,9 +724,7 @@ impl Solver {
                     // the factor and try again.
                     fold = foldable.clone();
                 }
-                Ok((p, dropped, exact)) => {
-                    break (z, pending, forward, fixes, g, p, dropped, exact);
-                }
+                Ok((p, dropped, exact)) => break (z, pending, forward, g, p, dropped, exact),
                 Err(e) => {
                     if refactored {
                         self.restore_factor(old);
@@ -762,7 +773,6 @@ impl Solver {
         self.z = z;
         self.pending = pending;
         self.pending_forward = forward;
-        self.pending_fix = fixes;
         self.g = g;
         self.eqs = eqs;
         self.loads = loads;
@@ -775,6 +785,7 @@ impl Solver {
         self.pin_redundant = pin_redundant;
         self.base = None;
         self.response = response;
+        self.served = true;
         Ok(())
     }
 
@@ -948,11 +959,10 @@ impl Solver {
         rows: &[ScalarRow],
         free_rows: &[ScalarRow],
         eqs: &[ScalarEq],
-    ) -> SchurUpdated {
+    ) -> Schur {
         let Some(update) = self.update.as_ref() else {
             unreachable!("schur_updated without an update");
         };
-        let n = self.dim();
         let old: HashMap<RowKey, usize> = self
             .rows
             .iter()
@@ -1054,26 +1064,11 @@ impl Solver {
                 g[b * nc + a] = v;
             }
         }
-        let nf = update.freed().len();
-        let fixes: Vec<PendingFix> = parts
-            .into_iter()
-            .zip(forward)
-            .zip(xis)
-            .map(|(((_, _, base), f), (_, xi))| {
-                let mut values = f.map_or_else(|| vec![0.0; n], Forward::into_values);
-                update.subtract(&self.factor, &xi, &mut values);
-                PendingFix {
-                    forward: values,
-                    base,
-                    freed: xi[..nf].to_vec(),
-                }
-            })
-            .collect();
         for &c in &missing {
             z[c] = Column::pending();
         }
         let s = assemble_s(eqs, &g, nc);
-        (z, missing, Vec::new(), fixes, g, s)
+        (z, missing, Vec::new(), g, s)
     }
 
     /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
@@ -1094,9 +1089,7 @@ impl Solver {
     /// factor serves them all. Dense columns of K̃⁻¹ per right-hand side,
     /// in `extra`'s order.
     fn solve_batch(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
-        if self.update.is_some() {
-            return self.solve_batch_updated(extra);
-        }
+        debug_assert!(self.update.is_none(), "solves settle a pin change first");
         let n = self.dim();
         let pending = std::mem::take(&mut self.pending);
         let forward = std::mem::take(&mut self.pending_forward);
@@ -1135,172 +1128,6 @@ impl Solver {
             self.z[c] = Column::new(x.col_as_slice(e + m));
         }
         x
-    }
-
-    /// [`Self::solve_batch`] while a pinned-set change is answered through
-    /// the factor of the old set ([`PinUpdate`]): the extra right-hand
-    /// sides' forward halves are corrected (α, ξ), the pending columns'
-    /// were corrected when they were left pending, and one backward pass
-    /// serves them all; the freed points then take their values, a pending
-    /// column adds its base column.
-    fn solve_batch_updated(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
-        let n = self.dim();
-        let pending = std::mem::take(&mut self.pending);
-        let fixes = std::mem::take(&mut self.pending_fix);
-        self.pending_forward.clear();
-        let Some(update) = self.update.as_ref() else {
-            unreachable!("solve_batch_updated without an update");
-        };
-        let e = extra.len();
-        let mut x = Mat::<f64>::zeros(n, e + pending.len());
-        let split: Vec<(SparseRhs, Vec<f64>)> = extra
-            .iter()
-            .map(|(i, w)| update.split_sparse(i, w))
-            .collect();
-        let refs: Vec<(&[usize], &[f64])> = split
-            .iter()
-            .map(|((i, w), _)| (i.as_slice(), w.as_slice()))
-            .collect();
-        let halves = self.factor.forward_sparse(&refs).unwrap_or_default();
-        let mut freed_values = Vec::with_capacity(e);
-        for (m, (half, (_, b_f))) in halves.into_iter().zip(&split).enumerate() {
-            let mut values = half.into_values();
-            freed_values.push(update.correct(&self.factor, &mut values, b_f));
-            x.col_mut(m).copy_from(faer::ColRef::from_slice(&values));
-        }
-        for (m, fix) in fixes.iter().enumerate() {
-            x.col_mut(e + m)
-                .copy_from(faer::ColRef::from_slice(&fix.forward));
-        }
-        self.factor.backward_in_place(x.as_mut());
-        let Some(update) = self.update.as_ref() else {
-            unreachable!("solve_batch_updated without an update");
-        };
-        for (m, x_f) in freed_values.iter().enumerate() {
-            update.finish(x_f, |i, v| x[(i, m)] = v);
-        }
-        for (m, fix) in fixes.iter().enumerate() {
-            if let Some(base) = &fix.base {
-                for (xi, &b) in x.col_as_slice_mut(e + m).iter_mut().zip(base.values.iter()) {
-                    *xi += b;
-                }
-            }
-            update.finish(&fix.freed, |i, v| x[(i, e + m)] = v);
-        }
-        let mut b = Mat::<f64>::zeros(n, e + pending.len());
-        for (m, (i, w)) in extra.iter().enumerate() {
-            for (&i, &w) in i.iter().zip(w) {
-                b[(i, m)] += w;
-            }
-        }
-        for (m, &c) in pending.iter().enumerate() {
-            let row = &self.free_rows[c];
-            for (&i, &w) in row.indices.iter().zip(&row.weights) {
-                b[(i, e + m)] += w;
-            }
-        }
-        self.polish(&b, &mut x);
-        for (m, &c) in pending.iter().enumerate() {
-            self.z[c] = Column::new(x.col_as_slice(e + m));
-        }
-        x
-    }
-
-    /// Overwrites every column of `rhs` (dim × k, zero at the pinned
-    /// points) with the solve of the problem's operator: K̃⁻¹ over the free
-    /// points, through [`PinUpdate`] while one is pending (forward half,
-    /// correction, backward half: the cost of one solve).
-    fn solve_dense(&mut self, rhs: &mut Mat<f64>) {
-        if self.update.is_none() {
-            self.factor.solve_in_place(rhs.as_mut());
-            return;
-        }
-        let b = rhs.clone();
-        self.updated_dense(rhs);
-        self.polish(&b, rhs);
-    }
-
-    /// Iterative refinement of solves through a [`PinUpdate`] against the
-    /// problem's operator A₁ (K̃ over the free points): x += Â⁻¹(b − A₁x)
-    /// while the componentwise backward error max |r| / (|b| + |K̃||x|)
-    /// exceeds [`NOISE_BACKWARD_ERROR`] and a step still halves it. R's
-    /// conditioning (neighbouring pinned points: K⁻¹ is smooth) costs the
-    /// one-shot solve digits; each step here gains them back.
-    fn polish(&mut self, b: &Mat<f64>, x: &mut Mat<f64>) {
-        let n = self.dim();
-        let k = x.ncols();
-        let mut last = vec![f64::INFINITY; k];
-        let mut active: Vec<bool> = vec![true; k];
-        for _ in 0..MAX_REFINEMENT_STEPS {
-            let mut r = Mat::<f64>::zeros(n, k);
-            let mut any = false;
-            for j in 0..k {
-                if !active[j] {
-                    continue;
-                }
-                let (mut y, mut y_abs) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
-                mul_with_bound_x(&self.augmented, x.col_as_slice(j), &mut y, &mut y_abs);
-                let mut worst = 0.0f64;
-                for i in 0..n {
-                    if self.pinned[i] {
-                        continue;
-                    }
-                    let ri = b[(i, j)] - y[i].x;
-                    r[(i, j)] = ri;
-                    let size = b[(i, j)].abs() + y_abs[i].x;
-                    if ri != 0.0 {
-                        worst = worst.max(if size > 0.0 {
-                            ri.abs() / size
-                        } else {
-                            f64::INFINITY
-                        });
-                    }
-                }
-                if worst <= NOISE_BACKWARD_ERROR || worst >= 0.5 * last[j] {
-                    active[j] = false;
-                } else {
-                    last[j] = worst;
-                    any = true;
-                }
-            }
-            if !any {
-                return;
-            }
-            self.counts.refinement_steps += 1;
-            self.updated_dense(&mut r);
-            for j in (0..k).filter(|&j| active[j]) {
-                for i in 0..n {
-                    x[(i, j)] += r[(i, j)];
-                }
-            }
-        }
-    }
-
-    /// One solve through the [`PinUpdate`] (no refinement): forward half,
-    /// correction, backward half.
-    fn updated_dense(&mut self, rhs: &mut Mat<f64>) {
-        let Some(update) = self.update.as_ref() else {
-            self.factor.solve_in_place(rhs.as_mut());
-            return;
-        };
-        let k = rhs.ncols();
-        let b_f: Vec<Vec<f64>> = (0..k)
-            .map(|j| update.split_dense(rhs.col_as_slice_mut(j)))
-            .collect();
-        self.factor.forward_in_place(rhs.as_mut());
-        let Some(update) = self.update.as_ref() else {
-            return;
-        };
-        let x_f: Vec<Vec<f64>> = (0..k)
-            .map(|j| update.correct(&self.factor, rhs.col_as_slice_mut(j), &b_f[j]))
-            .collect();
-        self.factor.backward_in_place(rhs.as_mut());
-        let Some(update) = self.update.as_ref() else {
-            return;
-        };
-        for (j, x_f) in x_f.iter().enumerate() {
-            update.finish(x_f, |i, v| rhs[(i, j)] = v);
-        }
     }
 
     /// S⁻¹ for the new equations `eqs` (over `rows`, S = `s`) from the
@@ -1531,6 +1358,8 @@ impl Solver {
             });
             return self.checked(self.report(out, None, DVec3::ZERO), out, None);
         }
+        // The shape must move: a deferred pin change is settled first.
+        self.settle_pins()?;
         self.solve_pending();
         let inputs = self.inputs(None, DVec3::ZERO);
         let (delta, lambda) = if self.at_rest(&inputs, reference) {
@@ -1702,6 +1531,9 @@ impl Solver {
         reference: &[DVec3],
         out: &mut [DVec3],
     ) -> Result<SolveReport, SolveError> {
+        // A deferred pin change is settled before a grab's first frame
+        // (a pin change drops the base and the response).
+        self.settle_pins()?;
         let cached = self.base.as_ref().is_some_and(|b| b.reference == reference);
         if cached {
             // Same reference as the cached base: already checked.
@@ -2147,7 +1979,7 @@ impl Solver {
                 }
             }
         }
-        self.solve_dense(&mut rhs);
+        self.factor.solve_in_place(rhs.as_mut());
         for (c, &(p, k)) in columns.iter().enumerate() {
             if let Some((_, u)) = &mut out[p] {
                 u.resize(n, DVec3::ZERO);
@@ -2455,7 +2287,7 @@ impl Solver {
             }
         }
         if !columns.is_empty() {
-            self.solve_dense(&mut y);
+            self.factor.solve_in_place(y.as_mut());
         }
         for (p, (sigma, _)) in pending.iter().enumerate() {
             if !active[p] {
@@ -2689,31 +2521,6 @@ type SparseRhs = (Vec<usize>, Vec<f64>);
 /// What `Solver::schur` builds: Z (pending placeholders included), the
 /// pending columns and their forward halves, G (row-major) and S.
 type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
-
-/// What `Solver::schur_updated` builds: [`Schur`] with the pending
-/// columns' [`PendingFix`]es (and no plain forward halves).
-type SchurUpdated = (
-    Vec<Column>,
-    Vec<usize>,
-    Vec<Forward>,
-    Vec<PendingFix>,
-    Vec<f64>,
-    Mat<f64>,
-);
-
-/// A column of Z left pending while a [`PinUpdate`] is in force:
-/// z = Pᵀ L⁻ᵀ `forward` (+ `base`), then the freed points set to `freed`
-/// and the newly pinned ones to zero.
-#[derive(Debug)]
-struct PendingFix {
-    /// The corrected forward half L⁻¹P(a₀ − Vξ), or −L⁻¹PVξ when `base`
-    /// carries Ã⁻¹a₀.
-    forward: Vec<f64>,
-    /// Ã⁻¹a₀ (the row's column over the factor), when it was at hand.
-    base: Option<Column>,
-    /// x_F: the freed points' values.
-    freed: Vec<f64>,
-}
 
 /// S = C K⁻¹ Cᵀ over the scalar equations from G (row-major, nc × nc).
 fn assemble_s(eqs: &[ScalarEq], g: &[f64], nc: usize) -> Mat<f64> {
