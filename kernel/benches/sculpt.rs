@@ -309,6 +309,8 @@ fn benches(c: &mut Criterion) {
                     sc.design.release(sc.load).unwrap();
                     sc.design.set_state(region, IconState::Sleeping).unwrap();
                     sc.design.solve().unwrap();
+                    // Back to a factor without the region's pins.
+                    sc.design.settle_pins().unwrap();
                 }
                 spent
             })

@@ -523,7 +523,11 @@ impl Solver {
         let pinned = self.pinned.clone();
         let folded = self.folded.clone();
         let old_factored = self.factored.clone();
+        // The same K and problem: the last answer stays the proof of
+        // `still_optimal` (a refactor forgets it).
+        let last = self.last.take();
         self.rebuild_factor(pinned, folded)?;
+        self.last = last;
         let problem = std::mem::take(&mut self.problem);
         if let Err(e) = self.set_problem(problem.clone()) {
             // Back to the earlier factor and the update over it.
