@@ -32,7 +32,6 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use glam::{DVec2, DVec3};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use vsculpt_kernel::dsm::shape_ops::rounded_box;
 use vsculpt_kernel::dsm::*;
 
 #[path = "../tests/dsm_support/mod.rs"]
@@ -142,26 +141,11 @@ fn net_drag(c: &mut Criterion) {
     g.finish();
 }
 
+/// The rounded box and the blobby shape (the handset is not a bench shape here).
 fn shapes() -> Vec<(&'static str, Model)> {
-    let mut rounded = Model::new(1.0, DEFAULT_TAU).unwrap();
-    rounded
-        .add(rounded_box(DVec3::new(1.5, 1.0, 0.8), Placement::IDENTITY, 0.3, 1.0).unwrap())
-        .unwrap();
-    let mut blobby = Model::new(1.0, DEFAULT_TAU).unwrap();
-    let density = (0..20)
-        .map(|i| {
-            let t = i as f64 / 20.0 * std::f64::consts::TAU;
-            let c = DVec3::new(2.0 * t.cos(), 1.2 * (2.0 * t).sin(), 0.6 * (3.0 * t).cos());
-            DensityPrimitive::sphere(c, 1.6, 1.5).unwrap()
-        })
-        .collect();
-    blobby
-        .add(Group {
-            density,
-            ..Default::default()
-        })
-        .unwrap();
-    vec![("rounded_box_20", rounded), ("blobby_20", blobby)]
+    let mut all = dsm_support::twenty_primitive_shapes();
+    all.truncate(2);
+    all
 }
 
 fn shape_remesh(c: &mut Criterion) {

@@ -294,3 +294,59 @@ fn negative_density_and_influence_range_cut_exactly() {
     assert!(m.contains(DVec3::new(1.24, 0.0, 0.0)));
     assert!(m.contains(DVec3::new(0.0, 0.0, 1.99)));
 }
+
+/// The mesher's normals take F and ∇F without the Hessian
+/// (`DensityPrimitive::value_grad`): against central differences of F, and
+/// equal to the jet's value and gradient to rounding, for every shape it
+/// differentiates itself (shells, line charges, clipped pipes, blobby, placed
+/// and rotated) and outside the support (0).
+#[test]
+fn density_value_and_gradient_match_differences_and_the_jet() {
+    let clip = HalfSpace::new(DVec3::new(1.0, 1.0, 0.0), 0.2).unwrap();
+    let prims = [
+        DensityPrimitive::new(DensityShape::Sphere { radius: 0.4 }, rotation(), 1.7, 2.0).unwrap(),
+        DensityPrimitive::new(DensityShape::Sphere { radius: 0.0 }, rotation(), -0.8, 1.3).unwrap(),
+        DensityPrimitive::new(
+            DensityShape::Pipe {
+                radius: 0.3,
+                half_length: 1.2,
+            },
+            rotation(),
+            1.1,
+            1.5,
+        )
+        .unwrap()
+        .clipped(clip),
+        DensityPrimitive::new(DensityShape::Blobby, rotation(), 2.0, 0.9).unwrap(),
+    ];
+    for (k, d) in prims.iter().enumerate() {
+        let range = 2.5;
+        for p in points() {
+            let (v, g) = d.value_grad(p, range);
+            let j = d.jet(p, range);
+            assert!(
+                (v - j.value).abs() <= 1e-14 * (1.0 + v.abs()),
+                "{k}: value at {p}"
+            );
+            assert!(
+                (g - j.grad).length() <= 1e-13 * (1.0 + g.length()),
+                "{k}: grad at {p}"
+            );
+            assert_eq!(v, d.value(p, range), "{k}: value at {p}");
+            let h = 1e-6;
+            for i in 0..3 {
+                let mut e = DVec3::ZERO;
+                e[i] = h;
+                let fd = (d.value(p + e, range) - d.value(p - e, range)) / (2.0 * h);
+                assert!(
+                    (fd - g[i]).abs() <= 1e-6 * (1.0 + g.length()),
+                    "{k}: d/dx{i} {} vs {fd} at {p}",
+                    g[i]
+                );
+            }
+        }
+    }
+    // Outside the support: 0 and no gradient.
+    let far = DVec3::new(9.0, 0.0, 0.0);
+    assert_eq!(prims[0].value_grad(far, 2.5), (0.0, DVec3::ZERO));
+}

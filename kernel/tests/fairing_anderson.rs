@@ -6,34 +6,21 @@
 //! threshold; and a relaxed run (ω = 0.7, which takes damped plain steps
 //! as asked, unaccelerated) ends at that fixed point too.
 
-use vsculpt_kernel::fairing::{
-    Acceleration, Control, FairingOptions, FairingReport, PointMesh, SweepSolve, fair_sweeps,
-};
+use vsculpt_kernel::fairing::{Acceleration, FairingOptions, FairingReport, PointMesh};
 
 mod fairing_support;
-use fairing_support::{octant, perturb};
+use fairing_support::{octant, perturb, sweep};
 
 fn run(
     start: &PointMesh,
     acceleration: Acceleration,
     relaxation: f64,
 ) -> (PointMesh, FairingReport) {
-    let mut mesh = start.clone();
-    let goals = vec![1.0; mesh.len()];
     let options = FairingOptions {
         relaxation,
         ..FairingOptions::default()
     };
-    let r = fair_sweeps(
-        &mut mesh,
-        &goals,
-        &options,
-        SweepSolve::Iterative,
-        acceleration,
-        |_| Control::Continue,
-    )
-    .unwrap();
-    (mesh, r)
+    sweep(start, &vec![1.0; start.len()], &options, acceleration)
 }
 
 fn apart(a: &PointMesh, b: &PointMesh) -> f64 {

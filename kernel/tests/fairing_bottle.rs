@@ -7,10 +7,12 @@
 //! same fixed point (1e-9), leaving the boundary untouched.
 
 use vsculpt_kernel::fairing::{
-    Acceleration, Control, FairingOptions, FairingReport, Goals, Measure, PointMesh, SweepSolve,
-    fair_sweeps, resolve,
+    Acceleration, FairingOptions, FairingReport, Goals, Measure, PointMesh, resolve,
 };
 use vsculpt_kernel::network::{PatchSampler, demo};
+
+mod fairing_support;
+use fairing_support::sweep;
 
 /// The server's `MESH_RESOLUTION`.
 const RESOLUTION: usize = 12;
@@ -33,22 +35,12 @@ fn faces(drag: f64) -> Vec<PointMesh> {
 }
 
 fn run(start: &PointMesh, acceleration: Acceleration) -> (PointMesh, FairingReport) {
-    let mut mesh = start.clone();
-    let goals = resolve(&mesh, Measure::Mean, &Goals::FromBoundary).unwrap();
+    let goals = resolve(start, Measure::Mean, &Goals::FromBoundary).unwrap();
     let options = FairingOptions {
         max_iterations: 1000,
         ..FairingOptions::default()
     };
-    let r = fair_sweeps(
-        &mut mesh,
-        &goals,
-        &options,
-        SweepSolve::Iterative,
-        acceleration,
-        |_| Control::Continue,
-    )
-    .unwrap();
-    (mesh, r)
+    sweep(start, &goals, &options, acceleration)
 }
 
 #[test]

@@ -112,6 +112,60 @@ pub struct DensityPrimitive {
     pub clip: Vec<HalfSpace>,
 }
 
+/// A sphere-based or blobby primitive without clipping, reduced to what its
+/// value needs: F depends on |p − centre| alone, so no transform to local
+/// coordinates and no support tests beyond the range (the mesher's hot loop,
+/// [`super::model::Model::sample`]). Equal to [`DensityPrimitive::value`] to
+/// rounding (bit for bit with an identity rotation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RadialCharge {
+    centre: DVec3,
+    /// Reference radius ρ₀ (0 for blobby).
+    radius: f64,
+    density: f64,
+    reducing: f64,
+    /// Blinn's Gaussian e^{−a r²} instead of e^{−a r}.
+    gaussian: bool,
+}
+
+impl RadialCharge {
+    /// F at p with influence range `range`.
+    #[inline]
+    pub(crate) fn value(&self, p: DVec3, range: f64) -> f64 {
+        let r = (p - self.centre).length() - self.radius;
+        if !(r >= 0.0 && r <= range) {
+            return 0.0;
+        }
+        // The same operations, in the same order, as `value_at`.
+        let x = if self.gaussian {
+            -self.reducing * r * r
+        } else {
+            -self.reducing * r
+        };
+        self.density * x.exp()
+    }
+
+    /// F and its world gradient at p ([`DensityPrimitive::value_grad`] to
+    /// rounding).
+    #[inline]
+    pub(crate) fn value_grad(&self, p: DVec3, range: f64) -> (f64, DVec3) {
+        let d = p - self.centre;
+        let n = d.length();
+        let v = self.value(p, range);
+        if v == 0.0 {
+            return (0.0, DVec3::ZERO);
+        }
+        let g = if self.gaussian {
+            d * (-2.0 * self.reducing * v)
+        } else if n > 0.0 {
+            d * (-self.reducing * v / n)
+        } else {
+            DVec3::ZERO
+        };
+        (v, g)
+    }
+}
+
 /// Local distance r, its jet, and whether the point is inside the support.
 struct Local {
     q: DVec3,
@@ -250,6 +304,26 @@ impl DensityPrimitive {
         cull.min(self.range)
     }
 
+    /// The primitive as a [`RadialCharge`] when it is one (sphere-based or
+    /// blobby, no clip half-spaces).
+    pub(crate) fn radial_charge(&self) -> Option<RadialCharge> {
+        if !self.clip.is_empty() {
+            return None;
+        }
+        let (radius, gaussian) = match self.shape {
+            DensityShape::Sphere { radius } => (radius, false),
+            DensityShape::Blobby => (0.0, true),
+            _ => return None,
+        };
+        Some(RadialCharge {
+            centre: self.placement.translation(),
+            radius,
+            density: self.density,
+            reducing: self.reducing,
+            gaussian,
+        })
+    }
+
     fn local(&self, p: DVec3) -> Local {
         let q = self.placement.to_local(p);
         let r = match &self.shape {
@@ -383,6 +457,46 @@ impl DensityPrimitive {
             }
         };
         local.rotate(&self.placement.rotation())
+    }
+
+    /// F with its world gradient, without the Hessian of [`Self::jet`]: what
+    /// the mesher's normals need. Sphere-, pipe-based and blobby primitives
+    /// differentiate e^{−a r} directly (equal to the jet's value and gradient
+    /// to rounding); sheets take the jet's.
+    pub fn value_grad(&self, p: DVec3, range: f64) -> (f64, DVec3) {
+        let l = self.local(p);
+        if !self.in_support(&l, range) {
+            return (0.0, DVec3::ZERO);
+        }
+        let q = l.q;
+        let a = self.reducing;
+        let (v, g) = match &self.shape {
+            DensityShape::Sphere { .. } => {
+                let n = q.length();
+                let u = if n == 0.0 { DVec3::ZERO } else { q / n };
+                let v = self.density * (-a * l.r).exp();
+                (v, u * (-a * v))
+            }
+            DensityShape::Pipe { .. } => {
+                let n = (q.x * q.x + q.y * q.y).sqrt();
+                let u = if n == 0.0 {
+                    DVec3::ZERO
+                } else {
+                    DVec3::new(q.x / n, q.y / n, 0.0)
+                };
+                let v = self.density * (-a * l.r).exp();
+                (v, u * (-a * v))
+            }
+            DensityShape::Blobby => {
+                let v = self.density * (-a * l.r * l.r).exp();
+                (v, q * (-2.0 * a * v))
+            }
+            _ => {
+                let j = self.jet(p, range);
+                return (j.value, j.grad);
+            }
+        };
+        (v, self.placement.rotation() * g)
     }
 
     /// Distance (a 1-Lipschitz lower bound, exact for planes) from `p` to the
@@ -595,4 +709,71 @@ fn sheet_jet(s: &Sheet, u: Jet, v: Jet, r: Jet, a: f64, density: f64) -> Jet {
         }
     };
     d.times(e.exp_neg()).scale(density)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A radial charge's value and gradient against the primitive's own
+    /// (through its local frame): the value bit for bit at an axis-aligned
+    /// placement, both to rounding when
+    /// rotated; 0 inside a shell's bore and beyond the range; clipped
+    /// primitives and other shapes are not radial charges.
+    #[test]
+    fn radial_charges_have_the_primitives_values() {
+        let rot = glam::DMat3::from_axis_angle(DVec3::new(1.0, -2.0, 0.5).normalize(), 0.9);
+        let placed = [
+            Placement::at(DVec3::new(0.3, -0.2, 0.1)),
+            Placement::new(rot, DVec3::new(-0.4, 0.7, 0.2)).unwrap(),
+        ];
+        for (k, pl) in placed.into_iter().enumerate() {
+            let prims = [
+                DensityPrimitive::new(DensityShape::Sphere { radius: 0.0 }, pl, 1.6, 1.5).unwrap(),
+                DensityPrimitive::new(DensityShape::Sphere { radius: 0.5 }, pl, -0.7, 2.5).unwrap(),
+                DensityPrimitive::new(DensityShape::Blobby, pl, 2.0, 0.8).unwrap(),
+            ];
+            for d in &prims {
+                let rc = d.radial_charge().expect("radial");
+                for i in 0..200 {
+                    let t = i as f64 * 0.37;
+                    let p = pl.translation()
+                        + DVec3::new(t.sin(), (1.3 * t).cos(), (0.7 * t).sin()) * (0.02 * i as f64);
+                    for range in [1.0, 3.5] {
+                        let (a, b) = (rc.value(p, range), d.value(p, range));
+                        if k == 0 {
+                            assert_eq!(a.to_bits(), b.to_bits(), "{d:?} at {p}");
+                        } else {
+                            // |p − c| to rounding, which exp(−a r) scales by a r.
+                            assert!((a - b).abs() <= 1e-13 * b.abs(), "{a} vs {b}");
+                        }
+                        let (v, g) = rc.value_grad(p, range);
+                        let (w, h) = d.value_grad(p, range);
+                        assert_eq!(v, a);
+                        assert!((v - w).abs() <= 1e-13 * w.abs(), "{v} vs {w}");
+                        assert!((g - h).length() <= 1e-12 * (1.0 + h.length()), "{g} vs {h}");
+                        if (p - pl.translation()).length() > range + 0.6 {
+                            assert_eq!(a, 0.0);
+                        }
+                    }
+                }
+            }
+        }
+        let bore = DensityPrimitive::sphere(DVec3::ZERO, 1.0, 1.0).unwrap();
+        assert!(bore.radial_charge().is_some());
+        let clipped = bore.clone().clipped(HalfSpace::new(DVec3::X, 0.0).unwrap());
+        assert!(clipped.radial_charge().is_none());
+        let pipe = DensityPrimitive::pipe(DVec3::ZERO, DVec3::X, 1.0, 1.0).unwrap();
+        assert!(pipe.radial_charge().is_none());
+        let shell = DensityPrimitive::new(
+            DensityShape::Sphere { radius: 0.5 },
+            Placement::IDENTITY,
+            1.0,
+            1.0,
+        )
+        .unwrap()
+        .radial_charge()
+        .unwrap();
+        assert_eq!(shell.value(DVec3::new(0.2, 0.0, 0.0), 9.0), 0.0);
+    }
 }

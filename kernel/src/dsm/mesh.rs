@@ -7,7 +7,10 @@
 //!    An octree over it culls, per node, the primitives whose influence cannot
 //!    reach the node's ball, and classifies the node by interval arithmetic
 //!    ([`Model::classify`]): a node wholly inside or outside S is skipped.
-//! 2. Each undecided leaf (8³ cells) samples membership and Φ at its corners.
+//! 2. Each undecided leaf (8³ cells) classifies its 2³-cell bricks the same
+//!    way and samples membership and Φ only at the corners of undecided
+//!    bricks (a narrow band around the boundary): no mixed cell and no
+//!    crossing edge lies in a proven brick.
 //! 3. Every grid edge whose ends differ in membership gets a Hermite sample: its
 //!    crossing, found by the Illinois method on Φ to 1e-10 of a cell, and the
 //!    unit normal of the boundary piece there.
@@ -31,10 +34,10 @@
 //! joins them at a non-manifold vertex — Manifold Dual Contouring would split it.
 
 use super::error::DsmError;
+use super::interval::Tri;
 use super::model::{Active, Model};
 use super::qef::Qef;
 use glam::{DVec3, IVec3};
-use std::collections::HashMap;
 
 /// Leaf size in cells.
 pub(crate) const LEAF: i32 = 8;
@@ -96,7 +99,8 @@ pub(crate) struct LeafMesh {
     pub(crate) origin: IVec3,
     /// Membership at the (LEAF + 1)³ corners (x fastest).
     inside: Vec<bool>,
-    /// Φ at the corners.
+    /// Φ at the corners; NaN at a corner not sampled (it lies in proven
+    /// bricks only, [`leaf_bricks`]).
     phi: Vec<f64>,
     /// Per cell (x fastest): index into `verts`, or u32::MAX.
     cell_vert: Vec<u32>,
@@ -246,9 +250,89 @@ fn leaf_active(model: &Model, grid: &Grid, origin: IVec3) -> Active {
     model.cull(&model.all_active(), c, r)
 }
 
-/// Steps 2–4 for the leaf at `origin`: corner samples, Hermite data (per leaf:
-/// a crossing on a leaf face is computed by each leaf that has it), one vertex
-/// per mixed cell, and the leaf's crossing edges for step 5.
+/// Bricks of [`BRICK`]³ cells per leaf axis.
+const BRICKS: i32 = LEAF / BRICK;
+
+/// Brick size in cells: the unit of the narrow band within a leaf.
+const BRICK: i32 = 2;
+
+/// Membership proven by interval bounds ([`Model::classify`]) over each
+/// [`BRICK`]³-cell brick of the leaf at `origin` (x fastest; `Tri::Maybe`:
+/// undecided), from the leaf's half-size bricks down. No crossing edge and no
+/// mixed cell lies in a proven brick, so only the corners of undecided
+/// bricks are sampled (the narrow band around the boundary); a corner of
+/// proven bricks alone takes their membership and no Φ. A function of the
+/// model, the grid and the leaf (its active set is derived from them), so a
+/// fresh leaf and an updated one prove the same bricks.
+fn leaf_bricks(model: &Model, act: &Active, grid: &Grid, origin: IVec3) -> Vec<Tri> {
+    let nb = BRICKS as usize;
+    let mut out = vec![Tri::Maybe; nb * nb * nb];
+    let half = LEAF / 2;
+    for k in 0..8 {
+        let o = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * half;
+        let r = 0.5 * half as f64 * grid.h * 3f64.sqrt();
+        let c = grid.corner(origin + o) + DVec3::splat(0.5 * half as f64 * grid.h);
+        let sub = model.cull(act, c, r);
+        let t = model.classify(c, r, &sub);
+        let rb = 0.5 * BRICK as f64 * grid.h * 3f64.sqrt();
+        for bz in 0..half / BRICK {
+            for by in 0..half / BRICK {
+                for bx in 0..half / BRICK {
+                    let b = o / BRICK + IVec3::new(bx, by, bz);
+                    let tb = if t == Tri::Maybe {
+                        let cb = grid.corner(origin + b * BRICK)
+                            + DVec3::splat(0.5 * BRICK as f64 * grid.h);
+                        model.classify(cb, rb, &sub)
+                    } else {
+                        t
+                    };
+                    out[((b.z * BRICKS + b.y) * BRICKS + b.x) as usize] = tb;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Per corner of the leaf: whether an undecided brick holds it (it is
+/// sampled), else the membership its proven bricks give.
+fn corner_plan(bricks: &[Tri]) -> Vec<Option<bool>> {
+    let n = (LEAF + 1) as usize;
+    let mut plan = vec![Some(false); n * n * n];
+    let mut known = vec![false; n * n * n];
+    for bz in 0..BRICKS {
+        for by in 0..BRICKS {
+            for bx in 0..BRICKS {
+                let b = IVec3::new(bx, by, bz);
+                let t = bricks[((bz * BRICKS + by) * BRICKS + bx) as usize];
+                for z in 0..=BRICK {
+                    for y in 0..=BRICK {
+                        for x in 0..=BRICK {
+                            let i = corner_index(b * BRICK + IVec3::new(x, y, z));
+                            match t {
+                                Tri::Maybe => {
+                                    plan[i] = None;
+                                    known[i] = true;
+                                }
+                                _ if !known[i] => {
+                                    plan[i] = Some(t == Tri::Yes);
+                                    known[i] = true;
+                                }
+                                _ => {}
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    plan
+}
+
+/// Steps 2–4 for the leaf at `origin`: corner samples in the narrow band
+/// ([`leaf_bricks`]), Hermite data (per leaf: a crossing on a leaf face is
+/// computed by each leaf that has it), one vertex per mixed cell, and the
+/// leaf's crossing edges for step 5.
 pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3) -> LeafMesh {
     let act = leaf_active(model, grid, origin);
     let field = Field {
@@ -256,6 +340,7 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3) -> LeafMesh {
         act: &act,
         margin: grid.reach_margin(),
     };
+    let plan = corner_plan(&leaf_bricks(model, &act, grid, origin));
     let n = (LEAF + 1) as usize;
     let mut scratch = Vec::new();
     let mut inside = Vec::with_capacity(n * n * n);
@@ -263,9 +348,18 @@ pub(crate) fn mesh_leaf(model: &Model, grid: &Grid, origin: IVec3) -> LeafMesh {
     for z in 0..=LEAF {
         for y in 0..=LEAF {
             for x in 0..=LEAF {
-                let smp = field.sample(grid.corner(origin + IVec3::new(x, y, z)), &mut scratch);
-                inside.push(smp.inside);
-                phi.push(smp.phi);
+                let l = IVec3::new(x, y, z);
+                match plan[corner_index(l)] {
+                    Some(known) => {
+                        inside.push(known);
+                        phi.push(f64::NAN);
+                    }
+                    None => {
+                        let smp = field.sample(grid.corner(origin + l), &mut scratch);
+                        inside.push(smp.inside);
+                        phi.push(smp.phi);
+                    }
+                }
             }
         }
     }
@@ -302,17 +396,28 @@ pub(crate) fn update_leaf(
     // 1e-9 of a cell).
     let eps = 1e-6 * grid.h;
     let mut scratch = Vec::new();
+    let plan = corner_plan(&leaf_bricks(model, &act, grid, origin));
     let mut inside = leaf.inside.clone();
     let mut phi = leaf.phi.clone();
     for z in 0..=LEAF {
         for y in 0..=LEAF {
             for x in 0..=LEAF {
                 let l = IVec3::new(x, y, z);
-                let p = grid.corner(origin + l);
-                if touches(changed, p, eps) {
-                    let smp = field.sample(p, &mut scratch);
-                    inside[corner_index(l)] = smp.inside;
-                    phi[corner_index(l)] = smp.phi;
+                let i = corner_index(l);
+                match plan[i] {
+                    Some(known) => {
+                        inside[i] = known;
+                        phi[i] = f64::NAN;
+                    }
+                    // Sampled before (Φ is not NaN) and out of the edit's
+                    // reach: the same sample.
+                    None if !phi[i].is_nan() && !touches(changed, grid.corner(origin + l), eps) => {
+                    }
+                    None => {
+                        let smp = field.sample(grid.corner(origin + l), &mut scratch);
+                        inside[i] = smp.inside;
+                        phi[i] = smp.phi;
+                    }
                 }
             }
         }
@@ -349,7 +454,10 @@ fn contour(
     let (inside, phi) = (&leaf.inside, &leaf.phi);
     let mut verts = Vec::new();
     let mut contoured = 0;
-    let mut edges: HashMap<(IVec3, u8), (DVec3, DVec3)> = HashMap::new();
+    // Hermite samples of the leaf's edges, shared by the (up to 4) cells
+    // around each: per (corner, axis), 1 + an index into `hermites`, or 0.
+    let mut edge_slot = vec![0u32; 3 * corner_index(IVec3::splat(LEAF)) + 3];
+    let mut hermites: Vec<(DVec3, DVec3)> = Vec::new();
     for z in 0..LEAF {
         for y in 0..LEAF {
             for x in 0..LEAF {
@@ -387,8 +495,9 @@ fn contour(
                         if i0 == i1 {
                             continue;
                         }
-                        let (p, n) = *edges.entry((a0, axis)).or_insert_with(|| {
-                            hermite(
+                        let slot = &mut edge_slot[3 * corner_index(a0) + axis as usize];
+                        if *slot == 0 {
+                            hermites.push(hermite(
                                 field,
                                 grid,
                                 origin + a0,
@@ -396,8 +505,10 @@ fn contour(
                                 phi[corner_index(a0)],
                                 phi[corner_index(a1)],
                                 i0,
-                            )
-                        });
+                            ));
+                            *slot = hermites.len() as u32;
+                        }
+                        let (p, n) = hermites[*slot as usize - 1];
                         qef.add(p, n);
                     }
                 }
@@ -545,7 +656,7 @@ fn hermite(
 ) -> (DVec3, DVec3) {
     let p0 = grid.corner(a);
     let d = e.as_dvec3() * grid.h;
-    let t = root(field, p0, d, phi0, phi1, 1e-10);
+    let t = root(field, p0, d, (phi0, phi1), inside0, 1e-10);
     let p = p0 + d * t;
     let g = field.normal(p);
     // Outward: from the inside end to the outside end.
@@ -554,27 +665,42 @@ fn hermite(
     (p, if n == DVec3::ZERO { out.normalize() } else { n })
 }
 
-/// The parameter t ∈ [0, 1] where Φ(p0 + t d) changes sign (Illinois method with a
-/// bisection guard), to `tol` in t.
-fn root(field: &Field, p0: DVec3, d: DVec3, f0: f64, f1: f64, tol: f64) -> f64 {
+/// The parameter t ∈ [0, 1] where membership along p0 + t d changes (Illinois
+/// method on Φ with a bisection guard), to `tol` in t; `f` is Φ at the ends
+/// and `ina` the membership of p0 (given, not read from Φ's sign: Φ is +0 or
+/// −0 on the boundary itself, and a p0 there would take the wrong side).
+///
+/// The bracket is kept by membership, so the result is within `tol` of the
+/// boundary whatever Φ's shape; Φ only chooses where to sample. A secant
+/// estimate closer than `tol` / 2 to an end of the bracket is moved to
+/// `tol` / 2 from it: once the estimate is on the root (Φ is near linear over
+/// a cell, so after one or two steps), the next sample then lands just past
+/// it and closes the bracket, instead of bisecting the far side down to `tol`
+/// (about 33 samples a root). Bisection is kept for a step that follows two
+/// steps which together did not halve the bracket.
+fn root(field: &Field, p0: DVec3, d: DVec3, f: (f64, f64), ina: bool, tol: f64) -> f64 {
     let mut scratch = Vec::new();
     let (mut a, mut b) = (0.0, 1.0);
-    let (mut fa, mut fb) = (f0, f1);
-    let ina = fa > 0.0;
+    let (mut fa, mut fb) = f;
     let mut side = 0i8;
+    // Bracket widths before the last two steps.
+    let mut widths = [f64::INFINITY; 2];
     for _ in 0..80 {
-        if b - a <= tol {
+        let w = b - a;
+        if w <= tol {
             break;
         }
-        let mut t = if fa != fb {
+        let stalled = w > 0.5 * widths[0];
+        widths = [widths[1], w];
+        let mut t = if fa != fb && !stalled {
             (a * fb - b * fa) / (fb - fa)
         } else {
             0.5 * (a + b)
         };
-        let w = b - a;
-        if !(t > a + 0.01 * w && t < b - 0.01 * w) {
+        if !(t >= a && t <= b) {
             t = 0.5 * (a + b);
         }
+        t = t.clamp(a + 0.5 * tol, b - 0.5 * tol);
         let s = field.sample(p0 + d * t, &mut scratch);
         let ft = s.phi;
         if s.inside == ina {
@@ -609,7 +735,7 @@ fn project(field: &Field, grid: &Grid, v: DVec3, n: DVec3) -> Option<DVec3> {
         let p1 = v + dir * (step * grid.h);
         let s1 = field.sample(p1, &mut scratch);
         if s1.inside != s0.inside {
-            let t = root(field, v, p1 - v, s0.phi, s1.phi, 1e-12);
+            let t = root(field, v, p1 - v, (s0.phi, s1.phi), s0.inside, 1e-12);
             return Some(v + (p1 - v) * t);
         }
     }

@@ -24,7 +24,7 @@
 //!   below n·τ·D_e at any point (n the number of culled primitives there), which moves
 //!   a surface with |∇f| ≈ a D_e by at most n·τ/a. τ defaults to 1e-9.
 
-use super::density::DensityPrimitive;
+use super::density::{DensityPrimitive, RadialCharge};
 use super::error::{DsmError, positive};
 use super::geometric::GeometricPrimitive;
 use super::interval::{Interval, Tri};
@@ -70,6 +70,8 @@ pub struct Model {
     ranges: Vec<Vec<f64>>,
     cuts: Vec<Vec<bool>>,
     scales: Vec<f64>,
+    /// Per group: each density primitive as a radial charge, where it is one.
+    radial: Vec<Vec<Option<RadialCharge>>>,
     /// Per group: each geometric primitive's bounding ball (centre, radius).
     gballs: Vec<Vec<(DVec3, f64)>>,
     /// Per group: each density primitive's influence ball (centre, radius).
@@ -118,6 +120,7 @@ impl Model {
             ranges: Vec::new(),
             cuts: Vec::new(),
             scales: Vec::new(),
+            radial: Vec::new(),
             gballs: Vec::new(),
             dballs: Vec::new(),
         })
@@ -151,6 +154,7 @@ impl Model {
         self.ranges.push(Vec::new());
         self.cuts.push(Vec::new());
         self.scales.push(0.0);
+        self.radial.push(Vec::new());
         self.gballs.push(Vec::new());
         self.dballs.push(Vec::new());
         self.refresh(k);
@@ -220,6 +224,7 @@ impl Model {
             .collect();
         self.cuts[k] = g.density.iter().map(|d| d.has_cuts()).collect();
         self.scales[k] = g.density.iter().map(|d| d.reducing).fold(0.0, f64::max);
+        self.radial[k] = g.density.iter().map(|d| d.radial_charge()).collect();
         self.gballs[k] = g.geometric.iter().map(|gp| gp.bounds()).collect();
         self.dballs[k] = g
             .density
@@ -389,7 +394,10 @@ impl Model {
             // culling range, where F jumps by less than τ D_e: no boundary of
             // S and no piece of Φ (as in `piece_gradient`).
             let cut = d.is_some() && self.cuts[k][i];
-            let (v, cd) = g.density[i].value_and_cut(p, self.ranges[k][i], cut);
+            let (v, cd) = match self.radial[k][i] {
+                Some(rc) if !cut => (rc.value(p, self.ranges[k][i]), f64::INFINITY),
+                _ => g.density[i].value_and_cut(p, self.ranges[k][i], cut),
+            };
             if v != 0.0 {
                 any = true;
                 f += v;
@@ -477,7 +485,7 @@ impl Model {
                 let jet = g.geometric[j as usize].jet(p);
                 take(jet.value, jet.grad);
             }
-            let mut f = super::jet::Jet::constant(0.0);
+            let (mut f, mut fg) = (0.0, DVec3::ZERO);
             let mut any = false;
             for &i in &act.density[k] {
                 if !self.density_reaches(k, i as usize, p, margin) {
@@ -489,16 +497,20 @@ impl Model {
                     let (cd, cg) = dp.cut_distance(p, r);
                     take(cd, cg);
                 }
-                let jet = dp.jet(p, r);
-                if jet.value != 0.0 {
+                let (v, vg) = match self.radial[k][i as usize] {
+                    Some(rc) => rc.value_grad(p, r),
+                    None => dp.value_grad(p, r),
+                };
+                if v != 0.0 {
                     any = true;
-                    f = f.plus(jet);
+                    f += v;
+                    fg += vg;
                 }
             }
             if any {
                 let s = 1.0 / (self.scales[k] * self.de);
-                take(f.value * s, f.grad * s);
-                take((f.value - self.de) * s, f.grad * s);
+                take(f * s, fg * s);
+                take((f - self.de) * s, fg * s);
             }
         }
         best.1.normalize_or_zero()

@@ -1,7 +1,8 @@
 //! The icon entity: id, anchor, role, state, position, target and sensors.
 //!
 //! Every icon has a *handle* ([`Anchor::handle_uv`]): the point, a curve's
-//! middle control point, a region's centre. Targets, by role:
+//! mid-parameter point (held exactly: the first row of its identity), a
+//! region's centre. Targets, by role:
 //!
 //! * position: where the handle's surface point must go. A point icon holds
 //!   w(u,v) = target; a curve or an inside region holds its whole shape,

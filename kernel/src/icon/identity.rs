@@ -7,7 +7,9 @@
 //! that many points plus one per piece (`sampling::collocation`) holds it
 //! on the whole piece: the identity is A P = shape, A the collocation rows.
 //! Those rows are dependent (neighbouring pieces share control points), and
-//! a column-pivoted QR of Aᵀ = Q R Πᵀ splits their span in two:
+//! the curve's handle is always the first point row (see [`curve_identity`]),
+//! and a column-pivoted QR of the rest of Aᵀ (the handle's direction taken
+//! out), Aᵀ = Q R Πᵀ, splits their span in two:
 //!
 //! * the samples it picks first, while its pivot stays above [`POINT`] of
 //!   the first: kept as ordinary point rows (4 × 4 control points, sum 1),
@@ -63,31 +65,62 @@ pub struct Identity {
     pub rows: Vec<ScalarRow>,
 }
 
-/// The identity held by the collocation `samples` on `surface`.
-pub fn curve_identity(samples: &[(f64, f64)], surface: &BSplineSurface) -> Identity {
+/// The identity held by the collocation `samples` on `surface`, with
+/// `handle` (the curve's handle, [`super::Anchor::handle_uv`]) always its
+/// first point row.
+///
+/// Why the handle is a row of its own: a curve constraint's targets are
+/// its captured shape translated by `target − handle`, and a design rebuilt
+/// from its document measures that handle again on the current surface.
+/// Held only through the identity, the handle would follow the held shape
+/// to [`EXACT`] of its motion, so a rebuild after a pull found the curve
+/// "moved" by ~5e-9 and the solve translated it back, which a point
+/// constraint 0.8 mm from the curve turned into a 1.4e-5 mm bend of the
+/// whole 20 × 15 plate. As a point row the handle is held to round-off, so
+/// a rebuild finds every target where it is and moves nothing
+/// (`server/tests/icon_creation.rs`).
+pub fn curve_identity(
+    samples: &[(f64, f64)],
+    handle: (f64, f64),
+    surface: &BSplineSurface,
+) -> Identity {
+    let handle_row = surface_row(surface, handle.0, handle.1, 0, 0);
     let rows: Vec<_> = samples
         .iter()
         .map(|&(u, v)| surface_row(surface, u, v, 0, 0))
         .collect();
     let mut touched: Vec<usize> = rows
         .iter()
+        .chain(std::iter::once(&handle_row))
         .flat_map(|r| r.indices.iter().copied())
         .collect();
     touched.sort_unstable();
     touched.dedup();
-    // Aᵀ: one column per sample.
+    let column = |r: &ScalarRow| {
+        let mut c = vec![0.0; touched.len()];
+        for (&i, &w) in r.indices.iter().zip(&r.weights) {
+            if let Ok(k) = touched.binary_search(&i) {
+                c[k] += w;
+            }
+        }
+        c
+    };
+    let h = column(&handle_row);
+    let h_norm = h.iter().map(|x| x * x).sum::<f64>().sqrt();
+    // Aᵀ: one column per sample, the handle's direction taken out (it is
+    // the first point row whatever the pivoting picks).
     let mut at = Mat::<f64>::zeros(touched.len(), rows.len());
     for (s, r) in rows.iter().enumerate() {
-        for (&i, &w) in r.indices.iter().zip(&r.weights) {
-            if let Ok(c) = touched.binary_search(&i) {
-                at[(c, s)] += w;
-            }
+        let c = column(r);
+        let along: f64 = c.iter().zip(&h).map(|(a, b)| a * b).sum::<f64>() / (h_norm * h_norm);
+        for (k, (x, hk)) in c.iter().zip(&h).enumerate() {
+            at[(k, s)] = x - along * hk;
         }
     }
     let qr = at.col_piv_qr();
     let r = qr.thin_R();
     let k = r.nrows().min(r.ncols());
-    let first = if k > 0 { r[(0, 0)].abs() } else { 0.0 };
+    let first = h_norm.max(if k > 0 { r[(0, 0)].abs() } else { 0.0 });
     let rank = |tol: f64| {
         (0..k)
             .take_while(|&d| r[(d, d)].abs() > tol * first)
@@ -100,13 +133,13 @@ pub fn curve_identity(samples: &[(f64, f64)], surface: &BSplineSurface) -> Ident
     let mut extra = Vec::new();
     if exact > points {
         let q = qr.compute_thin_Q();
-        // One point row (weights sum to 1) to take each direction's sum off.
-        let a0 = fwd[0];
+        // The handle's point row (weights sum to 1) takes each direction's
+        // sum off.
         for j in points..exact {
             let sum: f64 = (0..touched.len()).map(|c| q[(c, j)]).sum();
             let mut row = ScalarRow::default();
             for (c, &index) in touched.iter().enumerate() {
-                let w = q[(c, j)] - sum * at[(c, a0)];
+                let w = q[(c, j)] - sum * h[c];
                 if w != 0.0 {
                     row.indices.push(index);
                     row.weights.push(w);
@@ -116,7 +149,9 @@ pub fn curve_identity(samples: &[(f64, f64)], surface: &BSplineSurface) -> Ident
         }
     }
     Identity {
-        samples: kept.into_iter().map(|s| samples[s]).collect(),
+        samples: std::iter::once(handle)
+            .chain(kept.into_iter().map(|s| samples[s]))
+            .collect(),
         rows: extra,
     }
 }

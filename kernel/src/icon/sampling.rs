@@ -250,7 +250,11 @@ pub fn placement(anchor: &Anchor, surface: &BSplineSurface) -> Result<Identity, 
             if uv_len < 1e-9 {
                 return Err(AnchorError::Degenerate("curve has no length in (u,v)"));
             }
-            Ok(curve_identity(&collocation(curve, surface), surface))
+            Ok(curve_identity(
+                &collocation(curve, surface),
+                anchor.handle_uv(),
+                surface,
+            ))
         }
         Anchor::Region {
             u0,

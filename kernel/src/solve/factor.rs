@@ -166,7 +166,12 @@ impl Factor {
                 MemStack::new(&mut self.factor_mem),
                 Default::default(),
             )
-            .map_err(|e| SolveError::Factor(format!("not positive definite: {e:?}")))?;
+            .map_err(|e| {
+                SolveError::Factor(format!(
+                    "the stiffness is not positive definite to working precision ({e:?}): \
+                     `rest` is too small against α and β for this many control points"
+                ))
+            })?;
         std::mem::swap(&mut self.l_vals, &mut self.spare);
         Ok(())
     }

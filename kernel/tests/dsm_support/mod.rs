@@ -192,3 +192,39 @@ impl Spec {
         }
     }
 }
+
+/// The DSM bench's shapes (a box rounded by 20 negative density primitives, 20
+/// fused sphere-based charges) and the 20-primitive handset.
+pub fn twenty_primitive_shapes() -> Vec<(&'static str, Model)> {
+    let mut rounded = Model::new(1.0, DEFAULT_TAU).unwrap();
+    rounded
+        .add(
+            vsculpt_kernel::dsm::shape_ops::rounded_box(
+                DVec3::new(1.5, 1.0, 0.8),
+                Placement::IDENTITY,
+                0.3,
+                1.0,
+            )
+            .unwrap(),
+        )
+        .unwrap();
+    let mut blobby = Model::new(1.0, DEFAULT_TAU).unwrap();
+    let density = (0..20)
+        .map(|i| {
+            let t = i as f64 / 20.0 * std::f64::consts::TAU;
+            let c = DVec3::new(2.0 * t.cos(), 1.2 * (2.0 * t).sin(), 0.6 * (3.0 * t).cos());
+            DensityPrimitive::sphere(c, 1.6, 1.5).unwrap()
+        })
+        .collect();
+    blobby
+        .add(Group {
+            density,
+            ..Default::default()
+        })
+        .unwrap();
+    vec![
+        ("rounded_box_20", rounded),
+        ("blobby_20", blobby),
+        ("handset", handset().model()),
+    ]
+}

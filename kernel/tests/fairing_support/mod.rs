@@ -1,11 +1,36 @@
 //! What the fairing tests share: the paper's test mesh — an octant of the
-//! unit sphere as a triangulated lattice — and a seeded perturbation of its
-//! interior (an LCG independent of the code under test).
+//! unit sphere as a triangulated lattice —, a seeded perturbation of its
+//! interior (an LCG independent of the code under test), and a run of
+//! global sweeps to convergence.
 
 #![allow(dead_code)]
 
 use glam::DVec3;
-use vsculpt_kernel::fairing::PointMesh;
+use vsculpt_kernel::fairing::{
+    Acceleration, Control, FairingOptions, FairingReport, PointMesh, SweepSolve, fair_sweeps,
+};
+
+/// `start` faired towards `goals` by global sweeps (iterative solves) with
+/// `acceleration` until `options` says it has converged: the faired mesh
+/// and the report.
+pub fn sweep(
+    start: &PointMesh,
+    goals: &[f64],
+    options: &FairingOptions,
+    acceleration: Acceleration,
+) -> (PointMesh, FairingReport) {
+    let mut mesh = start.clone();
+    let report = fair_sweeps(
+        &mut mesh,
+        goals,
+        options,
+        SweepSolve::Iterative,
+        acceleration,
+        |_| Control::Continue,
+    )
+    .unwrap();
+    (mesh, report)
+}
 
 /// A 64-bit linear congruential generator (Knuth's MMIX constants).
 pub struct Lcg(pub u64);
