@@ -15,7 +15,15 @@
 //! * `first_frame_after_add` — the first frame of a grab just after an icon
 //!   was added (the drag response recomputed, the pending column solved);
 //! * `pin_change` — a small region constraint switched (sleeping ↔
-//!   passive): the pinned control points change (a numeric refactor);
+//!   passive): the pinned control points change (answered through the
+//!   factor of the old set, `solve::pin_update`, when small enough; else a
+//!   numeric refactor);
+//! * `pin_add` — the direction that costs: the region switched on and
+//!   solved (switched off outside the timing);
+//! * `first_frame_after_pin` — the first frame of a grab right after the
+//!   region was switched on (its pins not yet settled);
+//! * `pin_settle` — the deferred refactor that settles a pin change
+//!   (`Design::settle_pins`);
 //! * `refactor` — a material change: numeric refactorisation + solve;
 //! * `tessellate` — the client tessellation at the paper's polygon count;
 //! * `full_frame` — drag frame + tessellation with normals and curvature.
@@ -268,6 +276,55 @@ fn benches(c: &mut Criterion) {
             b.iter(|| {
                 k += 1;
                 black_box(switch_and_solve(&mut sc.design, region, k))
+            })
+        });
+        // The direction that costs: the region switched on (its ~100
+        // control points pinned) and solved; switched off outside the timing.
+        group.bench_function(BenchmarkId::new("pin_add", &id), |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for _ in 0..iters {
+                    let start = std::time::Instant::now();
+                    black_box(switch_and_solve(&mut sc.design, region, 0));
+                    spent += start.elapsed();
+                    switch_and_solve(&mut sc.design, region, 1);
+                }
+                spent
+            })
+        });
+        // The first frame of a grab right after the region was switched on
+        // (its pins answered through the old factor, not yet settled), and
+        // the deferred refactor that settles them.
+        group.bench_function(BenchmarkId::new("first_frame_after_pin", &id), |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for _ in 0..iters {
+                    sc.design.set_state(region, IconState::Passive).unwrap();
+                    sc.design.solve().unwrap();
+                    let at = sc.design.icon(sc.load).unwrap().xyz;
+                    let start = std::time::Instant::now();
+                    sc.design.drag_start(sc.load).unwrap();
+                    black_box(sc.design.drag(sc.load, at + DVec3::Z * 0.001).unwrap());
+                    spent += start.elapsed();
+                    sc.design.release(sc.load).unwrap();
+                    sc.design.set_state(region, IconState::Sleeping).unwrap();
+                    sc.design.solve().unwrap();
+                    // Back to a factor without the region's pins.
+                    sc.design.settle_pins().unwrap();
+                }
+                spent
+            })
+        });
+        group.bench_function(BenchmarkId::new("pin_settle", &id), |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                for k in 0..iters {
+                    switch_and_solve(&mut sc.design, region, k);
+                    let start = std::time::Instant::now();
+                    black_box(sc.design.settle_pins().unwrap());
+                    spent += start.elapsed();
+                }
+                spent
             })
         });
         sc.design.remove_icon(region).unwrap();

@@ -41,6 +41,11 @@ impl Forward {
     pub fn values(&self) -> &[f64] {
         &self.values
     }
+
+    /// y, owned.
+    pub fn into_values(self) -> Vec<f64> {
+        self.values
+    }
 }
 
 /// K = L Lᵀ, ready for batched solves.
@@ -310,6 +315,52 @@ impl Factor {
             }
         }
         gram
+    }
+
+    /// The index ranges (factor order) of the supernodes a forward half
+    /// reached: it is zero outside them.
+    fn reach_ranges<'a>(
+        &'a self,
+        f: &'a Forward,
+    ) -> impl Iterator<Item = std::ops::Range<usize>> + 'a {
+        let sym = match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(sym) => Some(sym),
+            SymbolicCholeskyRaw::Simplicial(_) => None,
+        };
+        f.reach.iter().filter_map(move |&s| {
+            let sym = sym?;
+            Some(sym.supernode_begin()[s]..sym.supernode_end()[s])
+        })
+    }
+
+    /// f · x over f's reach (x a dense vector in the factor's order).
+    pub fn dot_on_reach(&self, f: &Forward, x: &[f64]) -> f64 {
+        self.reach_ranges(f)
+            .map(|r| {
+                f.values[r.clone()]
+                    .iter()
+                    .zip(&x[r])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// y += alpha · f over f's reach (y a dense vector in the factor's
+    /// order).
+    pub fn axpy_on_reach(&self, alpha: f64, f: &Forward, y: &mut [f64]) {
+        for r in self.reach_ranges(f) {
+            for (yi, &fi) in y[r.clone()].iter_mut().zip(&f.values[r]) {
+                *yi += alpha * fi;
+            }
+        }
+    }
+
+    /// Whether the factor is supernodal: only then are forward and
+    /// backward halves ([`Self::forward_sparse`], [`Self::forward_in_place`],
+    /// [`Self::backward_in_place`]) available.
+    pub fn is_supernodal(&self) -> bool {
+        self.tree.is_some()
     }
 
     /// The forward halves of dense right-hand sides: every column a of `x`

@@ -4,6 +4,7 @@
 
 mod error;
 mod factor;
+mod pin_update;
 mod problem;
 mod solver;
 

@@ -24,7 +24,18 @@
 //!
 //! Pins (a vector equation on one control point) are not rows of C: the
 //! factor is of K with them eliminated (see [`Stiffness::with_pinned`]),
-//! their values enter as a moved reference. When S is not provably well
+//! their values enter as a moved reference. A change of the pinned set (a
+//! region or edge icon added, removed or switched) keeps the factor of the
+//! old set when the change is small and well conditioned: S over the new
+//! pinned set is built through it (see `pin_update`: forward halves of the
+//! changed points' columns, a small dense R, the columns kept over the old
+//! factor), with no refactor and no full sparse solve, so an edit that
+//! holds the shape where it is (proved by `still_optimal`) costs no
+//! refactor at all. The refactor is deferred to [`Solver::settle_pins`]: a
+//! host calls it when idle, and a solve that must move the shape or the
+//! first frame of a grab calls it first (measured: solving through the
+//! update cost more than refactoring, see kernel/README.md). When S is not
+//! provably well
 //! conditioned, the vector equations whose rows lie in K's pattern are
 //! folded into the factor (K + Σ ρ a aᵀ, see `Folded`).
 //!
@@ -45,6 +56,7 @@ use faer::Mat;
 use glam::DVec3;
 
 use super::factor::{Factor, Forward};
+use super::pin_update::PinUpdate;
 
 use super::{Equation, Group, GroupKey, Problem, ScalarRow, SolveError};
 use crate::energy::Stiffness;
@@ -291,8 +303,18 @@ pub struct Solver {
     /// K with the pinned control points eliminated (see
     /// [`Stiffness::with_pinned`]), factored.
     factor: Factor,
-    /// Which control points `factor` has eliminated.
+    /// The pinned control points of the problem: eliminated from the
+    /// unknowns (by the factor, or by `update`).
     pinned: Vec<bool>,
+    /// Which control points `factor` has eliminated.
+    factored: Vec<bool>,
+    /// When `pinned` differs from `factored`: the change held over the
+    /// factor of `factored`, its refactor deferred (see [`PinUpdate`],
+    /// [`Self::settle_pins`]).
+    update: Option<PinUpdate>,
+    /// Whether a problem was set since the factor was made (see
+    /// [`Self::repin`]).
+    served: bool,
     /// Equations folded into the factor (see [`Folded`]).
     folded: Vec<Folded>,
     /// K + Σ ρ a aᵀ over `folded`: the matrix the factor eliminates the
@@ -347,6 +369,9 @@ impl Solver {
         let factor = Factor::new(stiffness.clone())?;
         Ok(Self {
             pinned: vec![false; stiffness.dim()],
+            factored: vec![false; stiffness.dim()],
+            update: None,
+            served: false,
             folded: Vec::new(),
             augmented: stiffness.clone(),
             stiffness,
@@ -439,6 +464,81 @@ impl Solver {
         self.pending_forward.clear();
         self.retired.clear();
         self.response = None;
+    }
+
+    /// Takes the pinned set `pinned` over the current factor (see
+    /// [`PinUpdate`]) instead of refactoring: `false` (nothing changed) when
+    /// that is not possible or would cost more than the refactor. The
+    /// columns of the factor's own operator are kept (`retired`) for when
+    /// the pinned set goes back to the factor's (free) or for the update's
+    /// Gram entries.
+    fn repin(&mut self, pinned: &[bool]) -> bool {
+        if !self.served {
+            // A fresh solver's first pins: its factor has served nothing
+            // yet, so the refactor is the lasting choice.
+            return false;
+        }
+        let update = if pinned == self.factored.as_slice() {
+            None
+        } else {
+            match PinUpdate::new(&self.factor, &self.augmented, &self.factored, pinned) {
+                Some(u) => Some(u),
+                None => return false,
+            }
+        };
+        if self.update.is_none() {
+            // The current columns are the factor's own: keep them.
+            let all: Vec<Column> = Vec::new();
+            self.retire(&all);
+        }
+        self.rows.clear();
+        self.free_rows.clear();
+        self.z.clear();
+        self.g.clear();
+        self.pending.clear();
+        self.pending_forward.clear();
+        self.response = None;
+        self.s_exact = false;
+        self.update = update;
+        self.pinned = pinned.to_vec();
+        true
+    }
+
+    /// Whether a change of the pinned set is held over the factor of an
+    /// earlier set, its refactor deferred (see [`Self::settle_pins`]).
+    pub fn pins_pending(&self) -> bool {
+        self.update.is_some()
+    }
+
+    /// Refactors for the current pinned set when a change of it is held
+    /// over the factor of an earlier one (a numeric refactorisation and the
+    /// problem's columns: the cost a pin change deferred). [`Self::solve`]
+    /// (when the shape must move) and [`Self::drag`] call it first; a host
+    /// may call it when idle so that neither pays. `Ok(false)` when nothing
+    /// was pending. On error nothing changes.
+    pub fn settle_pins(&mut self) -> Result<bool, SolveError> {
+        if self.update.is_none() {
+            return Ok(false);
+        }
+        let pinned = self.pinned.clone();
+        let folded = self.folded.clone();
+        let old_factored = self.factored.clone();
+        // The same K and problem: the last answer stays the proof of
+        // `still_optimal` (a refactor forgets it).
+        let last = self.last.take();
+        self.rebuild_factor(pinned, folded)?;
+        self.last = last;
+        let problem = std::mem::take(&mut self.problem);
+        if let Err(e) = self.set_problem(problem.clone()) {
+            // Back to the earlier factor and the update over it.
+            let folded = self.folded.clone();
+            let pinned = self.pinned.clone();
+            self.rebuild_factor(old_factored, folded)?;
+            self.repin(&pinned);
+            self.set_problem(problem)?;
+            return Err(e);
+        }
+        Ok(true)
     }
 
     /// The current problem.
@@ -595,7 +695,9 @@ impl Solver {
         };
         let mut refactored = false;
         let (z, pending, forward, g, s_pinv, rank_deficiency, s_exact) = loop {
-            if pinned != self.pinned || !same_folds(&fold, &self.folded) {
+            if same_folds(&fold, &self.folded) && pinned != self.pinned && self.repin(&pinned) {
+                refactored = true;
+            } else if pinned != self.pinned || !same_folds(&fold, &self.folded) {
                 if let Err(e) = self.rebuild_factor(pinned.clone(), fold.clone()) {
                     if refactored {
                         self.restore_factor(old);
@@ -604,7 +706,11 @@ impl Solver {
                 }
                 refactored = true;
             }
-            let (z, pending, forward, g, s) = self.schur(&rows, &free_rows, &eqs, &loads);
+            let (z, pending, forward, g, s) = if self.update.is_some() {
+                self.schur_updated(&rows, &free_rows, &eqs)
+            } else {
+                self.schur(&rows, &free_rows, &eqs, &loads)
+            };
             // Same factor: S⁻¹ by block updates of the current one when
             // they are exact enough, else from scratch.
             let updated = if refactored {
@@ -661,7 +767,10 @@ impl Solver {
                 .zip(&z)
                 .all(|(a, b)| Arc::ptr_eq(&a.values, &b.values));
         let response = self.response.take().filter(|_| same_structure);
-        self.retire(&z);
+        if self.update.is_none() {
+            // Columns of an update's operator are not the factor's own.
+            self.retire(&z);
+        }
         self.problem = problem;
         self.rows = rows;
         self.free_rows = free_rows;
@@ -680,6 +789,7 @@ impl Solver {
         self.pin_redundant = pin_redundant;
         self.base = None;
         self.response = response;
+        self.served = true;
         Ok(())
     }
 
@@ -836,22 +946,133 @@ impl Solver {
                 }
             }
         }
-        // S = C K⁻¹ Cᵀ and its pseudo-inverse.
-        let m = eqs.len();
-        let mut s = Mat::<f64>::zeros(m, m);
-        for (e, ee) in eqs.iter().enumerate() {
-            for (f, ff) in eqs.iter().enumerate().skip(e) {
-                let mut v = 0.0;
-                for t in &ee.terms {
-                    for u in ff.terms.iter().filter(|u| u.k == t.k) {
-                        v += t.coef * u.coef * g[t.col * nc + u.col];
+        let s = assemble_s(eqs, &g, nc);
+        (z, pending, forward.unwrap_or_default(), g, s)
+    }
+
+    /// [`Self::schur`] while a pinned-set change is answered through the
+    /// factor of the old set ([`PinUpdate`]): Z = A₁⁻¹[free rows] with
+    /// A₁ = K̃ with the current pins eliminated. Columns already solved for
+    /// this update are kept; the others are left pending, their entries of
+    /// G from Gᵢⱼ = a₀ᵢᵀ Ã⁻¹ a₀ⱼ + αᵢᵀ R⁻¹ αⱼ (see `pin_update`): the first
+    /// term from the row's column over the factor when one is at hand (kept
+    /// from before the change: a dot product) or from forward halves, α
+    /// from the same. No full sparse solve.
+    fn schur_updated(
+        &mut self,
+        rows: &[ScalarRow],
+        free_rows: &[ScalarRow],
+        eqs: &[ScalarEq],
+    ) -> Schur {
+        let Some(update) = self.update.as_ref() else {
+            unreachable!("schur_updated without an update");
+        };
+        let old: HashMap<RowKey, usize> = self
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(c, r)| (row_key(r), c))
+            .collect();
+        let mut was_pending = vec![false; self.z.len()];
+        for &c in &self.pending {
+            was_pending[c] = true;
+        }
+        let mut z: Vec<Column> = rows
+            .iter()
+            .map(|r| match old.get(&row_key(r)) {
+                Some(&oc) if !was_pending[oc] => self.z[oc].clone(),
+                _ => Column::pending(),
+            })
+            .collect();
+        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].norm.is_nan()).collect();
+        // Per missing row: a₀ (its free part over the factor's free
+        // points), b_F, and its base column Ã⁻¹a₀ when kept (a row that
+        // touches no newly pinned point: its part over the factor's free
+        // points is a₀).
+        let parts: Vec<(SparseRhs, Vec<f64>, Option<Column>)> = missing
+            .iter()
+            .map(|&c| {
+                let (rest, b_f) = update.split_sparse(&free_rows[c].indices, &free_rows[c].weights);
+                let base = if update.touches_newly(&rows[c].indices) {
+                    None
+                } else {
+                    let key = row_key(&rows[c]);
+                    self.retired
+                        .iter()
+                        .find(|(k, _)| *k == key)
+                        .map(|(_, col)| col.clone())
+                };
+                (rest, b_f, base)
+            })
+            .collect();
+        let need: Vec<(&[usize], &[f64])> = parts
+            .iter()
+            .filter(|p| p.2.is_none())
+            .map(|p| (p.0.0.as_slice(), p.0.1.as_slice()))
+            .collect();
+        let mut fresh = self
+            .factor
+            .forward_sparse(&need)
+            .unwrap_or_default()
+            .into_iter();
+        let forward: Vec<Option<Forward>> = parts
+            .iter()
+            .map(|p| if p.2.is_none() { fresh.next() } else { None })
+            .collect();
+        let xis: Vec<(Vec<f64>, Vec<f64>)> = parts
+            .iter()
+            .zip(&forward)
+            .map(|((_, b_f, base), f)| {
+                let alpha = match (base, f) {
+                    (Some(col), _) => update.alpha_of_column(&col.values, b_f),
+                    (None, Some(f)) => update.alpha_of_forward(&self.factor, f.values(), b_f),
+                    (None, None) => vec![0.0; b_f.len()],
+                };
+                let xi = update.xi(&alpha);
+                (alpha, xi)
+            })
+            .collect();
+        let nc = rows.len();
+        let mut at = vec![usize::MAX; nc];
+        for (m, &c) in missing.iter().enumerate() {
+            at[c] = m;
+        }
+        let sparse_dot = |(i, w): &SparseRhs, x: &[f64]| -> f64 {
+            i.iter().zip(w).map(|(&i, &w)| w * x[i]).sum()
+        };
+        let dot = |row: &ScalarRow, col: &Column| -> f64 {
+            row.indices
+                .iter()
+                .zip(&row.weights)
+                .map(|(&i, &w)| w * col.values[i])
+                .sum()
+        };
+        let mut g = vec![0.0; nc * nc];
+        for a in 0..nc {
+            for b in a..nc {
+                let v = match (at[a], at[b]) {
+                    (usize::MAX, _) => dot(&free_rows[b], &z[a]),
+                    (_, usize::MAX) => dot(&free_rows[a], &z[b]),
+                    (i, j) => {
+                        let first = match (&parts[i].2, &parts[j].2, &forward[i], &forward[j]) {
+                            (_, Some(zb), _, _) => sparse_dot(&parts[i].0, &zb.values),
+                            (Some(za), _, _, _) => sparse_dot(&parts[j].0, &za.values),
+                            (_, _, Some(fa), Some(fb)) => self.factor.dot_on_reach(fa, fb.values()),
+                            _ => 0.0,
+                        };
+                        let cross: f64 = xis[i].0.iter().zip(&xis[j].1).map(|(x, y)| x * y).sum();
+                        first + cross
                     }
-                }
-                s[(e, f)] = v;
-                s[(f, e)] = v;
+                };
+                g[a * nc + b] = v;
+                g[b * nc + a] = v;
             }
         }
-        (z, pending, forward.unwrap_or_default(), g, s)
+        for &c in &missing {
+            z[c] = Column::pending();
+        }
+        let s = assemble_s(eqs, &g, nc);
+        (z, missing, Vec::new(), g, s)
     }
 
     /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
@@ -872,6 +1093,7 @@ impl Solver {
     /// factor serves them all. Dense columns of K̃⁻¹ per right-hand side,
     /// in `extra`'s order.
     fn solve_batch(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
+        debug_assert!(self.update.is_none(), "solves settle a pin change first");
         let n = self.dim();
         let pending = std::mem::take(&mut self.pending);
         let forward = std::mem::take(&mut self.pending_forward);
@@ -1007,6 +1229,8 @@ impl Solver {
     fn rebuild_factor(&mut self, pinned: Vec<bool>, folded: Vec<Folded>) -> Result<(), SolveError> {
         let augmented = fold(&self.stiffness, &folded);
         self.factor.refactor(augmented.with_pinned(&pinned))?;
+        self.factored = pinned.clone();
+        self.update = None;
         self.pinned = pinned;
         self.folded = folded;
         self.augmented = augmented;
@@ -1138,6 +1362,8 @@ impl Solver {
             });
             return self.checked(self.report(out, None, DVec3::ZERO), out);
         }
+        // The shape must move: a deferred pin change is settled first.
+        self.settle_pins()?;
         self.solve_pending();
         let inputs = self.inputs(None, DVec3::ZERO);
         let (delta, lambda) = if self.at_rest(&inputs, reference) {
@@ -1309,6 +1535,9 @@ impl Solver {
         reference: &[DVec3],
         out: &mut [DVec3],
     ) -> Result<SolveReport, SolveError> {
+        // A deferred pin change is settled before a grab's first frame
+        // (a pin change drops the base and the response).
+        self.settle_pins()?;
         let cached = self.base.as_ref().is_some_and(|b| b.reference == reference);
         if cached {
             // Same reference as the cached base: already checked.
@@ -2285,6 +2514,25 @@ type SparseRhs = (Vec<usize>, Vec<f64>);
 /// What `Solver::schur` builds: Z (pending placeholders included), the
 /// pending columns and their forward halves, G (row-major) and S.
 type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
+
+/// S = C K⁻¹ Cᵀ over the scalar equations from G (row-major, nc × nc).
+fn assemble_s(eqs: &[ScalarEq], g: &[f64], nc: usize) -> Mat<f64> {
+    let m = eqs.len();
+    let mut s = Mat::<f64>::zeros(m, m);
+    for (e, ee) in eqs.iter().enumerate() {
+        for (f, ff) in eqs.iter().enumerate().skip(e) {
+            let mut v = 0.0;
+            for t in &ee.terms {
+                for u in ff.terms.iter().filter(|u| u.k == t.k) {
+                    v += t.coef * u.coef * g[t.col * nc + u.col];
+                }
+            }
+            s[(e, f)] = v;
+            s[(f, e)] = v;
+        }
+    }
+    s
+}
 
 /// One input of a batched refinement: σ = d − C P_ref − C δ, and per
 /// coordinate the stationarity residual ρ_k when it needs a refinement step.
