@@ -6,7 +6,7 @@
 //! size, and each creation is undone again. The same on paper 003's five
 //! surfaces (Table 2) bent by the paper's set-up, where a held curve must
 //! also stay where it was created, between its samples too, across the
-//! rebuilds from the document that each undo causes and the drags after them.
+//! rebuilds from the document that every edit and undo cause, and the drags after them.
 
 mod common;
 
@@ -343,7 +343,7 @@ async fn on_the_papers_five_surfaces_icons_move_nothing_and_a_held_curve_stays()
             c.ok(json!({"type": "undo"})).await;
         }
 
-        // After those rebuilds (every undo reloads the document), a kept icon
+        // After those rebuilds (every edit and undo rebuilds the part), a kept icon
         // and a second pull: the
         // curve is still where it was created, everywhere along it.
         c.ok(json!({"type": "create_icon", "part": part, "spec": {
