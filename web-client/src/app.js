@@ -14,6 +14,7 @@ import { TessellationWorker } from './tessellate.js';
 import { View } from './view.js';
 import { IconLayer } from './icons.js';
 import { Link } from './net.js';
+import { KIND_SURFACE } from './frame.js';
 import { GeometryCache } from './geometry-cache.js';
 import { XRSculpt } from './xr.js';
 import { Design, domainOf, relationParts } from './design.js';
@@ -201,7 +202,7 @@ function drawnIcons() {
 const geometryOf = (partId) => design.parts.get(partId)?.geometry || null;
 
 /** Work counted for BENCHMARKS.md (bench/browser-fps.mjs reads it): full redraws, surfaces sent to the worker and shown; when the first picture was drawn (ms since navigation start). */
-const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null, firstPicture: null, prewarmedAt: null };
+const perf = { redraws: 0, submitted: 0, shown: 0, workerFailed: null, firstPicture: null, prewarmedAt: null, prewarmPlain: null };
 
 /** Per part: how many shapes arrived (frames, snapshots) and which of them its drawing shows. */
 const partSeq = new Map();
@@ -1287,6 +1288,7 @@ let prewarmed = false;
 function prewarmOnce(options) {
   if (prewarmed) return;
   prewarmed = true;
+  perf.prewarmPlain = options.plain;
   perf.prewarm = view.prewarm(options).then(() => {
     perf.prewarmedAt = performance.now();
     mark('prewarmed');
@@ -1303,11 +1305,13 @@ const link = token
       onFrame,
       onStatus: status,
       // The first picture's programs compile while the design is on its way; a warm visit, whose
-      // kept geometry is drawn before any hello is answered, also the plain ones it draws, and
-      // draws them once (view.prewarm).
+      // kept geometry is drawn before any hello is answered, also the plain ones it draws (lines
+      // of curves, bodies and networks: any kept frame but a surface's, kind 1), and draws them
+      // once (view.prewarm). A kept picture of surfaces alone draws only the studio program:
+      // compiling the plain ones then only delayed it (81 × 159, quiet: 0.1-0.2 s).
       onHello: () => {
         mark('hello');
-        prewarmOnce({ plain: link.cacheUse.replayed > 0 });
+        prewarmOnce({ plain: link.cacheUse.replayed > 0 && link.cacheUse.kinds.some((k) => k !== KIND_SURFACE) });
       },
       // The last visit's shape, drawn at once (geometry-cache.js); `?geometry_cache=0` joins without it.
       cache: params.get('geometry_cache') === '0' ? null : new GeometryCache(),

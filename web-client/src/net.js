@@ -41,7 +41,7 @@ export class Link {
     this.design = design;
     this.cache = cache;
     /** What the geometry cache did on this page: frames drawn from it, the name offered, whether the server confirmed it (null until the welcome). */
-    this.cacheUse = { replayed: 0, offered: null, confirmed: null, saved: null };
+    this.cacheUse = { replayed: 0, kinds: [], offered: null, confirmed: null, saved: null };
     /** Called each time a hello has been sent (the page prepares its first picture meanwhile). */
     this.onHello = onHello;
     this.token = token;
@@ -61,7 +61,12 @@ export class Link {
     this.cached = (cache ? withTimeout(cache.load(design), CACHE_WAIT_MS) : Promise.resolve(null)).then((entry) => {
       if (!entry || this.welcomed) return null;
       let read = 0;
-      for (const f of entry.frames) if (this.replay(f.slice(0))) read++;
+      for (const f of entry.frames) {
+        // The kinds drawn (byte 4 of each frame): app.js prewarms the programs they need.
+        const kind = f.byteLength > 4 ? new Uint8Array(f)[4] : null;
+        if (kind !== null && !this.cacheUse.kinds.includes(kind)) this.cacheUse.kinds.push(kind);
+        if (this.replay(f.slice(0))) read++;
+      }
       this.cacheUse.replayed = read;
       // A frame that cannot be read is not offered: the server then sends them all, and they replace what was drawn.
       return read === entry.frames.length ? entry : null;

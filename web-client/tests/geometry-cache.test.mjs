@@ -132,6 +132,9 @@ async function warmVisit() {
     assert.equal(warm.offered, cold.saved);
     assert.equal(warm.confirmed, true, 'the server found the kept frames current');
     assert.equal(page.binaryFrames, 0, 'the server sent no frame: the picture came from the cache');
+    // A kept picture of a surface alone: only the studio program is prewarmed (no lines to draw).
+    assert.deepEqual(await page.evaluate(() => window.vsculpt.link.cacheUse.kinds), [1]);
+    assert.equal(await page.evaluate(() => window.vsculpt.perf.prewarmPlain), false);
     assertSamePoints(await shownPoints(page), await restPoints(design), 'control points against the REST document');
     assertSamePoints(await drawnMeshes(page), await freshMeshes(url), 'drawn meshes against a page without the cache', 0);
   } finally {
@@ -153,6 +156,9 @@ async function demoVisit() {
     await settled(page);
     const use = await page.evaluate(() => window.vsculpt.link.cacheUse);
     assert.ok(use.replayed >= 5, `frames drawn from the cache: ${use.replayed}`);
+    // Curves and a body among the kept frames: their plain (line) programs are prewarmed too.
+    assert.ok((await page.evaluate(() => window.vsculpt.link.cacheUse.kinds)).some((k) => k !== 1));
+    assert.equal(await page.evaluate(() => window.vsculpt.perf.prewarmPlain), true);
     assert.equal(use.confirmed, true);
     assert.equal(page.binaryFrames, 0);
     assert.deepEqual(errors, []);
