@@ -176,15 +176,13 @@ impl BodyFrame {
     /// Parses a body frame. Any byte string gives a frame or an error; never a panic.
     pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
         crate::frame::check_header(bytes, KIND_BODY, BODY_HEADER_BYTES, "body frame")?;
-        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
-        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let counts = [u32_at(36), u32_at(40), u32_at(44)];
+        let le = crate::frame::Le(bytes);
+        let counts = [le.u32(36), le.u32(40), le.u32(44)];
         let (v, t, l, s) = (
-            u32_at(48) as usize,
-            u32_at(52) as usize,
-            u32_at(56) as usize,
-            u32_at(60) as usize,
+            le.u32(48) as usize,
+            le.u32(52) as usize,
+            le.u32(56) as usize,
+            le.u32(60) as usize,
         );
         let n = counts
             .iter()
@@ -209,7 +207,7 @@ impl BodyFrame {
                 bytes.len()
             )));
         }
-        let degrees = [0, 1, 2].map(|d| u32_at(spline + 4 * d));
+        let degrees = [0, 1, 2].map(|d| le.u32(spline + 4 * d));
         if degrees.iter().any(|&p| p == 0 || p > MAX_FRAME_DEGREE) {
             return Err(bad(format!(
                 "a body frame's degrees must be 1..={MAX_FRAME_DEGREE}"
@@ -225,7 +223,7 @@ impl BodyFrame {
         }
         let vec3s = |at: usize, count: usize| -> Vec<[f32; 3]> {
             (0..count)
-                .map(|k| [0, 1, 2].map(|a| f32_at(at + 12 * k + 4 * a)))
+                .map(|k| [0, 1, 2].map(|a| le.f32(at + 12 * k + 4 * a)))
                 .collect()
         };
         let lat = BODY_HEADER_BYTES;
@@ -235,26 +233,26 @@ impl BodyFrame {
         let dirs = tri + 12 * t;
         let pts = dirs + 4 * l;
         let frame = Self {
-            design: u64_at(8),
-            part: u64_at(16),
-            revision: u64_at(24),
+            design: le.u64(8),
+            part: le.u64(16),
+            revision: le.u64(24),
             flags: u16::from_le_bytes([bytes[6], bytes[7]]),
-            t: f32_at(32),
+            t: le.f32(32),
             counts,
             lattice: vec3s(lat, n),
             positions: vec3s(pos, v),
             normals: vec3s(nor, v),
             triangles: (0..t)
-                .map(|k| [0, 1, 2].map(|a| u32_at(tri + 12 * k + 4 * a)))
+                .map(|k| [0, 1, 2].map(|a| le.u32(tri + 12 * k + 4 * a)))
                 .collect(),
             line_samples: s as u32,
-            line_dirs: (0..l).map(|k| u32_at(dirs + 4 * k)).collect(),
+            line_dirs: (0..l).map(|k| le.u32(dirs + 4 * k)).collect(),
             line_points: vec3s(pts, l * s),
             degrees,
             knots: {
                 let mut at = spline + 12;
                 lens.map(|len| {
-                    let k = (0..len).map(|i| f32_at(at + 4 * i)).collect();
+                    let k = (0..len).map(|i| le.f32(at + 4 * i)).collect();
                     at += 4 * len;
                     k
                 })

@@ -80,10 +80,10 @@ pub fn unshuffle(bytes: &[u8], word: usize) -> Vec<u8> {
 /// frame's control points (12 bytes each, after its knots), a drag basis's
 /// ρ (4 bytes each, after its header); other kinds are not shuffled.
 fn records(inner: &[u8]) -> (usize, usize) {
-    let u32_at = |o: usize| u32::from_le_bytes(inner[o..o + 4].try_into().unwrap_or([0; 4]));
+    let le = crate::frame::Le(inner);
     match inner[4] {
         KIND_SURFACE | KIND_CURVE if inner.len() >= HEADER_BYTES => {
-            let (nu, nv) = (u32_at(32) as usize, u32_at(36) as usize);
+            let (nu, nv) = (le.u32(32) as usize, le.u32(36) as usize);
             let (du, dv) = (inner[40] as usize, inner[41] as usize);
             match Layout::new(inner[4], nu, nv, du, dv, 0) {
                 Some(l) if l.points <= inner.len() => (12, l.points),

@@ -83,6 +83,36 @@ pub struct GeometryFrame {
     pub icons: Vec<FrameIcon>,
 }
 
+/// Little-endian reads at byte offsets of a frame whose length was checked
+/// first (a short read gives 0, never a panic, for the multi-byte widths;
+/// `u16` needs its two bytes in range). Shared by every binary decoder.
+#[derive(Clone, Copy)]
+pub(crate) struct Le<'a>(pub &'a [u8]);
+
+impl Le<'_> {
+    pub(crate) fn u16(self, o: usize) -> u16 {
+        u16::from_le_bytes([self.0[o], self.0[o + 1]])
+    }
+    pub(crate) fn u32(self, o: usize) -> u32 {
+        u32::from_le_bytes(self.bytes(o))
+    }
+    pub(crate) fn u64(self, o: usize) -> u64 {
+        u64::from_le_bytes(self.bytes(o))
+    }
+    pub(crate) fn f32(self, o: usize) -> f32 {
+        f32::from_le_bytes(self.bytes(o))
+    }
+    pub(crate) fn f64(self, o: usize) -> f64 {
+        f64::from_le_bytes(self.bytes(o))
+    }
+    fn bytes<const N: usize>(self, o: usize) -> [u8; N] {
+        self.0
+            .get(o..o + N)
+            .and_then(|b| b.try_into().ok())
+            .unwrap_or([0; N])
+    }
+}
+
 fn bad(message: impl Into<String>) -> ProtocolError {
     ProtocolError::new(ErrorCode::Malformed, message)
 }
@@ -318,14 +348,10 @@ impl GeometryFrame {
                 format!("frame version {} is not {PROTOCOL_VERSION}", bytes[5]),
             ));
         }
-        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
-        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
-        let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
-        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let (nu, nv) = (u32_at(32), u32_at(36));
+        let le = crate::frame::Le(bytes);
+        let (nu, nv) = (le.u32(32), le.u32(36));
         let (degree_u, degree_v) = (bytes[40], bytes[41]);
-        let n_icons = u32_at(44) as usize;
+        let n_icons = le.u32(44) as usize;
         if nu as usize > MAX_GRID || nv as usize > MAX_GRID || n_icons > MAX_FRAME_ICONS {
             return Err(ProtocolError::new(
                 ErrorCode::TooLarge,
@@ -372,28 +398,28 @@ impl GeometryFrame {
         };
         let frame = Self {
             kind,
-            design: u64_at(8),
-            part: u64_at(16),
-            revision: u64_at(24),
-            flags: u16_at(6),
+            design: le.u64(8),
+            part: le.u64(16),
+            revision: le.u64(24),
+            flags: le.u16(6),
             degree_u,
             degree_v,
             nu,
             nv,
-            knots_u: (0..nku).map(|k| f64_at(layout.knots_u + 8 * k)).collect(),
-            knots_v: (0..nkv).map(|k| f64_at(layout.knots_v + 8 * k)).collect(),
+            knots_u: (0..nku).map(|k| le.f64(layout.knots_u + 8 * k)).collect(),
+            knots_v: (0..nkv).map(|k| le.f64(layout.knots_v + 8 * k)).collect(),
             points: (0..nu as usize * nv as usize)
                 .map(|k| {
                     let o = layout.points + 12 * k;
-                    [f32_at(o), f32_at(o + 4), f32_at(o + 8)]
+                    [le.f32(o), le.f32(o + 4), le.f32(o + 8)]
                 })
                 .collect(),
             icons: (0..n_icons)
                 .map(|k| {
                     let o = layout.icons + ICON_BYTES * k;
                     FrameIcon {
-                        id: u64_at(o),
-                        xyz: [f32_at(o + 8), f32_at(o + 12), f32_at(o + 16)],
+                        id: le.u64(o),
+                        xyz: [le.f32(o + 8), le.f32(o + 12), le.f32(o + 16)],
                     }
                 })
                 .collect(),

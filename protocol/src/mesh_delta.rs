@@ -402,11 +402,8 @@ impl MeshDelta {
     /// Parses a mesh delta. Any byte string gives a delta or an error; never a panic.
     pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
         crate::frame::check_header(bytes, KIND_MESH_DELTA, DELTA_HEADER_BYTES, "mesh delta")?;
-        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
-        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
-        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let [v, t, rv, rt, lv, lt] = [40, 44, 48, 52, 56, 60].map(|o| u32_at(o) as usize);
+        let le = crate::frame::Le(bytes);
+        let [v, t, rv, rt, lv, lt] = [40, 44, 48, 52, 56, 60].map(|o| le.u32(o) as usize);
         if v > MAX_MESH_VERTICES || t > MAX_MESH_TRIANGLES || rv > v || rt > t || lv > v || lt > t {
             return Err(ProtocolError::new(
                 ErrorCode::TooLarge,
@@ -431,19 +428,19 @@ impl MeshDelta {
             )));
         }
         let run = |k: usize| Run {
-            source: u32_at(DELTA_HEADER_BYTES + 8 * k),
-            count: u32_at(DELTA_HEADER_BYTES + 8 * k + 4),
+            source: le.u32(DELTA_HEADER_BYTES + 8 * k),
+            count: le.u32(DELTA_HEADER_BYTES + 8 * k + 4),
         };
         let (positions, normals, triangles) =
             read_records(bytes, DELTA_HEADER_BYTES + 8 * (rv + rt), (lv, lt), ib);
         let delta = Self {
-            design: u64_at(8),
-            part: u64_at(16),
-            revision: u64_at(24),
-            base: u64_at(32),
-            flags: u16_at(6),
-            origin: [f32_at(64), f32_at(68), f32_at(72)],
-            step: f32_at(76),
+            design: le.u64(8),
+            part: le.u64(16),
+            revision: le.u64(24),
+            base: le.u64(32),
+            flags: le.u16(6),
+            origin: [le.f32(64), le.f32(68), le.f32(72)],
+            step: le.f32(76),
             vertex_runs: (0..rv).map(run).collect(),
             triangle_runs: (rv..rv + rt).map(run).collect(),
             positions,

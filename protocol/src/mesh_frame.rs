@@ -97,21 +97,20 @@ pub(crate) type Records = (Vec<[u16; 3]>, Vec<[i16; 3]>, Vec<[u32; 3]>);
 /// Reads `v` vertex records and `t` triangles of `ib`-byte indices written
 /// by [`write_records`] from byte `at` (the caller checked the length).
 pub(crate) fn read_records(bytes: &[u8], at: usize, (v, t): (usize, usize), ib: usize) -> Records {
-    let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
-    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+    let le = crate::frame::Le(bytes);
     let (nn, tn) = (at + 6 * v, at + 12 * v);
     (
         (0..v)
-            .map(|k| [0, 1, 2].map(|a| u16_at(at + 6 * k + 2 * a)))
+            .map(|k| [0, 1, 2].map(|a| le.u16(at + 6 * k + 2 * a)))
             .collect(),
         (0..v)
-            .map(|k| [0, 1, 2].map(|a| u16_at(nn + 6 * k + 2 * a) as i16))
+            .map(|k| [0, 1, 2].map(|a| le.u16(nn + 6 * k + 2 * a) as i16))
             .collect(),
         (0..t)
             .map(|k| {
                 [0, 1, 2].map(|a| {
                     let o = tn + ib * (3 * k + a);
-                    if ib == 2 { u16_at(o) as u32 } else { u32_at(o) }
+                    if ib == 2 { le.u16(o) as u32 } else { le.u32(o) }
                 })
             })
             .collect(),
@@ -334,11 +333,8 @@ impl MeshFrame {
     /// Parses a mesh frame. Any byte string gives a frame or an error; never a panic.
     pub fn decode(bytes: &[u8]) -> Result<Self, ProtocolError> {
         crate::frame::check_header(bytes, KIND_MESH, MESH_HEADER_BYTES, "mesh frame")?;
-        let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
-        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
-        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-        let (v, t) = (u32_at(32) as usize, u32_at(36) as usize);
+        let le = crate::frame::Le(bytes);
+        let (v, t) = (le.u32(32) as usize, le.u32(36) as usize);
         if v > MAX_MESH_VERTICES || t > MAX_MESH_TRIANGLES {
             return Err(ProtocolError::new(
                 ErrorCode::TooLarge,
@@ -364,12 +360,12 @@ impl MeshFrame {
         }
         let (positions, normals, triangles) = read_records(bytes, MESH_HEADER_BYTES, (v, t), ib);
         let frame = Self {
-            design: u64_at(8),
-            part: u64_at(16),
-            revision: u64_at(24),
-            flags: u16_at(6),
-            origin: [f32_at(40), f32_at(44), f32_at(48)],
-            step: f32_at(52),
+            design: le.u64(8),
+            part: le.u64(16),
+            revision: le.u64(24),
+            flags: le.u16(6),
+            origin: [le.f32(40), le.f32(44), le.f32(48)],
+            step: le.f32(52),
             positions,
             normals,
             triangles,

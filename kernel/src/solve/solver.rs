@@ -793,6 +793,22 @@ impl Solver {
         Ok(())
     }
 
+    /// The current rows by key (their columns of Z and G) and which of
+    /// them are still pending: what a problem change can keep.
+    fn cached_rows(&self) -> (HashMap<RowKey, usize>, Vec<bool>) {
+        let old = self
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(c, r)| (row_key(r), c))
+            .collect();
+        let mut was_pending = vec![false; self.z.len()];
+        for &c in &self.pending {
+            was_pending[c] = true;
+        }
+        (old, was_pending)
+    }
+
     /// Z = K̃⁻¹[free rows] (cached columns reused, the rest in one batched
     /// solve), G = Aᵀ Z and S over the scalar equations. A few new rows
     /// that are only equations (no load) are left pending (returned) when
@@ -809,16 +825,7 @@ impl Solver {
     ) -> Schur {
         let n = self.dim();
         // Z: reuse cached columns, solve for the rest in one batch.
-        let old: HashMap<RowKey, usize> = self
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(c, r)| (row_key(r), c))
-            .collect();
-        let mut was_pending = vec![false; self.z.len()];
-        for &c in &self.pending {
-            was_pending[c] = true;
-        }
+        let (old, was_pending) = self.cached_rows();
         let mut z: Vec<Option<Column>> = rows
             .iter()
             .map(|r| {
@@ -967,16 +974,7 @@ impl Solver {
         let Some(update) = self.update.as_ref() else {
             unreachable!("schur_updated without an update");
         };
-        let old: HashMap<RowKey, usize> = self
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(c, r)| (row_key(r), c))
-            .collect();
-        let mut was_pending = vec![false; self.z.len()];
-        for &c in &self.pending {
-            was_pending[c] = true;
-        }
+        let (old, was_pending) = self.cached_rows();
         let mut z: Vec<Column> = rows
             .iter()
             .map(|r| match old.get(&row_key(r)) {
