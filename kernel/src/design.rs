@@ -659,9 +659,14 @@ impl Design {
         }
     }
 
-    /// The current shape becomes the reference shape (loads lose their pull).
+    /// The current shape becomes the reference shape (loads lose their
+    /// pull), and the spring's size its area, as for a design built from
+    /// that shape ([`Self::new`]): a host that rebuilds the design from its
+    /// control points gets the same spring.
     fn bake(&mut self) {
         self.reference = self.surface.points().to_vec();
+        let area = self.surface.area();
+        self.spring.set_size(if area > 0.0 { area } else { 1.0 });
         self.problem_dirty = true;
     }
 
@@ -789,9 +794,26 @@ impl Design {
     }
 
     /// The current shape becomes the reference shape (see [`Self::release`]):
-    /// a joint solve's result kept as the parts' rest shape.
-    pub(crate) fn keep_shape(&mut self) {
-        self.bake();
+    /// a joint solve's result kept as the parts' rest shape, or a host's
+    /// edit applied in place as a rebuild from the shape would see it (a
+    /// design built from its control points has them as its reference).
+    /// Costs no refactor. Does nothing when the shape is the reference to
+    /// round-off (every control point within 1e-13 of the shape's extent),
+    /// so a solver that proved the last answer optimal for this reference
+    /// keeps that proof.
+    pub fn keep_shape(&mut self) {
+        let points = self.surface.points();
+        let extent = points
+            .iter()
+            .fold(0.0_f64, |m, p| m.max(p.abs().max_element()));
+        let off = self
+            .reference
+            .iter()
+            .zip(points)
+            .fold(0.0_f64, |m, (r, p)| m.max((*r - *p).abs().max_element()));
+        if off > 1e-13 * extent.max(f64::MIN_POSITIVE) || !off.is_finite() {
+            self.bake();
+        }
     }
 
     /// Folds a running drag into its icon's target (the icon stays

@@ -16,18 +16,7 @@ use common::ws::Client;
 use serde_json::{Value, json};
 use vsculpt_kernel::bspline::{BSplineCurve, BSplineSurface, KnotVector};
 
-/// A small deterministic generator (64-bit LCG, top bits).
-struct Lcg(u64);
-
-impl Lcg {
-    fn within(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+use common::random::Lcg;
 
 /// Every control point of every part (surfaces and curves), in order.
 fn points(design: &Value) -> Vec<[f64; 3]> {

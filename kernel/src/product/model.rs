@@ -187,6 +187,31 @@ impl Product {
         self.parts.get(&id).and_then(Part::as_surface)
     }
 
+    /// Whether a surface part has a pin change whose refactor is deferred
+    /// ([`Design::pins_pending`]).
+    pub fn pins_pending(&self) -> bool {
+        self.parts
+            .values()
+            .filter_map(Part::as_surface)
+            .any(Design::pins_pending)
+    }
+
+    /// Settles the deferred refactor of every surface part that has one
+    /// ([`Design::settle_pins`]): for a host to call when idle, so the next
+    /// grab does not pay it. No shape changes. Returns the parts settled.
+    pub fn settle_pins(&mut self) -> Result<Vec<PartId>, ProductError> {
+        let mut settled = Vec::new();
+        for (id, part) in &mut self.parts {
+            if let Some(d) = part.as_surface_mut()
+                && d.pins_pending()
+                && d.settle_pins()?
+            {
+                settled.push(*id);
+            }
+        }
+        Ok(settled)
+    }
+
     /// A curve part's design.
     pub fn curve(&self, id: PartId) -> Option<&CurveDesign> {
         self.parts.get(&id).and_then(Part::as_curve)

@@ -461,6 +461,8 @@ enum Wake {
     Committed(super::commit_write::Landed),
     /// The comment write in flight landed.
     Commented(super::comment_write::Landed),
+    /// Nothing is waiting and an edit left work for idle time.
+    Idle,
 }
 
 /// The actor's state.
@@ -576,6 +578,10 @@ impl Actor {
             let writing = self.persisting.as_mut();
             let committing = self.commits.landed();
             let commenting = self.comment_writes.landed();
+            // Work an edit deferred (the refactor after a pin change) runs
+            // only when no request waits and nobody drags: a grab then
+            // finds it done, and no drag frame waits behind it.
+            let idle = self.model.idle_work() && self.dragging.is_empty() && rx.is_empty();
             let wake = tokio::select! {
                 n = rx.recv_many(&mut batch, 256) => Wake::Requests(n),
                 _ = sleep => Wake::PersistDue,
@@ -587,6 +593,7 @@ impl Actor {
                 } => Wake::Written(r),
                 landed = committing => Wake::Committed(landed),
                 landed = commenting => Wake::Commented(landed),
+                () = std::future::ready(()), if idle => Wake::Idle,
             };
             match wake {
                 Wake::Requests(0) => break,
@@ -608,6 +615,12 @@ impl Actor {
                 Wake::Commented(landed) => {
                     self.comment_landed(landed);
                     self.start_comment();
+                }
+                Wake::Idle => {
+                    if let Err(e) = self.model.settle_idle() {
+                        // The shape is untouched; the next solve refactors.
+                        tracing::warn!(design = self.id, error = %e.message, "idle settle failed");
+                    }
                 }
             }
         }

@@ -469,6 +469,21 @@ pub struct IconDoc {
     pub sensors: Vec<String>,
 }
 
+impl IconDoc {
+    /// The state the kernel holds this icon in when its part is built
+    /// from the document: a bound sensor drives it; a drag does not
+    /// survive a rebuild (driving without a sensor is passive).
+    pub fn kernel_state(&self) -> IconStateDoc {
+        if !self.sensors.is_empty() {
+            return IconStateDoc::Driving;
+        }
+        match self.state {
+            IconStateDoc::Driving => IconStateDoc::Passive,
+            other => other,
+        }
+    }
+}
+
 /// A whole design: a product of parts.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DesignDoc {

@@ -600,7 +600,26 @@ fn apply_part(
             }
         }
         PartEdit::SetState { id, state } => {
-            icon_mut(body.icons_mut(), *id)?.state = *state;
+            let icon = icon_mut(body.icons_mut(), *id)?;
+            let was = icon.kernel_state();
+            let now = IconDoc {
+                state: *state,
+                ..icon.clone()
+            }
+            .kernel_state();
+            if was != now
+                && (was == IconStateDoc::Sleeping
+                    || now == IconStateDoc::Sleeping
+                    || icon.role == IconRoleDoc::Load)
+            {
+                // Waking up or going to sleep holds the surface as it is
+                // now (a woken constraint whose old target the shape has
+                // left would pull it back); a load changing state is
+                // re-attached where the surface is (paper 003's states:
+                // only a driving icon moves the shape).
+                icon.target = surface.current_target(&icon.anchor, icon.role);
+            }
+            icon.state = *state;
         }
         PartEdit::BindSensor { id, sensor } => {
             if sensor.is_empty() || sensor.len() > 64 {

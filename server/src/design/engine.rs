@@ -60,7 +60,7 @@ pub fn material(m: &MaterialDoc) -> SurfaceMaterial {
     }
 }
 
-fn anchor(a: &AnchorDoc) -> Result<Anchor, CommandError> {
+pub(crate) fn anchor(a: &AnchorDoc) -> Result<Anchor, CommandError> {
     Ok(match a {
         AnchorDoc::Point { u, v } => Anchor::Point { u: *u, v: *v },
         AnchorDoc::Curve { curve } => {
@@ -103,7 +103,7 @@ fn anchor(a: &AnchorDoc) -> Result<Anchor, CommandError> {
     })
 }
 
-fn role(r: IconRoleDoc) -> Role {
+pub(crate) fn role(r: IconRoleDoc) -> Role {
     match r {
         IconRoleDoc::Load => Role::Load,
         IconRoleDoc::Position => Role::Position,
@@ -193,9 +193,9 @@ impl Engine {
         }
         let mut ids = BTreeMap::new();
         for icon in &doc.icons {
+            // A drag does not survive a rebuild: the icon is passive
+            // until grabbed again (sensors below make it driving).
             let st = match icon.state {
-                // A drag does not survive a rebuild: the icon is passive
-                // until grabbed again (sensors below make it driving).
                 IconStateDoc::Driving => IconState::Passive,
                 other => state(other),
             };

@@ -96,6 +96,13 @@ pub struct DesignModel {
     morphs: MorphMeshes,
     /// The solve warning of the last edit (see [`Self::edit_warning`]).
     warning: Option<String>,
+    /// Whether icon and material edits of surface parts are applied to the
+    /// live kernel design (`product_engine::icon_edit`) or, when off, by
+    /// rebuilding the part from its document.
+    in_place: bool,
+    /// The last idle settle failed: not tried again before the next edit
+    /// (the next solve refactors anyway).
+    settle_failed: bool,
 }
 
 fn unknown_part(part: u64) -> CommandError {
@@ -122,6 +129,8 @@ impl DesignModel {
             ffds,
             morphs: MorphMeshes::default(),
             warning: None,
+            in_place: true,
+            settle_failed: false,
         };
         m.sync();
         Ok(m)
@@ -230,6 +239,14 @@ impl DesignModel {
                     networks.remove(part);
                     Vec::new()
                 }
+                Edit::Part { part, edit }
+                    if self.in_place
+                        && let (Some(p), Some(q)) = (current.part(*part), doc.part(*part))
+                        && let Some(moved) =
+                            next.edit_in_place(*part, edit, &p.body, &q.body, created.icon) =>
+                {
+                    moved
+                }
                 Edit::Part { part, .. } | Edit::Dsm { part, .. } => {
                     let p = doc.part(*part).ok_or_else(|| unknown_part(*part))?;
                     let mut moved = next.rebuild_part(*part, &p.body)?;
@@ -287,6 +304,7 @@ impl DesignModel {
             })
         })();
         self.warning = None;
+        self.settle_failed = false;
         let outcome = outcome.and_then(|m| self.bodies.sync(&doc).map(|()| m));
         let ffds = &mut self.ffds;
         let dsm = self.engine.dsm();
@@ -446,6 +464,29 @@ impl DesignModel {
         let mut moved = vec![part];
         moved.extend(super::morph_follow::bound_parts(&self.doc, part));
         Ok(moved)
+    }
+
+    /// Whether an edit left work for idle time ([`Self::settle_idle`]).
+    pub fn idle_work(&self) -> bool {
+        !self.settle_failed && self.engine.pins_pending()
+    }
+
+    /// Does the work an edit deferred to idle time (the refactor after a
+    /// pin change applied in place); the shape does not change. Returns
+    /// whether there was any.
+    pub fn settle_idle(&mut self) -> Result<bool, CommandError> {
+        let settled = self.engine.settle_idle();
+        self.settle_failed = settled.is_err();
+        settled
+    }
+
+    /// With `in_place` off, an icon or material edit of a surface part
+    /// rebuilds the part from its edited document (a fresh factorisation
+    /// and every column of the constrained solve) instead of editing the
+    /// live kernel design: the server before issue 15's in-place edits,
+    /// kept to measure and test against.
+    pub fn set_edit_in_place(&mut self, in_place: bool) {
+        self.in_place = in_place;
     }
 
     /// With `full`, a body's lattice change recomputes every vertex of the

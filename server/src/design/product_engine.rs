@@ -27,6 +27,8 @@ use vsculpt_kernel::product::{
 };
 use vsculpt_kernel::solve::SolveWarning;
 
+mod icon_edit;
+
 /// What a client is told when a solve met its constraints only in the
 /// least-squares sense.
 pub fn warning_text(w: SolveWarning) -> String {
@@ -320,6 +322,26 @@ impl ProductEngine {
         moved.sort_unstable();
         moved.dedup();
         Ok(moved)
+    }
+
+    /// Whether a part has a pin change whose refactor is deferred (see
+    /// [`Self::settle_idle`]).
+    pub fn pins_pending(&self) -> bool {
+        self.product.pins_pending()
+    }
+
+    /// The deferred half of the pin changes applied in place (a region or
+    /// edge icon added, removed or switched: the kernel answers them
+    /// through the old factor and refactors later): refactors now, for the
+    /// design's actor to call when it has nothing else to do, so the next
+    /// grab's first frame does not pay it. No shape changes. Returns
+    /// whether anything was settled.
+    pub fn settle_idle(&mut self) -> Result<bool, CommandError> {
+        Ok(!self
+            .product
+            .settle_pins()
+            .map_err(product_error)?
+            .is_empty())
     }
 
     /// The warning of the last solve of a rebuilt part ([`Self::rebuild_part`]),

@@ -5,6 +5,7 @@
 
 pub mod http;
 pub mod parts;
+pub mod random;
 pub mod store_server;
 pub mod ws;
 
