@@ -670,6 +670,27 @@ impl Design {
         self.problem_dirty = true;
     }
 
+    /// Takes `other`'s solver — its factorisation of the stiffness and the
+    /// columns it keeps — when this design has none yet and both have the
+    /// same knots and material (so the same stiffness K): a host that
+    /// builds a design afresh from a stored state (undo, redo, restore)
+    /// then pays, at its next solve, only what differs between the two
+    /// problems (the solver's incremental paths) instead of a
+    /// factorisation and every column. `other` is left without a solver
+    /// (its next solve factors afresh). Returns whether it was taken.
+    pub fn adopt_solver(&mut self, other: &mut Design) -> bool {
+        let same = self.solver.is_none()
+            && other.solver.is_some()
+            && self.material == other.material
+            && self.surface.u_knots() == other.surface.u_knots()
+            && self.surface.v_knots() == other.surface.v_knots();
+        if same {
+            self.solver = other.solver.take();
+            self.problem_dirty = true;
+        }
+        same
+    }
+
     /// Whether a change of the pinned control points (a region or edge
     /// icon added, removed or switched) is answered through the factor of
     /// an earlier pinned set (see [`Solver::settle_pins`]): exact, but each

@@ -17,6 +17,13 @@
 //!   settles the deferred refactor between the edit and the grab, as the
 //!   design actor does when no request waits (not timed).
 //!
+//! * `icon_edit/undo_then_first_frame/{alone,taken}` — a point constraint
+//!   created, then undone (the model built from the stored document) and
+//!   the load grabbed and dragged one frame (timed: the undo, the grab and
+//!   the frame): `alone` builds the kernel designs afresh (the server
+//!   before: a factorisation and every column at the grab), `taken` takes
+//!   the replaced model's solvers (`DesignModel::load_replacing`).
+//!
 //! `in_place` is the server since issue 15's in-place edits
 //! (`product_engine::icon_edit`); `rebuild` rebuilds the part from its
 //! edited document at every edit (`DesignModel::set_edit_in_place(false)`),
@@ -165,6 +172,48 @@ fn benches(c: &mut Criterion) {
                 })
             });
         }
+    }
+    // Undo of a point constraint's creation, then a grab of the load: the
+    // model built afresh from the stored document alone (the server before)
+    // or taking the replaced model's solvers (`DesignModel::load_replacing`).
+    let (mut m, part, load) = scene();
+    for (name, take) in [("alone", false), ("taken", true)] {
+        g.bench_function(format!("undo_then_first_frame/{name}"), |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    let before = m.doc().clone();
+                    edit(
+                        &mut m,
+                        part,
+                        PartEdit::AddIcon {
+                            anchor: AnchorDoc::Point { u: 0.35, v: 0.45 },
+                            role: IconRoleDoc::Position,
+                            state: IconStateDoc::Passive,
+                            target: None,
+                        },
+                    );
+                    let t = Instant::now();
+                    let mut undone = if take {
+                        DesignModel::load_replacing(&before, &mut m).unwrap()
+                    } else {
+                        DesignModel::load(&before).unwrap()
+                    };
+                    let at = undone.icon(load).map(|(_, i)| DVec3::from(i.xyz)).unwrap();
+                    undone.grab(part, load).unwrap();
+                    black_box(
+                        undone
+                            .drag(part, load, at + DVec3::new(0.0, 0.0, 1.0))
+                            .unwrap(),
+                    );
+                    total += t.elapsed();
+                    undone.drag(part, load, at).unwrap();
+                    undone.release(part, load).unwrap();
+                    m = undone;
+                }
+                total
+            })
+        });
     }
     g.finish();
 }

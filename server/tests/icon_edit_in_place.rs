@@ -361,26 +361,30 @@ fn in_place_edits_equal_rebuilds_on_a_42x40_plate() {
     compare(7, 42, 40, 40);
 }
 
+/// Creates a passive icon on `part`; its id.
+fn add(m: &mut DesignModel, part: u64, anchor: AnchorDoc, role: IconRoleDoc) -> u64 {
+    m.apply(Edit::Part {
+        part,
+        edit: PartEdit::AddIcon {
+            anchor,
+            role,
+            state: IconStateDoc::Passive,
+            target: None,
+        },
+    })
+    .unwrap()
+    .0
+    .icon
+    .unwrap()
+}
+
 #[test]
 fn a_region_defers_its_refactor_to_idle_time_and_settling_moves_nothing() {
     let doc = plate("plate", 42, 40).unwrap();
     let mut m = DesignModel::load(&doc).unwrap();
     let part = m.doc().parts[0].id;
-    let add = |m: &mut DesignModel, anchor: AnchorDoc, role: IconRoleDoc| {
-        m.apply(Edit::Part {
-            part,
-            edit: PartEdit::AddIcon {
-                anchor,
-                role,
-                state: IconStateDoc::Passive,
-                target: None,
-            },
-        })
-        .unwrap()
-        .0
-        .icon
-        .unwrap()
-    };
+    let add =
+        |m: &mut DesignModel, anchor: AnchorDoc, role: IconRoleDoc| add(m, part, anchor, role);
     let load = add(
         &mut m,
         AnchorDoc::Point { u: 0.5, v: 0.6 },
@@ -438,4 +442,100 @@ fn a_region_defers_its_refactor_to_idle_time_and_settling_moves_nothing() {
     let (reached, _, _) = m.drag(part, load, at + DVec3::new(0.0, 0.0, 10.0)).unwrap();
     assert!(!m.idle_work(), "the grab left the refactor pending");
     assert!(reached.z > at.z + 1.0, "the load did not pull: {reached:?}");
+}
+
+/// Undo, redo and restore build the model afresh from a stored document
+/// (`DesignModel::load_replacing`) and take the replaced model's kernel
+/// solvers: the next solves must be those of a model loaded alone. Random
+/// edits, each undone and redone at random, each followed by a drag on the
+/// model that took the solvers and on one loaded alone from the same
+/// document: the same shape to 1e-9 of the size, and the stored shape
+/// taken bit for bit.
+#[test]
+fn a_model_that_takes_the_replaced_ones_solvers_solves_as_one_loaded_alone() {
+    let doc = plate("plate", 42, 40).unwrap();
+    let mut m = DesignModel::load(&doc).unwrap();
+    let mut r = Lcg(11);
+    let mut history: Vec<vsculpt_server::design::doc::DesignDoc> = Vec::new();
+    let (mut compared, mut undone) = (0, 0);
+    for k in 0..30 {
+        let size = size(&m);
+        let s = step(&mut r, &m, size);
+        let before = m.doc().clone();
+        if run(&mut m, &s).is_err() || m.edit_warning().is_some() {
+            m = DesignModel::load(m.doc()).unwrap();
+            continue;
+        }
+        history.push(before);
+        // Undo to a random earlier state now and then.
+        let target = if r.next() < 0.4 {
+            undone += 1;
+            history[r.pick(history.len())].clone()
+        } else {
+            m.doc().clone()
+        };
+        let mut taken = DesignModel::load_replacing(&target, &mut m).unwrap();
+        let mut alone = DesignModel::load(&target).unwrap();
+        assert_eq!(points(&taken), points(&alone), "step {k}: the stored shape");
+        // A drag of some icon on both.
+        let icons = taken.doc().parts[0].body.icons().to_vec();
+        if icons.is_empty() {
+            m = taken;
+            continue;
+        }
+        let icon = icons[r.pick(icons.len())].id;
+        let by =
+            [r.within(-1.0, 1.0), r.within(-1.0, 1.0), r.within(0.2, 1.0)].map(|x| x * 0.1 * size);
+        let a = run(&mut taken, &Step::Drag(icon, by));
+        let b = run(&mut alone, &Step::Drag(icon, by));
+        assert_eq!(a.is_ok(), b.is_ok(), "step {k}: {a:?} vs {b:?}");
+        if a.is_ok() && taken.edit_warning().is_none() {
+            let (d, at) = difference(&taken, &alone, &format!("step {k}"));
+            assert!(
+                d <= 1e-9,
+                "step {k}: the drags differ by {d:e} of the size ({at})"
+            );
+            compared += 1;
+        }
+        m = taken;
+    }
+    assert!(compared >= 10, "only {compared} drags compared");
+    assert!(undone >= 5, "only {undone} undos");
+
+    // Undoing a material change: the stiffness differs, so the solver must
+    // not be taken (a drag through the old factor would bend the plate as
+    // the other material does).
+    let mut m = DesignModel::load(&doc).unwrap();
+    let part = m.doc().parts[0].id;
+    for (anchor, role) in [
+        (AnchorDoc::Point { u: 0.2, v: 0.3 }, IconRoleDoc::Position),
+        (AnchorDoc::Point { u: 0.6, v: 0.5 }, IconRoleDoc::Load),
+    ] {
+        add(&mut m, part, anchor, role);
+    }
+    let before = m.doc().clone();
+    let stiffer = MaterialDoc {
+        beta11: 5.0,
+        beta22: 5.0,
+        ..MaterialDoc::default()
+    };
+    m.apply(Edit::Part {
+        part,
+        edit: PartEdit::SetMaterial(MaterialEdit::Surface(stiffer)),
+    })
+    .unwrap();
+    let icon = m.doc().parts[0].body.icons()[1].id;
+    let lift = 0.05 * size(&m);
+    run(&mut m, &Step::Drag(icon, [0.0, 0.0, lift])).unwrap();
+    let mut taken = DesignModel::load_replacing(&before, &mut m).unwrap();
+    let mut alone = DesignModel::load(&before).unwrap();
+    let by = [0.0, 0.0, 0.1 * size(&alone)];
+    let a = run(&mut taken, &Step::Drag(icon, by));
+    let b = run(&mut alone, &Step::Drag(icon, by));
+    assert_eq!(a.is_ok(), b.is_ok());
+    let (d, at) = difference(&taken, &alone, "material undone");
+    assert!(
+        d <= 1e-9,
+        "after a material undo the drags differ by {d:e} ({at})"
+    );
 }

@@ -212,6 +212,28 @@ impl Product {
         Ok(settled)
     }
 
+    /// Every surface part solved alone here takes the solver of the part
+    /// with the same id in `old`, when `old` solves it alone too
+    /// ([`Design::adopt_solver`]: same knots and material): a product
+    /// built afresh from a stored state keeps the factorisations of the
+    /// one it replaces. Returns the parts that took one.
+    pub fn adopt_solvers(&mut self, old: &mut Product) -> Vec<PartId> {
+        let mut taken = Vec::new();
+        for (id, part) in &mut self.parts {
+            if self.group_of.contains_key(id) || old.group_of.contains_key(id) {
+                continue;
+            }
+            if let (Some(new), Some(was)) = (
+                part.as_surface_mut(),
+                old.parts.get_mut(id).and_then(Part::as_surface_mut),
+            ) && new.adopt_solver(was)
+            {
+                taken.push(*id);
+            }
+        }
+        taken
+    }
+
     /// A curve part's design.
     pub fn curve(&self, id: PartId) -> Option<&CurveDesign> {
         self.parts.get(&id).and_then(Part::as_curve)

@@ -802,7 +802,7 @@ impl Actor {
                     let _ = reply.send(self.model.mesh(part, density));
                 }
                 Request::Replace { doc, reply } => {
-                    let out = match heavy(|| DesignModel::load(&doc)) {
+                    let out = match heavy(|| DesignModel::load_replacing(&doc, &mut self.model)) {
                         Ok(m) => {
                             self.undo.push(self.model.to_doc());
                             self.model = m;
@@ -1568,7 +1568,7 @@ impl Actor {
                         },
                     )
                 })?;
-                match heavy(|| DesignModel::load(&doc)) {
+                match heavy(|| DesignModel::load_replacing(&doc, &mut self.model)) {
                     Ok(m) => self.model = m,
                     Err(e) => {
                         // Put the stacks back as they were.
@@ -1613,7 +1613,7 @@ impl Actor {
                     CommandError::new(ErrorKind::UnknownVersion, "no such version")
                 })?;
                 let doc = DesignDoc::from_bytes(&bytes)?;
-                let model = heavy(|| DesignModel::load(&doc))?;
+                let model = heavy(|| DesignModel::load_replacing(&doc, &mut self.model))?;
                 self.undo.push(self.model.to_doc());
                 self.model = model;
                 self.base_version = info.number;

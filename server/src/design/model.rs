@@ -136,6 +136,21 @@ impl DesignModel {
         Ok(m)
     }
 
+    /// [`Self::load`] for a document that replaces `current` (undo, redo,
+    /// revert, restore, a whole-design replace): the same model, but its
+    /// surface parts take `current`'s kernel solvers where knots and
+    /// material agree, so their next solve costs what differs rather than
+    /// a factorisation and every column. `current` keeps working (its
+    /// parts refactor at their next solve).
+    pub fn load_replacing(
+        doc: &DesignDoc,
+        current: &mut DesignModel,
+    ) -> Result<Self, CommandError> {
+        let mut m = Self::load(doc)?;
+        m.engine.adopt_solvers(&mut current.engine);
+        Ok(m)
+    }
+
     /// Copies the kernel's state into the document.
     fn sync(&mut self) {
         self.doc = self.to_doc();

@@ -324,6 +324,14 @@ impl ProductEngine {
         Ok(moved)
     }
 
+    /// Takes the kernel solvers of `old`'s surface parts for the same
+    /// parts here (same knots and material: `Product::adopt_solvers`), so
+    /// an engine built afresh from a stored document (undo, redo, revert,
+    /// restore) solves next through the factorisations it replaces.
+    pub fn adopt_solvers(&mut self, old: &mut ProductEngine) {
+        self.product.adopt_solvers(&mut old.product);
+    }
+
     /// Whether a part has a pin change whose refactor is deferred (see
     /// [`Self::settle_idle`]).
     pub fn pins_pending(&self) -> bool {
