@@ -283,6 +283,23 @@ impl Column {
             norm: f64::NAN,
         }
     }
+
+    /// Whether the column is not solved yet.
+    fn is_pending(&self) -> bool {
+        self.norm.is_nan()
+    }
+}
+
+/// |w| ‖z‖∞ per coordinate: how far weight `w` on column `col` reaches the
+/// shape. A pending column's norm is not known: any non-zero weight on it
+/// reaches without bound (the conservative answer: refine, count as
+/// pulling).
+fn column_reach(w: DVec3, col: &Column) -> DVec3 {
+    if col.is_pending() {
+        DVec3::select(w.cmpeq(DVec3::ZERO), DVec3::ZERO, DVec3::INFINITY)
+    } else {
+        w.abs() * col.norm
+    }
 }
 
 /// The last full solve, for [`Solver::still_optimal`].
@@ -361,6 +378,9 @@ pub struct Solver {
     response: Option<Response>,
     last: Option<LastSolve>,
     counts: ResponseCounts,
+    /// Solve every new row's column of Z in full at a problem change (the
+    /// path before issue 15), see [`Solver::set_eager_columns`].
+    eager_columns: bool,
 }
 
 impl Solver {
@@ -396,7 +416,18 @@ impl Solver {
             response: None,
             last: None,
             counts: ResponseCounts::default(),
+            eager_columns: false,
         })
+    }
+
+    /// Whether a problem change solves every new row's column of Z = K̃⁻¹Cᵀ
+    /// in full (`true`: the path before issue 15, one full sparse solve
+    /// per row) instead of leaving equation rows pending with their block
+    /// of G from forward halves (`false`, the default). A reference for
+    /// tests that compare the two; it applies from the next problem change.
+    #[doc(hidden)]
+    pub fn set_eager_columns(&mut self, eager: bool) {
+        self.eager_columns = eager;
     }
 
     /// The number of control points.
@@ -718,10 +749,18 @@ impl Solver {
             } else {
                 self.updated_inverse(&rows, &eqs, &s)
             };
-            let inverse = match updated {
-                Some(p) => Ok((p, 0, true)),
-                None => pseudo_inverse(&s),
-            };
+            // When S is not provably well conditioned the equations are
+            // folded and S formed again: the eigendecomposition of this S
+            // would be thrown away (on 81 × 159 a curve's 1245 equations
+            // cost ~50 ms of it), so only the Cholesky path is tried.
+            let may_fold = !same_folds(&fold, &foldable);
+            let inverse =
+                match updated {
+                    Some(p) => Ok((p, 0, true)),
+                    None if may_fold => Ok(cholesky_inverse(&s)
+                        .map_or_else(|| (Vec::new(), 0, false), |p| (p, 0, true))),
+                    None => pseudo_inverse(&s),
+                };
             match inverse {
                 Ok((_, _, false)) if !same_folds(&fold, &foldable) => {
                     // S is ill-conditioned over K: fold the equations into
@@ -862,52 +901,75 @@ impl Solver {
             old.get(&row_key(&rows[c]))
                 .and_then(|oc| carried.get(oc).copied())
         };
-        let forward = if !missing.is_empty()
-            && missing.len() <= LAZY_COLUMNS
-            && missing.iter().all(|&c| !is_load[c])
-        {
-            let kept: Vec<Option<&Forward>> = missing.iter().map(|&c| carried_of(c)).collect();
-            let columns: Vec<(&[usize], &[f64])> = missing
+        // New equation rows are left pending (their block of G from forward
+        // halves on the elimination-tree reach: no full solve, however many
+        // — a curve across the plate brings hundreds); loads are solved.
+        let lazy: Vec<usize> = if self.eager_columns {
+            Vec::new()
+        } else {
+            missing.iter().copied().filter(|&c| !is_load[c]).collect()
+        };
+        let row_of = |c: usize| {
+            (
+                free_rows[c].indices.as_slice(),
+                free_rows[c].weights.as_slice(),
+            )
+        };
+        let kept: Vec<Option<&Forward>> = lazy.iter().map(|&c| carried_of(c)).collect();
+        let fresh = kept.iter().filter(|k| k.is_none()).count();
+        let batch: Option<(Vec<Forward>, Vec<f64>)> = if lazy.is_empty() {
+            None
+        } else if fresh > LAZY_COLUMNS {
+            // Many rows (a curve): all of them in one blocked pass, their
+            // Gram matrix with it.
+            let columns: Vec<(&[usize], &[f64])> = lazy.iter().map(|&c| row_of(c)).collect();
+            self.factor.forward_batch(&columns)
+        } else {
+            let columns: Vec<(&[usize], &[f64])> = lazy
                 .iter()
                 .zip(&kept)
                 .filter(|(_, k)| k.is_none())
-                .map(|(&c, _)| {
-                    (
-                        free_rows[c].indices.as_slice(),
-                        free_rows[c].weights.as_slice(),
-                    )
-                })
+                .map(|(&c, _)| row_of(c))
                 .collect();
             self.factor.forward_sparse(&columns).map(|fresh| {
                 let mut fresh = fresh.into_iter();
-                kept.iter()
+                let forward: Vec<Forward> = kept
+                    .iter()
                     .filter_map(|k| k.map_or_else(|| fresh.next(), |f| Some(f.clone())))
-                    .collect::<Vec<Forward>>()
+                    .collect();
+                let gram = self.factor.gram_of(&forward);
+                (forward, gram)
             })
-        } else {
-            None
         };
-        let gram = forward.as_ref().map(|f| self.factor.gram_of(f));
+        let (forward, gram) = match batch {
+            Some((f, g)) => (Some(f), Some(g)),
+            None => (None, None),
+        };
         let pending = if gram.is_some() {
-            for &c in &missing {
+            for &c in &lazy {
                 z[c] = Some(Column::pending());
             }
-            missing.clone()
+            lazy
         } else {
-            if !missing.is_empty() {
-                let mut rhs = Mat::<f64>::zeros(n, missing.len());
-                for (m, &c) in missing.iter().enumerate() {
-                    for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
-                        rhs[(i, m)] += w;
-                    }
-                }
-                self.factor.solve_in_place(rhs.as_mut());
-                for (m, &c) in missing.iter().enumerate() {
-                    z[c] = Some(Column::new(rhs.col_as_slice(m)));
-                }
-            }
             Vec::new()
         };
+        let solve_now: Vec<usize> = missing
+            .iter()
+            .copied()
+            .filter(|&c| z[c].is_none())
+            .collect();
+        if !solve_now.is_empty() {
+            let mut rhs = Mat::<f64>::zeros(n, solve_now.len());
+            for (m, &c) in solve_now.iter().enumerate() {
+                for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
+                    rhs[(i, m)] += w;
+                }
+            }
+            self.factor.solve_in_place(rhs.as_mut());
+            for (m, &c) in solve_now.iter().enumerate() {
+                z[c] = Some(Column::new(rhs.col_as_slice(m)));
+            }
+        }
         let z: Vec<Column> = z.into_iter().flatten().collect();
         debug_assert_eq!(z.len(), rows.len());
         // G = Aᵀ Z (Z is zero at the pinned points: the free rows suffice).
@@ -982,7 +1044,7 @@ impl Solver {
                 _ => Column::pending(),
             })
             .collect();
-        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].norm.is_nan()).collect();
+        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].is_pending()).collect();
         // Per missing row: a₀ (its free part over the factor's free
         // points), b_F, and its base column Ã⁻¹a₀ when kept (a row that
         // touches no newly pinned point: its part over the factor's free
@@ -1023,7 +1085,7 @@ impl Solver {
             .map(|((_, b_f, base), f)| {
                 let alpha = match (base, f) {
                     (Some(col), _) => update.alpha_of_column(&col.values, b_f),
-                    (None, Some(f)) => update.alpha_of_forward(&self.factor, f.values(), b_f),
+                    (None, Some(f)) => update.alpha_of_forward(f, b_f),
                     (None, None) => vec![0.0; b_f.len()],
                 };
                 let xi = update.xi(&alpha);
@@ -1055,7 +1117,7 @@ impl Solver {
                         let first = match (&parts[i].2, &parts[j].2, &forward[i], &forward[j]) {
                             (_, Some(zb), _, _) => sparse_dot(&parts[i].0, &zb.values),
                             (Some(za), _, _, _) => sparse_dot(&parts[j].0, &za.values),
-                            (_, _, Some(fa), Some(fb)) => self.factor.dot_on_reach(fa, fb.values()),
+                            (_, _, Some(fa), Some(fb)) => fa.dot(fb),
                             _ => 0.0,
                         };
                         let cross: f64 = xis[i].0.iter().zip(&xis[j].1).map(|(x, y)| x * y).sum();
@@ -1073,17 +1135,28 @@ impl Solver {
         (z, missing, Vec::new(), g, s)
     }
 
-    /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
+    /// Solves the pending columns of Z (see [`Self::pending`]) in one batch
+    /// when there are few (at most [`LAZY_COLUMNS`]); more stay pending for
+    /// good (see [`Self::z_is_whole`]).
     fn solve_pending(&mut self) {
-        if self.pending.is_empty() {
+        if self.pending.is_empty() || self.pending.len() > LAZY_COLUMNS {
             return;
         }
         self.solve_batch(&[]);
     }
 
+    /// Whether every column of Z is solved, or will be at its first read
+    /// ([`Self::solve_pending`]). When not (more than [`LAZY_COLUMNS`] rows
+    /// pending: a curve constraint's hundreds), what reads Z takes another
+    /// way: δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
+    /// ([`Self::add_rows_solved`]) instead of Σ w_c z_c.
+    fn z_is_whole(&self) -> bool {
+        self.pending.len() <= LAZY_COLUMNS
+    }
+
     /// K̃⁻¹ of every sparse right-hand side in `extra` (`(indices,
     /// weights)` over the free points), with the pending columns of Z
-    /// solved in the same batch. The extra ones' forward halves visit only
+    /// solved in the same batch when they are few ([`Self::z_is_whole`]). The extra ones' forward halves visit only
     /// the elimination-tree reach of their non-zeros
     /// ([`Factor::forward_sparse`]: a combination of constraint and load
     /// rows touches a fraction of the factor), the pending ones need no
@@ -1093,8 +1166,14 @@ impl Solver {
     fn solve_batch(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
         debug_assert!(self.update.is_none(), "solves settle a pin change first");
         let n = self.dim();
-        let pending = std::mem::take(&mut self.pending);
-        let forward = std::mem::take(&mut self.pending_forward);
+        let (pending, forward) = if self.z_is_whole() {
+            (
+                std::mem::take(&mut self.pending),
+                std::mem::take(&mut self.pending_forward),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let e = extra.len();
         let k = e + pending.len();
         let mut x = Mat::<f64>::zeros(n, k);
@@ -1109,7 +1188,7 @@ impl Solver {
         };
         if let Some(halves) = halves {
             for (m, f) in halves.iter().chain(&forward).enumerate() {
-                x.col_mut(m).copy_from(faer::ColRef::from_slice(f.values()));
+                f.scatter(x.col_as_slice_mut(m));
             }
             self.factor.backward_in_place(x.as_mut());
         } else {
@@ -1415,9 +1494,10 @@ impl Solver {
             let size: f64 = eq
                 .terms
                 .iter()
-                .map(|t| t.coef.abs() * self.z[t.col].norm)
+                .map(|t| column_reach(DVec3::splat(t.coef), &self.z[t.col]).x)
                 .sum();
-            *pull.entry(key).or_default() += lam.abs() * size;
+            // A pending column's size is unknown (infinite) unless unused.
+            *pull.entry(key).or_default() += if *lam == 0.0 { 0.0 } else { lam.abs() * size };
         }
         if !self.pin_points.is_empty() {
             // A pin's multiplier is its reaction (b − Kδ − Cᵀλ at the pinned
@@ -1825,10 +1905,17 @@ impl Solver {
         (lambdas, w)
     }
 
-    /// δ += Σ_c w_c z_c.
-    fn add_columns(&self, delta: &mut [DVec3], w: &[DVec3]) {
+    /// δ += Σ_c w_c z_c over the solved columns; returns whether a
+    /// pending column has a non-zero weight (its part is the caller's:
+    /// [`Self::add_rows_solved`]).
+    fn add_columns(&self, delta: &mut [DVec3], w: &[DVec3]) -> bool {
+        let mut missed = false;
         for (c, wc) in w.iter().enumerate() {
             if *wc == DVec3::ZERO {
+                continue;
+            }
+            if self.z[c].is_pending() {
+                missed = true;
                 continue;
             }
             if wc.y == 0.0 && wc.z == 0.0 {
@@ -1842,6 +1929,7 @@ impl Solver {
                 }
             }
         }
+        missed
     }
 
     /// δ += K̃⁻¹ Σ_c w_c a_c per input and coordinate, as one batched sparse
@@ -1863,7 +1951,7 @@ impl Solver {
                     .map(move |k| (p, k))
             })
             .collect();
-        if columns.is_empty() && self.pending.is_empty() {
+        if columns.is_empty() && (self.pending.is_empty() || !self.z_is_whole()) {
             return;
         }
         // The combined rows, summed in a dense scratch (in the order the
@@ -2029,6 +2117,8 @@ impl Solver {
     ) -> Vec<Refined> {
         let n = self.dim();
         let m = self.eqs.len();
+        // Σ w_c z_c needs every column of Z.
+        let direct = direct || !self.z_is_whole();
         let mut deltas = Vec::with_capacity(inputs.len());
         let mut lambdas: Vec<Vec<f64>> = Vec::with_capacity(inputs.len());
         let mut reaches = Vec::with_capacity(inputs.len());
@@ -2071,7 +2161,8 @@ impl Solver {
         } else {
             self.solve_pending();
             for (delta, w) in deltas.iter_mut().zip(&weights) {
-                self.add_columns(delta, w);
+                let missed = self.add_columns(delta, w);
+                debug_assert!(!missed, "Z is whole on this path");
             }
         }
         for (w, pin_reach) in weights.iter().zip(pin_reaches) {
@@ -2079,7 +2170,7 @@ impl Solver {
             let reach = w
                 .iter()
                 .zip(&self.z)
-                .fold(pin_reach, |m, (wc, col)| m + wc.abs() * col.norm);
+                .fold(pin_reach, |m, (wc, col)| m + column_reach(*wc, col));
             reaches.push(reach);
         }
         self.refine(inputs, &cxs, &mut deltas, &mut lambdas, &reaches, extents);
@@ -2291,6 +2382,9 @@ impl Solver {
         if !columns.is_empty() {
             self.factor.solve_in_place(y.as_mut());
         }
+        // The weights on pending columns, per input: one batched solve of
+        // their combined rows for every input at the end.
+        let mut unsolved: Vec<Vec<DVec3>> = vec![Vec::new(); pending.len()];
         for (p, (sigma, _)) in pending.iter().enumerate() {
             if !active[p] {
                 continue;
@@ -2303,20 +2397,32 @@ impl Solver {
                     }
                 }
             }
-            self.project(sigma, &correction, &mut deltas[p], &mut lambdas[p]);
+            let w = self.project(sigma, &correction, &mut deltas[p], &mut lambdas[p]);
+            if self.add_columns(&mut deltas[p], &w) {
+                unsolved[p] = w
+                    .iter()
+                    .zip(&self.z)
+                    .map(|(wc, col)| if col.is_pending() { *wc } else { DVec3::ZERO })
+                    .collect();
+            }
+        }
+        if unsolved.iter().any(|w| !w.is_empty()) {
+            self.add_rows_solved(deltas, &unsolved);
         }
     }
 
-    /// δ += y + Z w with w = −Cᵀ S⁺ (C y − σ), λ += S⁺ (C y − σ): the
-    /// correction y (K̃⁻¹ of a stationarity residual) projected onto the
-    /// constraints, as in [`Self::lambda_weights`].
+    /// δ += y and λ += S⁺ (C y − σ); returns w = −Cᵀ S⁺ (C y − σ), whose
+    /// Z w the caller adds to δ ([`Self::add_columns`], and for pending
+    /// columns [`Self::add_rows_solved`]): the correction y (K̃⁻¹ of a
+    /// stationarity residual) projected onto the constraints, as in
+    /// [`Self::lambda_weights`].
     fn project(
         &self,
         sigma: &[f64],
         correction: &[DVec3],
         delta: &mut [DVec3],
         lambda: &mut [f64],
-    ) {
+    ) -> Vec<DVec3> {
         // r' = C y − σ.
         let r: Vec<f64> = self
             .c_times(correction)
@@ -2336,7 +2442,7 @@ impl Solver {
         for (d, c) in delta.iter_mut().zip(correction) {
             *d += *c;
         }
-        self.add_columns(delta, &w);
+        w
     }
 
     /// `report` as a result: a residual above [`RESIDUAL_TOLERANCE`] of the
@@ -2634,38 +2740,16 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
     if m == 0 {
         return Ok((Vec::new(), 0, true));
     }
-    let scale: Vec<f64> = (0..m)
-        .map(|i| {
-            if s[(i, i)] > 0.0 && s[(i, i)].is_finite() {
-                1.0 / s[(i, i)].sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
-    let blocks = independent_blocks(&scaled);
-    // Each block's equilibrated matrix, and which earlier block it repeats.
-    let mats: Vec<Mat<f64>> = blocks
-        .iter()
-        .map(|b| Mat::<f64>::from_fn(b.len(), b.len(), |i, j| scaled[(b[i], b[j])]))
-        .collect();
-    let same_as: Vec<Option<usize>> = (0..blocks.len())
-        .map(|k| (0..k).find(|&e| same_as_earlier(&mats[e], &mats[k])))
-        .collect();
-    let mut out = vec![0.0; m * m];
-    if !scale.contains(&0.0)
-        && let Some(inverses) = well_conditioned_blocks(&mats, &same_as)
-    {
-        for (b, inv) in blocks.iter().zip(&inverses) {
-            for (i, &bi) in b.iter().enumerate() {
-                for (j, &bj) in b.iter().enumerate() {
-                    out[bi * m + bj] = inv[(i, j)] * scale[bi] * scale[bj];
-                }
-            }
-        }
+    let Equilibrated {
+        scale,
+        blocks,
+        mats,
+        same_as,
+    } = equilibrated(s);
+    if let Some(out) = blockwise_inverse(m, &scale, &blocks, &mats, &same_as) {
         return Ok((out, 0, true));
     }
+    let mut out = vec![0.0; m * m];
     let mut evds = Vec::with_capacity(blocks.len());
     for (k, mat) in mats.iter().enumerate() {
         if same_as[k].is_some() {
@@ -2706,6 +2790,79 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
         }
     }
     Ok((out, dropped, false))
+}
+
+/// S equilibrated (Ŝ = D^-½ S D^-½, `scale` = D^-½, 0 where S's diagonal is
+/// not positive) and taken apart into its independent blocks, each block's
+/// Ŝ and which earlier block it repeats (see [`pseudo_inverse`]).
+struct Equilibrated {
+    scale: Vec<f64>,
+    blocks: Vec<Vec<usize>>,
+    mats: Vec<Mat<f64>>,
+    same_as: Vec<Option<usize>>,
+}
+
+fn equilibrated(s: &Mat<f64>) -> Equilibrated {
+    let m = s.nrows();
+    let scale: Vec<f64> = (0..m)
+        .map(|i| {
+            if s[(i, i)] > 0.0 && s[(i, i)].is_finite() {
+                1.0 / s[(i, i)].sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
+    let blocks = independent_blocks(&scaled);
+    let mats: Vec<Mat<f64>> = blocks
+        .iter()
+        .map(|b| Mat::<f64>::from_fn(b.len(), b.len(), |i, j| scaled[(b[i], b[j])]))
+        .collect();
+    let same_as: Vec<Option<usize>> = (0..blocks.len())
+        .map(|k| (0..k).find(|&e| same_as_earlier(&mats[e], &mats[k])))
+        .collect();
+    Equilibrated {
+        scale,
+        blocks,
+        mats,
+        same_as,
+    }
+}
+
+/// S⁻¹ (row-major) by Cholesky, block by block, when S is provably well
+/// conditioned ([`well_conditioned_blocks`]); `None` otherwise.
+fn blockwise_inverse(
+    m: usize,
+    scale: &[f64],
+    blocks: &[Vec<usize>],
+    mats: &[Mat<f64>],
+    same_as: &[Option<usize>],
+) -> Option<Vec<f64>> {
+    if scale.contains(&0.0) {
+        return None;
+    }
+    let inverses = well_conditioned_blocks(mats, same_as)?;
+    let mut out = vec![0.0; m * m];
+    for (b, inv) in blocks.iter().zip(&inverses) {
+        for (i, &bi) in b.iter().enumerate() {
+            for (j, &bj) in b.iter().enumerate() {
+                out[bi * m + bj] = inv[(i, j)] * scale[bi] * scale[bj];
+            }
+        }
+    }
+    Some(out)
+}
+
+/// The Cholesky path of [`pseudo_inverse`] alone: S⁻¹ (row-major) when S
+/// is provably well conditioned, `None` (no eigendecomposition) otherwise.
+fn cholesky_inverse(s: &Mat<f64>) -> Option<Vec<f64>> {
+    let m = s.nrows();
+    if m == 0 {
+        return Some(Vec::new());
+    }
+    let e = equilibrated(s);
+    blockwise_inverse(m, &e.scale, &e.blocks, &e.mats, &e.same_as)
 }
 
 /// The independent blocks of the symmetric `a`: the connected components of
