@@ -8,13 +8,17 @@
 //! ```
 //!
 //! Every load and every equation is built from a [`ScalarRow`] a_c, so all
-//! of K⁻¹b and Y are combinations of the columns Z = K⁻¹[a_c], computed in
-//! one batched solve when the problem changes and cached by row (and kept a
-//! while after their row leaves), so adding one icon solves only for its new
-//! rows — and not even those at once: a few new equation rows are left
-//! pending, their entries of G taken from the existing columns (K⁻¹ is
-//! symmetric) and a sparse forward solve (see `Factor::forward_gram`), and
-//! their columns are solved in one batch when the shape next moves. S is
+//! of K⁻¹b and Y are combinations of the columns Z = K⁻¹[a_c], cached by
+//! row (and kept a while after their row leaves). A load's column is solved
+//! when its row first comes; an equation row's is left pending: its
+//! entries of G are taken from the existing columns (K⁻¹ is symmetric) and
+//! from forward halves L⁻¹Pa kept on their elimination-tree reach (see
+//! `Factor::forward_sparse`, and `Factor::forward_batch` for many rows at
+//! once: a curve across 81 × 159 brings 415), with no full solve. A few
+//! pending columns (at most `LAZY_COLUMNS`) are solved in one batch when
+//! the shape next moves; with more, nothing reads Z: a solve or a drag
+//! response takes δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
+//! (see `Solver::z_is_whole`). S is
 //! assembled from the small Gram matrix G = Aᵀ Z. S⁻¹ is a
 //! Cholesky inverse when S is provably well conditioned, else a
 //! pseudo-inverse by symmetric eigendecomposition: redundant equations
@@ -357,11 +361,12 @@ pub struct Solver {
     /// (an icon switched off and on again, an undo): oldest first, at most
     /// [`RETIRED_BYTES`] of them. Valid until the stiffness changes.
     retired: VecDeque<(RowKey, Column)>,
-    /// Columns of Z not solved yet (placeholders in `z`): a few new
-    /// equation rows whose entries of G came from existing columns and a
-    /// sparse forward solve (see [`LAZY_COLUMNS`]). Solved in one batch by
-    /// [`Self::solve_pending`] before anything reads them: a new icon that
-    /// holds the shape where it is costs no full sparse solve.
+    /// Columns of Z not solved yet (placeholders in `z`): new equation rows
+    /// whose entries of G came from existing columns and forward halves.
+    /// A few (see [`LAZY_COLUMNS`]) are solved in one batch by
+    /// [`Self::solve_pending`] before anything reads them; more stay
+    /// pending (see [`Self::z_is_whole`]): a new icon, even a curve's
+    /// hundreds of rows, costs no full sparse solve.
     pending: Vec<usize>,
     /// The forward halves L⁻¹Pa of the pending columns' rows (from the
     /// Gram's forward solves): a pending column costs only the backward half.
@@ -756,7 +761,7 @@ impl Solver {
             let may_fold = !same_folds(&fold, &foldable);
             let inverse =
                 match updated {
-                    Some(p) => Ok((p, 0, true)),
+                    Some(kept) => Ok(kept),
                     None if may_fold => Ok(cholesky_inverse(&s)
                         .map_or_else(|| (Vec::new(), 0, false), |p| (p, 0, true))),
                     None => pseudo_inverse(&s),
@@ -931,13 +936,32 @@ impl Solver {
                 .filter(|(_, k)| k.is_none())
                 .map(|(&c, _)| row_of(c))
                 .collect();
+            // Entries between carried rows come from the current G (see
+            // below) when it is whole: only pairs with a fresh row are
+            // needed then.
+            let old_g = self.g.len() == self.rows.len() * self.rows.len();
             self.factor.forward_sparse(&columns).map(|fresh| {
                 let mut fresh = fresh.into_iter();
                 let forward: Vec<Forward> = kept
                     .iter()
                     .filter_map(|k| k.map_or_else(|| fresh.next(), |f| Some(f.clone())))
                     .collect();
-                let gram = self.factor.gram_of(&forward);
+                let gram = if old_g {
+                    let l = forward.len();
+                    let mut gram = vec![0.0; l * l];
+                    for i in 0..l {
+                        for j in i..l {
+                            if kept[i].is_none() || kept[j].is_none() {
+                                let v = forward[i].dot(&forward[j]);
+                                gram[i * l + j] = v;
+                                gram[j * l + i] = v;
+                            }
+                        }
+                    }
+                    gram
+                } else {
+                    self.factor.gram_of(&forward)
+                };
                 (forward, gram)
             })
         };
@@ -1223,16 +1247,19 @@ impl Solver {
     /// 1e-9 on two probe vectors. With nothing added or removed (a load's
     /// group came or went) S is the current one entry for entry (see
     /// `schur`: G's entries between kept rows are kept), so the current
-    /// inverse, permuted, is returned unchecked.
+    /// inverse, permuted, is returned unchecked — a pseudo-inverse too (a
+    /// grab after a curve was added: no second eigendecomposition). Returns
+    /// what [`pseudo_inverse`] does: S⁻¹, the dropped directions, and
+    /// whether it is an exact inverse.
     fn updated_inverse(
         &self,
         rows: &[ScalarRow],
         eqs: &[ScalarEq],
         s: &Mat<f64>,
-    ) -> Option<Vec<f64>> {
+    ) -> Option<(Vec<f64>, usize, bool)> {
         use faer::linalg::solvers::{DenseSolveCore, Solve};
         let (m_old, m) = (self.eqs.len(), eqs.len());
-        if !self.s_exact || m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
+        if m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
             return None;
         }
         let EquationMatch {
@@ -1248,14 +1275,19 @@ impl Solver {
         if a == 0 && r == 0 {
             // The same equations on the same columns (a load came or went,
             // or equations were only reordered): S is the old one, entry
-            // for entry, and so is its inverse, permuted. Nothing to check.
+            // for entry, and so is its inverse — or pseudo-inverse, with
+            // the same dropped directions — permuted. Nothing to check.
             let mut out = vec![0.0; m * m];
             for &(e, o) in &kept {
                 for &(f, q) in &kept {
                     out[e * m + f] = old(o, q);
                 }
             }
-            return Some(out);
+            let dropped = self.rank_deficiency.saturating_sub(self.pin_redundant);
+            return Some((out, dropped, self.s_exact));
+        }
+        if !self.s_exact {
+            return None;
         }
         // (S_kk)⁻¹ over the kept equations, in the new order.
         let mut inv_k = Mat::<f64>::from_fn(k, k, |i, j| old(kept[i].1, kept[j].1));
@@ -1296,7 +1328,7 @@ impl Solver {
                 out[(pi, pj)] = whole[(i, j)];
             }
         }
-        checked_inverse(s, &out)
+        checked_inverse(s, &out).map(|p| (p, 0, true))
     }
 
     /// Refactors for `pinned` control points eliminated and `folded`
@@ -2620,19 +2652,45 @@ type SparseRhs = (Vec<usize>, Vec<f64>);
 type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
 
 /// S = C K⁻¹ Cᵀ over the scalar equations from G (row-major, nc × nc).
+/// Equations of one term (every vector equation's coordinate) take the
+/// short way: S_ef = c_e c_f G[col_e, col_f] when they act on the same
+/// coordinate, else 0 — the same products as the general sum.
 fn assemble_s(eqs: &[ScalarEq], g: &[f64], nc: usize) -> Mat<f64> {
     let m = eqs.len();
     let mut s = Mat::<f64>::zeros(m, m);
-    for (e, ee) in eqs.iter().enumerate() {
-        for (f, ff) in eqs.iter().enumerate().skip(e) {
-            let mut v = 0.0;
-            for t in &ee.terms {
-                for u in ff.terms.iter().filter(|u| u.k == t.k) {
-                    v += t.coef * u.coef * g[t.col * nc + u.col];
+    let single: Vec<Option<Term>> = eqs
+        .iter()
+        .map(|e| match e.terms.as_slice() {
+            [t] => Some(*t),
+            _ => None,
+        })
+        .collect();
+    // Column by column (S is column-major), each entry from its upper
+    // triangle's terms (e ≤ f) so that S is symmetric to the last bit.
+    let entry = |e: usize, f: usize| -> f64 {
+        match (single[e], single[f]) {
+            (Some(t), Some(u)) if t.k == u.k => t.coef * u.coef * g[t.col * nc + u.col],
+            (Some(_), Some(_)) => 0.0,
+            _ => {
+                let mut v = 0.0;
+                for t in &eqs[e].terms {
+                    for u in eqs[f].terms.iter().filter(|u| u.k == t.k) {
+                        v += t.coef * u.coef * g[t.col * nc + u.col];
+                    }
                 }
+                v
             }
-            s[(e, f)] = v;
-            s[(f, e)] = v;
+        }
+    };
+    for f in 0..m {
+        let column = s
+            .col_mut(f)
+            .try_as_col_major_mut()
+            .map(|c| c.as_slice_mut());
+        if let Some(column) = column {
+            for (e, x) in column.iter_mut().enumerate() {
+                *x = if e <= f { entry(e, f) } else { entry(f, e) };
+            }
         }
     }
     s
@@ -2978,9 +3036,12 @@ const MAX_REFINEMENT_STEPS: usize = 12;
 /// usual Oettli–Prager stopping rule): a step would add noise, not digits.
 const NOISE_BACKWARD_ERROR: f64 = 1e-14;
 
-/// Most new equation rows whose columns of Z a problem change leaves
-/// pending (see `Solver::pending`); more are solved at once in one batch
-/// (a batch streams the factor once, so many columns cost less together).
+/// Most pending columns of Z (see `Solver::pending`) solved in one batch
+/// when Z is first read; with more, Z is never read (see
+/// `Solver::z_is_whole`): a curve's 415 columns on 81 × 159 took ~1 s of
+/// full solves (loaded), its forward halves and S ~50 ms. Also the most
+/// new rows whose forward halves are solved column by column
+/// (`Factor::forward_sparse`); more go through `Factor::forward_batch`.
 const LAZY_COLUMNS: usize = 8;
 
 /// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
