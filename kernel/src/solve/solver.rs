@@ -15,7 +15,7 @@
 //! from forward halves L⁻¹Pa kept on their elimination-tree reach (see
 //! `Factor::forward_sparse`, and `Factor::forward_batch` for many rows at
 //! once: a curve across 81 × 159 brings 415), with no full solve. A few
-//! pending columns (at most `LAZY_COLUMNS`) are solved in one batch when
+//! pending columns (at most `SOLVED_WHEN_READ`) are solved in one batch when
 //! the shape next moves; with more, nothing reads Z: a solve or a drag
 //! response takes δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
 //! (see `Solver::z_is_whole`). S is
@@ -363,7 +363,7 @@ pub struct Solver {
     retired: VecDeque<(RowKey, Column)>,
     /// Columns of Z not solved yet (placeholders in `z`): new equation rows
     /// whose entries of G came from existing columns and forward halves.
-    /// A few (see [`LAZY_COLUMNS`]) are solved in one batch by
+    /// A few (see [`SOLVED_WHEN_READ`]) are solved in one batch by
     /// [`Self::solve_pending`] before anything reads them; more stay
     /// pending (see [`Self::z_is_whole`]): a new icon, even a curve's
     /// hundreds of rows, costs no full sparse solve.
@@ -1160,22 +1160,22 @@ impl Solver {
     }
 
     /// Solves the pending columns of Z (see [`Self::pending`]) in one batch
-    /// when there are few (at most [`LAZY_COLUMNS`]); more stay pending for
-    /// good (see [`Self::z_is_whole`]).
+    /// when there are not too many (at most [`SOLVED_WHEN_READ`]); more
+    /// stay pending for good (see [`Self::z_is_whole`]).
     fn solve_pending(&mut self) {
-        if self.pending.is_empty() || self.pending.len() > LAZY_COLUMNS {
+        if self.pending.is_empty() || !self.z_is_whole() {
             return;
         }
         self.solve_batch(&[]);
     }
 
     /// Whether every column of Z is solved, or will be at its first read
-    /// ([`Self::solve_pending`]). When not (more than [`LAZY_COLUMNS`] rows
-    /// pending: a curve constraint's hundreds), what reads Z takes another
-    /// way: δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
+    /// ([`Self::solve_pending`]). When not (more than [`SOLVED_WHEN_READ`]
+    /// rows pending: a free-form curve's hundreds), what reads Z takes
+    /// another way: δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
     /// ([`Self::add_rows_solved`]) instead of Σ w_c z_c.
     fn z_is_whole(&self) -> bool {
-        self.pending.len() <= LAZY_COLUMNS
+        self.pending.len() <= SOLVED_WHEN_READ
     }
 
     /// K̃⁻¹ of every sparse right-hand side in `extra` (`(indices,
@@ -3036,13 +3036,20 @@ const MAX_REFINEMENT_STEPS: usize = 12;
 /// usual Oettli–Prager stopping rule): a step would add noise, not digits.
 const NOISE_BACKWARD_ERROR: f64 = 1e-14;
 
-/// Most pending columns of Z (see `Solver::pending`) solved in one batch
-/// when Z is first read; with more, Z is never read (see
-/// `Solver::z_is_whole`): a curve's 415 columns on 81 × 159 took ~1 s of
-/// full solves (loaded), its forward halves and S ~50 ms. Also the most
-/// new rows whose forward halves are solved column by column
-/// (`Factor::forward_sparse`); more go through `Factor::forward_batch`.
+/// Most new rows whose forward halves are solved column by column
+/// (`Factor::forward_sparse`, the Gram by sparse products); more go
+/// through `Factor::forward_batch` (dense blocks per supernode).
 const LAZY_COLUMNS: usize = 8;
+
+/// Most pending columns of Z (see `Solver::pending`) solved in one batch
+/// when Z is first read (the first solve that moves the shape, the first
+/// grab): then Σ w_c z_c is a pass over Z, and every later solve costs no
+/// sparse solve for it — the paper's straight curve (81 rows on 81 × 159)
+/// is paid once, not at every solve (measured: through combined rows
+/// `constraint_change_moving` took 2.2× as long). With more, Z is never
+/// read (see `Solver::z_is_whole`): a free-form cubic's 415 columns on
+/// 81 × 159 took ~1 s of full solves (loaded, load 5).
+const SOLVED_WHEN_READ: usize = 128;
 
 /// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
 const RETIRED_BYTES: usize = 16 << 20;
