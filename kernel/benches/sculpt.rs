@@ -31,6 +31,12 @@
 //! And `clamped_plate`: a 128 × 128 plate clamped on its four edges (edge
 //! icons) under a dragged distributed load.
 //!
+//! And `curve_set_up` (issue 15), on 20 × 15 and 81 × 159 with the paper's
+//! scene: a free-form cubic curve constraint across the plate (the one of
+//! `server/tests/icon_creation.rs`) added and solved — the time from adding
+//! the icon to the design being ready for a drag (`curve_set_up`) — and the
+//! first frame of a grab right after it (`first_frame_after_curve`).
+//!
 //! Run: `cargo bench -p vsculpt-kernel --bench sculpt`. Figures in BENCHMARKS.md.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -105,6 +111,56 @@ fn scene(nu: usize, nv: usize) -> Scene {
         switch,
         start,
     }
+}
+
+/// A passive position icon on `anchor`.
+fn held(anchor: Anchor) -> IconSpec {
+    IconSpec {
+        anchor,
+        role: Role::Position,
+        state: IconState::Passive,
+        target: None,
+    }
+}
+
+/// `iters` times: an icon `spec()` added and solved (timed), then removed
+/// and the removal solved (not timed).
+fn time_add(sc: &mut Scene, iters: u64, spec: &mut impl FnMut() -> IconSpec) -> Duration {
+    let mut spent = Duration::ZERO;
+    for _ in 0..iters {
+        let spec = spec();
+        let start = std::time::Instant::now();
+        let icon = sc.design.add_icon(spec).unwrap();
+        black_box(sc.design.solve().unwrap());
+        spent += start.elapsed();
+        sc.design.remove_icon(icon).unwrap();
+        sc.design.solve().unwrap();
+    }
+    spent
+}
+
+/// `iters` times: an icon `spec()` added and solved, then the first frame
+/// of a grab of the load (timed: drag start and one frame), then the load
+/// released and the icon removed.
+fn time_first_frame_after_add(
+    sc: &mut Scene,
+    iters: u64,
+    spec: &mut impl FnMut() -> IconSpec,
+) -> Duration {
+    let mut spent = Duration::ZERO;
+    for _ in 0..iters {
+        let icon = sc.design.add_icon(spec()).unwrap();
+        sc.design.solve().unwrap();
+        let at = sc.design.icon(sc.load).unwrap().xyz;
+        let start = std::time::Instant::now();
+        sc.design.drag_start(sc.load).unwrap();
+        black_box(sc.design.drag(sc.load, at + DVec3::Z * 0.001).unwrap());
+        spent += start.elapsed();
+        sc.design.release(sc.load).unwrap();
+        sc.design.remove_icon(icon).unwrap();
+        sc.design.solve().unwrap();
+    }
+    spent
 }
 
 /// Switches `icon` passive (even `k`) or sleeping (odd `k`) and solves.
@@ -194,64 +250,23 @@ fn benches(c: &mut Criterion) {
                 black_box(sc.design.solve().unwrap())
             })
         });
+        // A position icon at a parameter never used before: its column is
+        // not cached.
         let mut fresh = 0u64;
+        let mut point = move || {
+            fresh += 1;
+            let u = 0.2 + 0.6 * ((fresh as f64 * 0.618_033_988_75) % 1.0);
+            let v = 0.4 + 0.2 * ((fresh as f64 * 0.414_213_562_37) % 1.0);
+            held(Anchor::Point { u, v })
+        };
         group.bench_function(BenchmarkId::new("add_icon", &id), |b| {
-            b.iter_custom(|iters| {
-                let mut spent = Duration::ZERO;
-                for _ in 0..iters {
-                    fresh += 1;
-                    // A parameter never used before: its column is not cached.
-                    let u = 0.2 + 0.6 * ((fresh as f64 * 0.618_033_988_75) % 1.0);
-                    let v = 0.4 + 0.2 * ((fresh as f64 * 0.414_213_562_37) % 1.0);
-                    let start = std::time::Instant::now();
-                    let icon = sc
-                        .design
-                        .add_icon(IconSpec {
-                            anchor: Anchor::Point { u, v },
-                            role: Role::Position,
-                            state: IconState::Passive,
-                            target: None,
-                        })
-                        .unwrap();
-                    black_box(sc.design.solve().unwrap());
-                    spent += start.elapsed();
-                    sc.design.remove_icon(icon).unwrap();
-                    sc.design.solve().unwrap();
-                }
-                spent
-            })
+            b.iter_custom(|iters| time_add(&mut sc, iters, &mut point))
         });
         // The first frame of a grab right after the icon set changed (an
         // icon added and solved, outside the timing): the drag's response
         // is recomputed and the new icon's pending column solved.
         group.bench_function(BenchmarkId::new("first_frame_after_add", &id), |b| {
-            b.iter_custom(|iters| {
-                let mut spent = Duration::ZERO;
-                for _ in 0..iters {
-                    fresh += 1;
-                    let u = 0.2 + 0.6 * ((fresh as f64 * 0.618_033_988_75) % 1.0);
-                    let v = 0.4 + 0.2 * ((fresh as f64 * 0.414_213_562_37) % 1.0);
-                    let icon = sc
-                        .design
-                        .add_icon(IconSpec {
-                            anchor: Anchor::Point { u, v },
-                            role: Role::Position,
-                            state: IconState::Passive,
-                            target: None,
-                        })
-                        .unwrap();
-                    sc.design.solve().unwrap();
-                    let at = sc.design.icon(sc.load).unwrap().xyz;
-                    let start = std::time::Instant::now();
-                    sc.design.drag_start(sc.load).unwrap();
-                    black_box(sc.design.drag(sc.load, at + DVec3::Z * 0.001).unwrap());
-                    spent += start.elapsed();
-                    sc.design.release(sc.load).unwrap();
-                    sc.design.remove_icon(icon).unwrap();
-                    sc.design.solve().unwrap();
-                }
-                spent
-            })
+            b.iter_custom(|iters| time_first_frame_after_add(&mut sc, iters, &mut point))
         });
         // A region constraint switched (sleeping ↔ passive): the control
         // points its rectangle holds are pinned or freed, so the pin set
@@ -428,5 +443,57 @@ fn clamped_plate(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(sculpt, benches, clamped_plate);
+/// The free-form cubic of `server/tests/icon_creation.rs`, across the plate,
+/// its control points shifted by `shift` along v (a fresh curve per
+/// iteration: no cached column of an earlier one applies).
+fn cubic(shift: f64) -> Anchor {
+    let points = [
+        (0.1, 0.12),
+        (0.3, 0.3),
+        (0.5, 0.05),
+        (0.7, 0.35),
+        (0.92, 0.15),
+    ];
+    let curve = BSplineCurve::new(
+        KnotVector::new(3, vec![0.0, 0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0, 1.0]).unwrap(),
+        points
+            .iter()
+            .map(|&(u, v)| DVec3::new(u, v + shift, 0.0))
+            .collect(),
+    )
+    .unwrap();
+    Anchor::Curve(curve)
+}
+
+/// A free-form curve constraint added to the paper's scene (issue 15).
+fn curve_set_up(c: &mut Criterion) {
+    let mut group = c.benchmark_group("sculpt");
+    group
+        .sample_size(10)
+        .sampling_mode(criterion::SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(100))
+        .measurement_time(Duration::from_secs(2));
+    for (nu, nv) in [(20, 15), (81, 159)] {
+        let id = format!("{nu}x{nv}");
+        let mut sc = scene(nu, nv);
+        sc.design.release(sc.load).unwrap();
+        let mut fresh = 0u64;
+        let mut spec = move || {
+            fresh += 1;
+            held(cubic(0.02 * ((fresh as f64 * 0.618_033_988_75) % 1.0)))
+        };
+        // Added and solved: the design is then ready for a drag.
+        group.bench_function(BenchmarkId::new("curve_set_up", &id), |b| {
+            b.iter_custom(|iters| time_add(&mut sc, iters, &mut spec))
+        });
+        // The first frame of a grab of the load right after the curve was
+        // added and solved (outside the timing).
+        group.bench_function(BenchmarkId::new("first_frame_after_curve", &id), |b| {
+            b.iter_custom(|iters| time_first_frame_after_add(&mut sc, iters, &mut spec))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(sculpt, benches, clamped_plate, curve_set_up);
 criterion_main!(sculpt);

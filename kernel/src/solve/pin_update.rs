@@ -224,13 +224,19 @@ impl PinUpdate {
             .collect()
     }
 
-    /// α = [b_F; 0] − Vᵀ Ã⁻¹ b₀ from the forward half f = L⁻¹P b₀.
-    pub(crate) fn alpha_of_forward(&self, factor: &Factor, f: &[f64], b_f: &[f64]) -> Vec<f64> {
+    /// α = [b_F; 0] − Vᵀ Ã⁻¹ b₀ from the forward half f = L⁻¹P b₀, with
+    /// `dot` the product of one of V's forward halves with f.
+    fn alpha_by(&self, b_f: &[f64], dot: impl Fn(&Forward) -> f64) -> Vec<f64> {
         self.forward
             .iter()
             .enumerate()
-            .map(|(v, fv)| b_f.get(v).copied().unwrap_or(0.0) - factor.dot_on_reach(fv, f))
+            .map(|(v, fv)| b_f.get(v).copied().unwrap_or(0.0) - dot(fv))
             .collect()
+    }
+
+    /// α from the forward half f = L⁻¹P b₀ (see [`Self::alpha_by`]).
+    pub(crate) fn alpha_of_forward(&self, f: &Forward, b_f: &[f64]) -> Vec<f64> {
+        self.alpha_by(b_f, |fv| fv.dot(f))
     }
 
     /// α = [b_F; 0] − Vᵀ z₀ from the full solve z₀ = Ã⁻¹ b₀ (original
@@ -248,10 +254,10 @@ impl PinUpdate {
 
     #[cfg(test)]
     /// f −= (L⁻¹PV) ξ: the forward half of b₀ − V ξ.
-    pub(crate) fn subtract(&self, factor: &Factor, xi: &[f64], f: &mut [f64]) {
+    pub(crate) fn subtract(&self, xi: &[f64], f: &mut [f64]) {
         for (fv, &x) in self.forward.iter().zip(xi) {
             if x != 0.0 {
-                factor.axpy_on_reach(-x, fv, f);
+                fv.axpy(-x, f);
             }
         }
     }
@@ -259,9 +265,9 @@ impl PinUpdate {
     #[cfg(test)]
     /// Corrects the forward half f = L⁻¹P b₀ in place into that of
     /// b₀ − V ξ; returns x_F (the freed points' values, ξ's first part).
-    pub(crate) fn correct(&self, factor: &Factor, f: &mut [f64], b_f: &[f64]) -> Vec<f64> {
-        let xi = self.xi(&self.alpha_of_forward(factor, f, b_f));
-        self.subtract(factor, &xi, f);
+    pub(crate) fn correct(&self, f: &mut [f64], b_f: &[f64]) -> Vec<f64> {
+        let xi = self.xi(&self.alpha_by(b_f, |fv| fv.dot_dense(f)));
+        self.subtract(&xi, f);
         xi[..self.freed.len()].to_vec()
     }
 
@@ -316,7 +322,7 @@ mod tests {
         let mut got = Mat::<f64>::from_fn(dim, 1, |i, _| b[i]);
         let b_f = update.split_dense(got.col_as_slice_mut(0));
         assert!(factor.forward_in_place(got.as_mut()));
-        let x_f = update.correct(&factor, got.col_as_slice_mut(0), &b_f);
+        let x_f = update.correct(got.col_as_slice_mut(0), &b_f);
         assert!(factor.backward_in_place(got.as_mut()));
         update.finish(&x_f, |i, v| got[(i, 0)] = v);
         let scale = (0..dim).fold(0.0f64, |m, i| m.max(want[(i, 0)].abs()));

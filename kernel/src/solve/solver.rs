@@ -8,13 +8,17 @@
 //! ```
 //!
 //! Every load and every equation is built from a [`ScalarRow`] a_c, so all
-//! of K⁻¹b and Y are combinations of the columns Z = K⁻¹[a_c], computed in
-//! one batched solve when the problem changes and cached by row (and kept a
-//! while after their row leaves), so adding one icon solves only for its new
-//! rows — and not even those at once: a few new equation rows are left
-//! pending, their entries of G taken from the existing columns (K⁻¹ is
-//! symmetric) and a sparse forward solve (see `Factor::forward_gram`), and
-//! their columns are solved in one batch when the shape next moves. S is
+//! of K⁻¹b and Y are combinations of the columns Z = K⁻¹[a_c], cached by
+//! row (and kept a while after their row leaves). A load's column is solved
+//! when its row first comes; an equation row's is left pending: its
+//! entries of G are taken from the existing columns (K⁻¹ is symmetric) and
+//! from forward halves L⁻¹Pa kept on their elimination-tree reach (see
+//! `Factor::forward_sparse`, and `Factor::forward_batch` for many rows at
+//! once: a curve across 81 × 159 brings 415), with no full solve. A few
+//! pending columns (at most `SOLVED_WHEN_READ`) are solved in one batch when
+//! the shape next moves; with more, nothing reads Z: a solve or a drag
+//! response takes δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
+//! (see `Solver::z_is_whole`). S is
 //! assembled from the small Gram matrix G = Aᵀ Z. S⁻¹ is a
 //! Cholesky inverse when S is provably well conditioned, else a
 //! pseudo-inverse by symmetric eigendecomposition: redundant equations
@@ -283,6 +287,23 @@ impl Column {
             norm: f64::NAN,
         }
     }
+
+    /// Whether the column is not solved yet.
+    fn is_pending(&self) -> bool {
+        self.norm.is_nan()
+    }
+}
+
+/// |w| ‖z‖∞ per coordinate: how far weight `w` on column `col` reaches the
+/// shape. A pending column's norm is not known: any non-zero weight on it
+/// reaches without bound (the conservative answer: refine, count as
+/// pulling).
+fn column_reach(w: DVec3, col: &Column) -> DVec3 {
+    if col.is_pending() {
+        DVec3::select(w.cmpeq(DVec3::ZERO), DVec3::ZERO, DVec3::INFINITY)
+    } else {
+        w.abs() * col.norm
+    }
 }
 
 /// The last full solve, for [`Solver::still_optimal`].
@@ -340,11 +361,12 @@ pub struct Solver {
     /// (an icon switched off and on again, an undo): oldest first, at most
     /// [`RETIRED_BYTES`] of them. Valid until the stiffness changes.
     retired: VecDeque<(RowKey, Column)>,
-    /// Columns of Z not solved yet (placeholders in `z`): a few new
-    /// equation rows whose entries of G came from existing columns and a
-    /// sparse forward solve (see [`LAZY_COLUMNS`]). Solved in one batch by
-    /// [`Self::solve_pending`] before anything reads them: a new icon that
-    /// holds the shape where it is costs no full sparse solve.
+    /// Columns of Z not solved yet (placeholders in `z`): new equation rows
+    /// whose entries of G came from existing columns and forward halves.
+    /// A few (see [`SOLVED_WHEN_READ`]) are solved in one batch by
+    /// [`Self::solve_pending`] before anything reads them; more stay
+    /// pending (see [`Self::z_is_whole`]): a new icon, even a curve's
+    /// hundreds of rows, costs no full sparse solve.
     pending: Vec<usize>,
     /// The forward halves L⁻¹Pa of the pending columns' rows (from the
     /// Gram's forward solves): a pending column costs only the backward half.
@@ -361,6 +383,9 @@ pub struct Solver {
     response: Option<Response>,
     last: Option<LastSolve>,
     counts: ResponseCounts,
+    /// Solve every new row's column of Z in full at a problem change (the
+    /// path before issue 15), see [`Solver::set_eager_columns`].
+    eager_columns: bool,
 }
 
 impl Solver {
@@ -396,7 +421,18 @@ impl Solver {
             response: None,
             last: None,
             counts: ResponseCounts::default(),
+            eager_columns: false,
         })
+    }
+
+    /// Whether a problem change solves every new row's column of Z = K̃⁻¹Cᵀ
+    /// in full (`true`: the path before issue 15, one full sparse solve
+    /// per row) instead of leaving equation rows pending with their block
+    /// of G from forward halves (`false`, the default). A reference for
+    /// tests that compare the two; it applies from the next problem change.
+    #[doc(hidden)]
+    pub fn set_eager_columns(&mut self, eager: bool) {
+        self.eager_columns = eager;
     }
 
     /// The number of control points.
@@ -718,10 +754,18 @@ impl Solver {
             } else {
                 self.updated_inverse(&rows, &eqs, &s)
             };
-            let inverse = match updated {
-                Some(p) => Ok((p, 0, true)),
-                None => pseudo_inverse(&s),
-            };
+            // When S is not provably well conditioned the equations are
+            // folded and S formed again: the eigendecomposition of this S
+            // would be thrown away (on 81 × 159 a curve's 1245 equations
+            // cost ~50 ms of it), so only the Cholesky path is tried.
+            let may_fold = !same_folds(&fold, &foldable);
+            let inverse =
+                match updated {
+                    Some(kept) => Ok(kept),
+                    None if may_fold => Ok(cholesky_inverse(&s)
+                        .map_or_else(|| (Vec::new(), 0, false), |p| (p, 0, true))),
+                    None => pseudo_inverse(&s),
+                };
             match inverse {
                 Ok((_, _, false)) if !same_folds(&fold, &foldable) => {
                     // S is ill-conditioned over K: fold the equations into
@@ -862,52 +906,94 @@ impl Solver {
             old.get(&row_key(&rows[c]))
                 .and_then(|oc| carried.get(oc).copied())
         };
-        let forward = if !missing.is_empty()
-            && missing.len() <= LAZY_COLUMNS
-            && missing.iter().all(|&c| !is_load[c])
-        {
-            let kept: Vec<Option<&Forward>> = missing.iter().map(|&c| carried_of(c)).collect();
-            let columns: Vec<(&[usize], &[f64])> = missing
+        // New equation rows are left pending (their block of G from forward
+        // halves on the elimination-tree reach: no full solve, however many
+        // — a curve across the plate brings hundreds); loads are solved.
+        let lazy: Vec<usize> = if self.eager_columns {
+            Vec::new()
+        } else {
+            missing.iter().copied().filter(|&c| !is_load[c]).collect()
+        };
+        let row_of = |c: usize| {
+            (
+                free_rows[c].indices.as_slice(),
+                free_rows[c].weights.as_slice(),
+            )
+        };
+        let kept: Vec<Option<&Forward>> = lazy.iter().map(|&c| carried_of(c)).collect();
+        let fresh = kept.iter().filter(|k| k.is_none()).count();
+        let batch: Option<(Vec<Forward>, Vec<f64>)> = if lazy.is_empty() {
+            None
+        } else if fresh > LAZY_COLUMNS {
+            // Many rows (a curve): all of them in one blocked pass, their
+            // Gram matrix with it.
+            let columns: Vec<(&[usize], &[f64])> = lazy.iter().map(|&c| row_of(c)).collect();
+            self.factor.forward_batch(&columns)
+        } else {
+            let columns: Vec<(&[usize], &[f64])> = lazy
                 .iter()
                 .zip(&kept)
                 .filter(|(_, k)| k.is_none())
-                .map(|(&c, _)| {
-                    (
-                        free_rows[c].indices.as_slice(),
-                        free_rows[c].weights.as_slice(),
-                    )
-                })
+                .map(|(&c, _)| row_of(c))
                 .collect();
+            // Entries between carried rows come from the current G (see
+            // below) when it is whole: only pairs with a fresh row are
+            // needed then.
+            let old_g = self.g.len() == self.rows.len() * self.rows.len();
             self.factor.forward_sparse(&columns).map(|fresh| {
                 let mut fresh = fresh.into_iter();
-                kept.iter()
+                let forward: Vec<Forward> = kept
+                    .iter()
                     .filter_map(|k| k.map_or_else(|| fresh.next(), |f| Some(f.clone())))
-                    .collect::<Vec<Forward>>()
+                    .collect();
+                let gram = if old_g {
+                    let l = forward.len();
+                    let mut gram = vec![0.0; l * l];
+                    for i in 0..l {
+                        for j in i..l {
+                            if kept[i].is_none() || kept[j].is_none() {
+                                let v = forward[i].dot(&forward[j]);
+                                gram[i * l + j] = v;
+                                gram[j * l + i] = v;
+                            }
+                        }
+                    }
+                    gram
+                } else {
+                    self.factor.gram_of(&forward)
+                };
+                (forward, gram)
             })
-        } else {
-            None
         };
-        let gram = forward.as_ref().map(|f| self.factor.gram_of(f));
+        let (forward, gram) = match batch {
+            Some((f, g)) => (Some(f), Some(g)),
+            None => (None, None),
+        };
         let pending = if gram.is_some() {
-            for &c in &missing {
+            for &c in &lazy {
                 z[c] = Some(Column::pending());
             }
-            missing.clone()
+            lazy
         } else {
-            if !missing.is_empty() {
-                let mut rhs = Mat::<f64>::zeros(n, missing.len());
-                for (m, &c) in missing.iter().enumerate() {
-                    for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
-                        rhs[(i, m)] += w;
-                    }
-                }
-                self.factor.solve_in_place(rhs.as_mut());
-                for (m, &c) in missing.iter().enumerate() {
-                    z[c] = Some(Column::new(rhs.col_as_slice(m)));
-                }
-            }
             Vec::new()
         };
+        let solve_now: Vec<usize> = missing
+            .iter()
+            .copied()
+            .filter(|&c| z[c].is_none())
+            .collect();
+        if !solve_now.is_empty() {
+            let mut rhs = Mat::<f64>::zeros(n, solve_now.len());
+            for (m, &c) in solve_now.iter().enumerate() {
+                for (&i, &w) in free_rows[c].indices.iter().zip(&free_rows[c].weights) {
+                    rhs[(i, m)] += w;
+                }
+            }
+            self.factor.solve_in_place(rhs.as_mut());
+            for (m, &c) in solve_now.iter().enumerate() {
+                z[c] = Some(Column::new(rhs.col_as_slice(m)));
+            }
+        }
         let z: Vec<Column> = z.into_iter().flatten().collect();
         debug_assert_eq!(z.len(), rows.len());
         // G = Aᵀ Z (Z is zero at the pinned points: the free rows suffice).
@@ -982,7 +1068,7 @@ impl Solver {
                 _ => Column::pending(),
             })
             .collect();
-        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].norm.is_nan()).collect();
+        let missing: Vec<usize> = (0..rows.len()).filter(|&c| z[c].is_pending()).collect();
         // Per missing row: a₀ (its free part over the factor's free
         // points), b_F, and its base column Ã⁻¹a₀ when kept (a row that
         // touches no newly pinned point: its part over the factor's free
@@ -1023,7 +1109,7 @@ impl Solver {
             .map(|((_, b_f, base), f)| {
                 let alpha = match (base, f) {
                     (Some(col), _) => update.alpha_of_column(&col.values, b_f),
-                    (None, Some(f)) => update.alpha_of_forward(&self.factor, f.values(), b_f),
+                    (None, Some(f)) => update.alpha_of_forward(f, b_f),
                     (None, None) => vec![0.0; b_f.len()],
                 };
                 let xi = update.xi(&alpha);
@@ -1055,7 +1141,7 @@ impl Solver {
                         let first = match (&parts[i].2, &parts[j].2, &forward[i], &forward[j]) {
                             (_, Some(zb), _, _) => sparse_dot(&parts[i].0, &zb.values),
                             (Some(za), _, _, _) => sparse_dot(&parts[j].0, &za.values),
-                            (_, _, Some(fa), Some(fb)) => self.factor.dot_on_reach(fa, fb.values()),
+                            (_, _, Some(fa), Some(fb)) => fa.dot(fb),
                             _ => 0.0,
                         };
                         let cross: f64 = xis[i].0.iter().zip(&xis[j].1).map(|(x, y)| x * y).sum();
@@ -1073,17 +1159,28 @@ impl Solver {
         (z, missing, Vec::new(), g, s)
     }
 
-    /// Solves the pending columns of Z (see [`Self::pending`]) in one batch.
+    /// Solves the pending columns of Z (see [`Self::pending`]) in one batch
+    /// when there are not too many (at most [`SOLVED_WHEN_READ`]); more
+    /// stay pending for good (see [`Self::z_is_whole`]).
     fn solve_pending(&mut self) {
-        if self.pending.is_empty() {
+        if self.pending.is_empty() || !self.z_is_whole() {
             return;
         }
         self.solve_batch(&[]);
     }
 
+    /// Whether every column of Z is solved, or will be at its first read
+    /// ([`Self::solve_pending`]). When not (more than [`SOLVED_WHEN_READ`]
+    /// rows pending: a free-form curve's hundreds), what reads Z takes
+    /// another way: δ = K̃⁻¹(Σ w_c a_c) by one solve of the combined rows
+    /// ([`Self::add_rows_solved`]) instead of Σ w_c z_c.
+    fn z_is_whole(&self) -> bool {
+        self.pending.len() <= SOLVED_WHEN_READ
+    }
+
     /// K̃⁻¹ of every sparse right-hand side in `extra` (`(indices,
     /// weights)` over the free points), with the pending columns of Z
-    /// solved in the same batch. The extra ones' forward halves visit only
+    /// solved in the same batch when they are few ([`Self::z_is_whole`]). The extra ones' forward halves visit only
     /// the elimination-tree reach of their non-zeros
     /// ([`Factor::forward_sparse`]: a combination of constraint and load
     /// rows touches a fraction of the factor), the pending ones need no
@@ -1093,8 +1190,14 @@ impl Solver {
     fn solve_batch(&mut self, extra: &[SparseRhs]) -> Mat<f64> {
         debug_assert!(self.update.is_none(), "solves settle a pin change first");
         let n = self.dim();
-        let pending = std::mem::take(&mut self.pending);
-        let forward = std::mem::take(&mut self.pending_forward);
+        let (pending, forward) = if self.z_is_whole() {
+            (
+                std::mem::take(&mut self.pending),
+                std::mem::take(&mut self.pending_forward),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let e = extra.len();
         let k = e + pending.len();
         let mut x = Mat::<f64>::zeros(n, k);
@@ -1109,7 +1212,7 @@ impl Solver {
         };
         if let Some(halves) = halves {
             for (m, f) in halves.iter().chain(&forward).enumerate() {
-                x.col_mut(m).copy_from(faer::ColRef::from_slice(f.values()));
+                f.scatter(x.col_as_slice_mut(m));
             }
             self.factor.backward_in_place(x.as_mut());
         } else {
@@ -1144,16 +1247,19 @@ impl Solver {
     /// 1e-9 on two probe vectors. With nothing added or removed (a load's
     /// group came or went) S is the current one entry for entry (see
     /// `schur`: G's entries between kept rows are kept), so the current
-    /// inverse, permuted, is returned unchecked.
+    /// inverse, permuted, is returned unchecked — a pseudo-inverse too (a
+    /// grab after a curve was added: no second eigendecomposition). Returns
+    /// what [`pseudo_inverse`] does: S⁻¹, the dropped directions, and
+    /// whether it is an exact inverse.
     fn updated_inverse(
         &self,
         rows: &[ScalarRow],
         eqs: &[ScalarEq],
         s: &Mat<f64>,
-    ) -> Option<Vec<f64>> {
+    ) -> Option<(Vec<f64>, usize, bool)> {
         use faer::linalg::solvers::{DenseSolveCore, Solve};
         let (m_old, m) = (self.eqs.len(), eqs.len());
-        if !self.s_exact || m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
+        if m_old == 0 || m == 0 || self.rows.len() != self.z.len() {
             return None;
         }
         let EquationMatch {
@@ -1169,14 +1275,19 @@ impl Solver {
         if a == 0 && r == 0 {
             // The same equations on the same columns (a load came or went,
             // or equations were only reordered): S is the old one, entry
-            // for entry, and so is its inverse, permuted. Nothing to check.
+            // for entry, and so is its inverse — or pseudo-inverse, with
+            // the same dropped directions — permuted. Nothing to check.
             let mut out = vec![0.0; m * m];
             for &(e, o) in &kept {
                 for &(f, q) in &kept {
                     out[e * m + f] = old(o, q);
                 }
             }
-            return Some(out);
+            let dropped = self.rank_deficiency.saturating_sub(self.pin_redundant);
+            return Some((out, dropped, self.s_exact));
+        }
+        if !self.s_exact {
+            return None;
         }
         // (S_kk)⁻¹ over the kept equations, in the new order.
         let mut inv_k = Mat::<f64>::from_fn(k, k, |i, j| old(kept[i].1, kept[j].1));
@@ -1217,7 +1328,7 @@ impl Solver {
                 out[(pi, pj)] = whole[(i, j)];
             }
         }
-        checked_inverse(s, &out)
+        checked_inverse(s, &out).map(|p| (p, 0, true))
     }
 
     /// Refactors for `pinned` control points eliminated and `folded`
@@ -1415,9 +1526,10 @@ impl Solver {
             let size: f64 = eq
                 .terms
                 .iter()
-                .map(|t| t.coef.abs() * self.z[t.col].norm)
+                .map(|t| column_reach(DVec3::splat(t.coef), &self.z[t.col]).x)
                 .sum();
-            *pull.entry(key).or_default() += lam.abs() * size;
+            // A pending column's size is unknown (infinite) unless unused.
+            *pull.entry(key).or_default() += if *lam == 0.0 { 0.0 } else { lam.abs() * size };
         }
         if !self.pin_points.is_empty() {
             // A pin's multiplier is its reaction (b − Kδ − Cᵀλ at the pinned
@@ -1825,10 +1937,17 @@ impl Solver {
         (lambdas, w)
     }
 
-    /// δ += Σ_c w_c z_c.
-    fn add_columns(&self, delta: &mut [DVec3], w: &[DVec3]) {
+    /// δ += Σ_c w_c z_c over the solved columns; returns whether a
+    /// pending column has a non-zero weight (its part is the caller's:
+    /// [`Self::add_rows_solved`]).
+    fn add_columns(&self, delta: &mut [DVec3], w: &[DVec3]) -> bool {
+        let mut missed = false;
         for (c, wc) in w.iter().enumerate() {
             if *wc == DVec3::ZERO {
+                continue;
+            }
+            if self.z[c].is_pending() {
+                missed = true;
                 continue;
             }
             if wc.y == 0.0 && wc.z == 0.0 {
@@ -1842,6 +1961,7 @@ impl Solver {
                 }
             }
         }
+        missed
     }
 
     /// δ += K̃⁻¹ Σ_c w_c a_c per input and coordinate, as one batched sparse
@@ -1863,7 +1983,7 @@ impl Solver {
                     .map(move |k| (p, k))
             })
             .collect();
-        if columns.is_empty() && self.pending.is_empty() {
+        if columns.is_empty() && (self.pending.is_empty() || !self.z_is_whole()) {
             return;
         }
         // The combined rows, summed in a dense scratch (in the order the
@@ -2029,6 +2149,8 @@ impl Solver {
     ) -> Vec<Refined> {
         let n = self.dim();
         let m = self.eqs.len();
+        // Σ w_c z_c needs every column of Z.
+        let direct = direct || !self.z_is_whole();
         let mut deltas = Vec::with_capacity(inputs.len());
         let mut lambdas: Vec<Vec<f64>> = Vec::with_capacity(inputs.len());
         let mut reaches = Vec::with_capacity(inputs.len());
@@ -2071,7 +2193,8 @@ impl Solver {
         } else {
             self.solve_pending();
             for (delta, w) in deltas.iter_mut().zip(&weights) {
-                self.add_columns(delta, w);
+                let missed = self.add_columns(delta, w);
+                debug_assert!(!missed, "Z is whole on this path");
             }
         }
         for (w, pin_reach) in weights.iter().zip(pin_reaches) {
@@ -2079,7 +2202,7 @@ impl Solver {
             let reach = w
                 .iter()
                 .zip(&self.z)
-                .fold(pin_reach, |m, (wc, col)| m + wc.abs() * col.norm);
+                .fold(pin_reach, |m, (wc, col)| m + column_reach(*wc, col));
             reaches.push(reach);
         }
         self.refine(inputs, &cxs, &mut deltas, &mut lambdas, &reaches, extents);
@@ -2291,6 +2414,9 @@ impl Solver {
         if !columns.is_empty() {
             self.factor.solve_in_place(y.as_mut());
         }
+        // The weights on pending columns, per input: one batched solve of
+        // their combined rows for every input at the end.
+        let mut unsolved: Vec<Vec<DVec3>> = vec![Vec::new(); pending.len()];
         for (p, (sigma, _)) in pending.iter().enumerate() {
             if !active[p] {
                 continue;
@@ -2303,20 +2429,32 @@ impl Solver {
                     }
                 }
             }
-            self.project(sigma, &correction, &mut deltas[p], &mut lambdas[p]);
+            let w = self.project(sigma, &correction, &mut deltas[p], &mut lambdas[p]);
+            if self.add_columns(&mut deltas[p], &w) {
+                unsolved[p] = w
+                    .iter()
+                    .zip(&self.z)
+                    .map(|(wc, col)| if col.is_pending() { *wc } else { DVec3::ZERO })
+                    .collect();
+            }
+        }
+        if unsolved.iter().any(|w| !w.is_empty()) {
+            self.add_rows_solved(deltas, &unsolved);
         }
     }
 
-    /// δ += y + Z w with w = −Cᵀ S⁺ (C y − σ), λ += S⁺ (C y − σ): the
-    /// correction y (K̃⁻¹ of a stationarity residual) projected onto the
-    /// constraints, as in [`Self::lambda_weights`].
+    /// δ += y and λ += S⁺ (C y − σ); returns w = −Cᵀ S⁺ (C y − σ), whose
+    /// Z w the caller adds to δ ([`Self::add_columns`], and for pending
+    /// columns [`Self::add_rows_solved`]): the correction y (K̃⁻¹ of a
+    /// stationarity residual) projected onto the constraints, as in
+    /// [`Self::lambda_weights`].
     fn project(
         &self,
         sigma: &[f64],
         correction: &[DVec3],
         delta: &mut [DVec3],
         lambda: &mut [f64],
-    ) {
+    ) -> Vec<DVec3> {
         // r' = C y − σ.
         let r: Vec<f64> = self
             .c_times(correction)
@@ -2336,7 +2474,7 @@ impl Solver {
         for (d, c) in delta.iter_mut().zip(correction) {
             *d += *c;
         }
-        self.add_columns(delta, &w);
+        w
     }
 
     /// `report` as a result: a residual above [`RESIDUAL_TOLERANCE`] of the
@@ -2514,19 +2652,45 @@ type SparseRhs = (Vec<usize>, Vec<f64>);
 type Schur = (Vec<Column>, Vec<usize>, Vec<Forward>, Vec<f64>, Mat<f64>);
 
 /// S = C K⁻¹ Cᵀ over the scalar equations from G (row-major, nc × nc).
+/// Equations of one term (every vector equation's coordinate) take the
+/// short way: S_ef = c_e c_f G[col_e, col_f] when they act on the same
+/// coordinate, else 0 — the same products as the general sum.
 fn assemble_s(eqs: &[ScalarEq], g: &[f64], nc: usize) -> Mat<f64> {
     let m = eqs.len();
     let mut s = Mat::<f64>::zeros(m, m);
-    for (e, ee) in eqs.iter().enumerate() {
-        for (f, ff) in eqs.iter().enumerate().skip(e) {
-            let mut v = 0.0;
-            for t in &ee.terms {
-                for u in ff.terms.iter().filter(|u| u.k == t.k) {
-                    v += t.coef * u.coef * g[t.col * nc + u.col];
+    let single: Vec<Option<Term>> = eqs
+        .iter()
+        .map(|e| match e.terms.as_slice() {
+            [t] => Some(*t),
+            _ => None,
+        })
+        .collect();
+    // Column by column (S is column-major), each entry from its upper
+    // triangle's terms (e ≤ f) so that S is symmetric to the last bit.
+    let entry = |e: usize, f: usize| -> f64 {
+        match (single[e], single[f]) {
+            (Some(t), Some(u)) if t.k == u.k => t.coef * u.coef * g[t.col * nc + u.col],
+            (Some(_), Some(_)) => 0.0,
+            _ => {
+                let mut v = 0.0;
+                for t in &eqs[e].terms {
+                    for u in eqs[f].terms.iter().filter(|u| u.k == t.k) {
+                        v += t.coef * u.coef * g[t.col * nc + u.col];
+                    }
                 }
+                v
             }
-            s[(e, f)] = v;
-            s[(f, e)] = v;
+        }
+    };
+    for f in 0..m {
+        let column = s
+            .col_mut(f)
+            .try_as_col_major_mut()
+            .map(|c| c.as_slice_mut());
+        if let Some(column) = column {
+            for (e, x) in column.iter_mut().enumerate() {
+                *x = if e <= f { entry(e, f) } else { entry(f, e) };
+            }
         }
     }
     s
@@ -2634,38 +2798,16 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
     if m == 0 {
         return Ok((Vec::new(), 0, true));
     }
-    let scale: Vec<f64> = (0..m)
-        .map(|i| {
-            if s[(i, i)] > 0.0 && s[(i, i)].is_finite() {
-                1.0 / s[(i, i)].sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
-    let blocks = independent_blocks(&scaled);
-    // Each block's equilibrated matrix, and which earlier block it repeats.
-    let mats: Vec<Mat<f64>> = blocks
-        .iter()
-        .map(|b| Mat::<f64>::from_fn(b.len(), b.len(), |i, j| scaled[(b[i], b[j])]))
-        .collect();
-    let same_as: Vec<Option<usize>> = (0..blocks.len())
-        .map(|k| (0..k).find(|&e| same_as_earlier(&mats[e], &mats[k])))
-        .collect();
-    let mut out = vec![0.0; m * m];
-    if !scale.contains(&0.0)
-        && let Some(inverses) = well_conditioned_blocks(&mats, &same_as)
-    {
-        for (b, inv) in blocks.iter().zip(&inverses) {
-            for (i, &bi) in b.iter().enumerate() {
-                for (j, &bj) in b.iter().enumerate() {
-                    out[bi * m + bj] = inv[(i, j)] * scale[bi] * scale[bj];
-                }
-            }
-        }
+    let Equilibrated {
+        scale,
+        blocks,
+        mats,
+        same_as,
+    } = equilibrated(s);
+    if let Some(out) = blockwise_inverse(m, &scale, &blocks, &mats, &same_as) {
         return Ok((out, 0, true));
     }
+    let mut out = vec![0.0; m * m];
     let mut evds = Vec::with_capacity(blocks.len());
     for (k, mat) in mats.iter().enumerate() {
         if same_as[k].is_some() {
@@ -2706,6 +2848,79 @@ fn pseudo_inverse(s: &Mat<f64>) -> Result<(Vec<f64>, usize, bool), SolveError> {
         }
     }
     Ok((out, dropped, false))
+}
+
+/// S equilibrated (Ŝ = D^-½ S D^-½, `scale` = D^-½, 0 where S's diagonal is
+/// not positive) and taken apart into its independent blocks, each block's
+/// Ŝ and which earlier block it repeats (see [`pseudo_inverse`]).
+struct Equilibrated {
+    scale: Vec<f64>,
+    blocks: Vec<Vec<usize>>,
+    mats: Vec<Mat<f64>>,
+    same_as: Vec<Option<usize>>,
+}
+
+fn equilibrated(s: &Mat<f64>) -> Equilibrated {
+    let m = s.nrows();
+    let scale: Vec<f64> = (0..m)
+        .map(|i| {
+            if s[(i, i)] > 0.0 && s[(i, i)].is_finite() {
+                1.0 / s[(i, i)].sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let scaled = Mat::<f64>::from_fn(m, m, |i, j| s[(i, j)] * scale[i] * scale[j]);
+    let blocks = independent_blocks(&scaled);
+    let mats: Vec<Mat<f64>> = blocks
+        .iter()
+        .map(|b| Mat::<f64>::from_fn(b.len(), b.len(), |i, j| scaled[(b[i], b[j])]))
+        .collect();
+    let same_as: Vec<Option<usize>> = (0..blocks.len())
+        .map(|k| (0..k).find(|&e| same_as_earlier(&mats[e], &mats[k])))
+        .collect();
+    Equilibrated {
+        scale,
+        blocks,
+        mats,
+        same_as,
+    }
+}
+
+/// S⁻¹ (row-major) by Cholesky, block by block, when S is provably well
+/// conditioned ([`well_conditioned_blocks`]); `None` otherwise.
+fn blockwise_inverse(
+    m: usize,
+    scale: &[f64],
+    blocks: &[Vec<usize>],
+    mats: &[Mat<f64>],
+    same_as: &[Option<usize>],
+) -> Option<Vec<f64>> {
+    if scale.contains(&0.0) {
+        return None;
+    }
+    let inverses = well_conditioned_blocks(mats, same_as)?;
+    let mut out = vec![0.0; m * m];
+    for (b, inv) in blocks.iter().zip(&inverses) {
+        for (i, &bi) in b.iter().enumerate() {
+            for (j, &bj) in b.iter().enumerate() {
+                out[bi * m + bj] = inv[(i, j)] * scale[bi] * scale[bj];
+            }
+        }
+    }
+    Some(out)
+}
+
+/// The Cholesky path of [`pseudo_inverse`] alone: S⁻¹ (row-major) when S
+/// is provably well conditioned, `None` (no eigendecomposition) otherwise.
+fn cholesky_inverse(s: &Mat<f64>) -> Option<Vec<f64>> {
+    let m = s.nrows();
+    if m == 0 {
+        return Some(Vec::new());
+    }
+    let e = equilibrated(s);
+    blockwise_inverse(m, &e.scale, &e.blocks, &e.mats, &e.same_as)
 }
 
 /// The independent blocks of the symmetric `a`: the connected components of
@@ -2821,10 +3036,20 @@ const MAX_REFINEMENT_STEPS: usize = 12;
 /// usual Oettli–Prager stopping rule): a step would add noise, not digits.
 const NOISE_BACKWARD_ERROR: f64 = 1e-14;
 
-/// Most new equation rows whose columns of Z a problem change leaves
-/// pending (see `Solver::pending`); more are solved at once in one batch
-/// (a batch streams the factor once, so many columns cost less together).
+/// Most new rows whose forward halves are solved column by column
+/// (`Factor::forward_sparse`, the Gram by sparse products); more go
+/// through `Factor::forward_batch` (dense blocks per supernode).
 const LAZY_COLUMNS: usize = 8;
+
+/// Most pending columns of Z (see `Solver::pending`) solved in one batch
+/// when Z is first read (the first solve that moves the shape, the first
+/// grab): then Σ w_c z_c is a pass over Z, and every later solve costs no
+/// sparse solve for it — the paper's straight curve (81 rows on 81 × 159)
+/// is paid once, not at every solve (measured: through combined rows
+/// `constraint_change_moving` took 2.2× as long). With more, Z is never
+/// read (see `Solver::z_is_whole`): a free-form cubic's 415 columns on
+/// 81 × 159 took ~1 s of full solves (loaded, load 5).
+const SOLVED_WHEN_READ: usize = 128;
 
 /// Memory for retired columns (see [`Solver`]): 160 columns at 81 × 159.
 const RETIRED_BYTES: usize = 16 << 20;
