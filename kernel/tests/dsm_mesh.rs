@@ -3,76 +3,9 @@
 //! converges with the resolution, and sharp edges of geometric primitives kept.
 
 use glam::DVec3;
-use std::collections::HashMap;
 use vsculpt_kernel::dsm::*;
 
-/// Every undirected edge is used by exactly two triangles, once in each direction
-/// (closed, oriented), and every vertex's triangles form one fan (vertex-manifold).
-fn assert_closed_manifold(m: &Mesh) {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &m.triangles {
-        assert!(
-            t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
-            "repeated vertex in {t:?}"
-        );
-        for i in 0..3 {
-            *directed.entry((t[i], t[(i + 1) % 3])).or_default() += 1;
-        }
-    }
-    for (&(a, b), &n) in &directed {
-        assert_eq!(n, 1, "directed edge {a}->{b} used {n} times");
-        assert_eq!(
-            directed.get(&(b, a)),
-            Some(&1),
-            "edge {a}-{b} is a border or non-manifold"
-        );
-    }
-    // Vertex fans: the link of each vertex is one cycle.
-    let mut next: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
-    for t in &m.triangles {
-        for i in 0..3 {
-            next.entry(t[i])
-                .or_default()
-                .insert(t[(i + 1) % 3], t[(i + 2) % 3]);
-        }
-    }
-    for (v, link) in &next {
-        let start = *link.keys().next().unwrap();
-        let mut cur = start;
-        let mut steps = 0;
-        loop {
-            cur = link[&cur];
-            steps += 1;
-            if cur == start {
-                break;
-            }
-            assert!(steps <= link.len(), "vertex {v}: link is not a cycle");
-        }
-        assert_eq!(
-            steps,
-            link.len(),
-            "vertex {v}: link has {} edges in more than one cycle",
-            link.len()
-        );
-    }
-}
-
-fn min_triangle_quality(m: &Mesh) -> f64 {
-    // 4√3 · area / Σ edge² : 1 for equilateral, 0 for degenerate.
-    m.triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (
-                m.positions[t[0] as usize],
-                m.positions[t[1] as usize],
-                m.positions[t[2] as usize],
-            );
-            let area = 0.5 * (b - a).cross(c - a).length();
-            4.0 * 3f64.sqrt() * area
-                / ((b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared())
-        })
-        .fold(f64::INFINITY, f64::min)
-}
+use dsm_support::mesh_checks::{assert_closed_manifold, min_triangle_quality};
 
 fn sphere_model(c: DVec3, d: f64, a: f64, de: f64) -> Model {
     let mut m = Model::new(de, DEFAULT_TAU).unwrap();

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod mesh_checks;
+
 use glam::DVec3;
 use vsculpt_kernel::dsm::*;
 
