@@ -59,9 +59,10 @@
 //! that holds a sheet. One vertex per leaf, so a one-cell leaf cut by two
 //! sheets is non-manifold as in the uniform mesher.
 
+use super::corner_cache::CornerCache;
 use super::error::DsmError;
 use super::interval::Tri;
-use super::mesh::{Field, Grid, Mesh, hermite, project};
+use super::mesh::{Field, Grid, Mesh, hermite, project, root};
 use super::model::{Active, Model, Sample};
 use super::qef::Qef;
 use glam::{DVec3, IVec3};
@@ -151,7 +152,7 @@ pub fn mesh_adaptive_on(
         max_leaf,
         nodes: Vec::new(),
         leaves: Vec::new(),
-        samples: HashMap::default(),
+        samples: CornerCache::default(),
         edges: HashMap::default(),
         positions: Vec::new(),
         normals: Vec::new(),
@@ -163,7 +164,7 @@ pub fn mesh_adaptive_on(
         size *= 2;
     }
     let all = model.all_active();
-    let root = b.build(IVec3::ZERO, size, &all);
+    let root = b.build(IVec3::ZERO, size, &all, 0.0);
     let mut quads = Vec::new();
     b.cell_proc(root, &mut quads);
     b.finish(quads, &all)
@@ -236,7 +237,7 @@ struct Builder<'a> {
     max_leaf: i32,
     nodes: Vec<Node>,
     leaves: Vec<Leaf>,
-    samples: HashMap<u64, Sample, Fast>,
+    samples: CornerCache,
     edges: HashMap<(u64, u32), (DVec3, DVec3), Fast>,
     positions: Vec<DVec3>,
     normals: Vec<DVec3>,
@@ -272,18 +273,22 @@ fn connected(set: u8) -> bool {
 
 impl Builder<'_> {
     fn sample(&mut self, c: IVec3, act: &Active) -> Sample {
-        if let Some(s) = self.samples.get(&key(c)) {
-            return *s;
+        if let Some(s) = self.samples.get(c) {
+            return s;
         }
         let s = self
             .model
             .sample(self.grid.corner(c), act, self.margin, &mut self.scratch);
-        self.samples.insert(key(c), s);
+        self.samples.set(c, s);
         s
     }
 
     /// The Hermite sample of the edge of `len` cells from corner `a` along
-    /// `axis` (its ends differ in membership), once per edge.
+    /// `axis` (its ends differ in membership), once per edge. A one-cell edge
+    /// is rooted to 1e-10 of a cell as in the uniform mesher (its crossings
+    /// place feature vertices); a longer (check lattice) edge to 1e-4 of a
+    /// cell: its crossing only tests the tolerance and seeds a vertex that is
+    /// then projected onto the level set.
     fn edge(&mut self, a: IVec3, axis: usize, len: i32, act: &Active) -> (DVec3, DVec3) {
         let k = (key(a), axis as u32 | ((len as u32) << 2));
         if let Some(h) = self.edges.get(&k) {
@@ -296,7 +301,25 @@ impl Builder<'_> {
             act,
             margin: self.margin,
         };
-        let h = hermite(&field, &self.grid, a, e, s0.phi, s1.phi, s0.inside);
+        let h = if len == 1 {
+            hermite(&field, &self.grid, a, e, s0.phi, s1.phi, s0.inside)
+        } else {
+            let p0 = self.grid.corner(a);
+            let d = e.as_dvec3() * self.grid.h;
+            let t = root(
+                &field,
+                p0,
+                d,
+                (s0.phi, s1.phi),
+                s0.inside,
+                1e-4 / len as f64,
+            );
+            let p = p0 + d * t;
+            let g = field.normal(p);
+            let out = if s0.inside { d } else { -d };
+            let n = if g.dot(out) < 0.0 { -g } else { g };
+            (p, if n == DVec3::ZERO { out.normalize() } else { n })
+        };
         self.edges.insert(k, h);
         h
     }
@@ -319,8 +342,11 @@ impl Builder<'_> {
         self.positions.len() as u32 - 1
     }
 
-    /// Step 1 and 2 for node (o, s) whose parent's active set is `parent`.
-    fn build(&mut self, o: IVec3, s: i32, parent: &Active) -> u32 {
+    /// Step 1 and 2 for node (o, s) whose parent's active set is `parent`;
+    /// `predicted`: the deviation from its vertex plane that the parent's
+    /// samples predict for this node, relative to the tolerance (a node whose
+    /// prediction exceeds 2 is split without sampling its check lattice).
+    fn build(&mut self, o: IVec3, s: i32, parent: &Active, predicted: f64) -> u32 {
         let grid = self.grid;
         if o.cmpge(grid.dims + IVec3::ONE).any() {
             return self.push_leaf(o, s, 0, NONE);
@@ -340,10 +366,16 @@ impl Builder<'_> {
         if s == 1 {
             return self.cell_leaf(o, &act);
         }
-        if s <= self.max_leaf {
-            if let Some(n) = self.coarse_leaf(o, s, &act) {
-                return n;
+        let mut next = 0.0;
+        if s <= self.max_leaf && predicted <= 2.0 {
+            match self.coarse_leaf(o, s, &act) {
+                Ok(n) => return n,
+                // A smooth sheet's deviation from a tangent plane falls as the
+                // square of the leaf's size.
+                Err(dev) => next = 0.25 * dev,
             }
+        } else {
+            next = 0.25 * predicted;
         }
         let id = self.nodes.len();
         self.nodes.push(Node::Inner([NONE; 8]));
@@ -352,7 +384,7 @@ impl Builder<'_> {
         for (k, slot) in ch.iter_mut().enumerate() {
             let k = k as i32;
             let d = IVec3::new(k & 1, (k >> 1) & 1, (k >> 2) & 1) * hs;
-            *slot = self.build(o + d, hs, &act);
+            *slot = self.build(o + d, hs, &act, next);
         }
         self.nodes[id] = Node::Inner(ch);
         id as u32
@@ -417,12 +449,14 @@ impl Builder<'_> {
     }
 
     /// The node (o, s) as one leaf if its check lattice passes the tests of
-    /// step 2 (module doc), else None.
-    fn coarse_leaf(&mut self, o: IVec3, s: i32, act: &Active) -> Option<u32> {
-        let q = (s / 4).max(1);
+    /// step 2 (module doc); else the largest deviation of a sample from the
+    /// vertex plane relative to the tolerance (0 when the node failed before
+    /// a plane was fitted).
+    fn coarse_leaf(&mut self, o: IVec3, s: i32, act: &Active) -> Result<u32, f64> {
+        let q = s / 2;
         let n = (s / q + 1) as usize;
         let idx = |x: usize, y: usize, z: usize| (z * n + y) * n + x;
-        let mut inside = [false; 125];
+        let mut inside = [false; 27];
         for z in 0..n {
             for y in 0..n {
                 for x in 0..n {
@@ -450,7 +484,7 @@ impl Builder<'_> {
                         }
                     }
                     if changes > 1 {
-                        return None;
+                        return Err(0.0);
                     }
                     any |= changes > 0;
                 }
@@ -465,10 +499,10 @@ impl Builder<'_> {
             }
         }
         if !any {
-            return Some(self.push_leaf(o, s, corners, NONE));
+            return Ok(self.push_leaf(o, s, corners, NONE));
         }
         if corners == 0 || corners == 255 || !connected(corners) || !connected(!corners) {
-            return None;
+            return Err(0.0);
         }
         // Faces whose corners agree hold no lattice crossing.
         for axis in 0..3 {
@@ -486,7 +520,7 @@ impl Builder<'_> {
                     for j in 0..n {
                         for i in 0..n {
                             if at(i, j) != first {
-                                return None;
+                                return Err(0.0);
                             }
                         }
                     }
@@ -516,9 +550,9 @@ impl Builder<'_> {
                 }
             }
         }
-        let sol = qef.solve()?;
+        let sol = qef.solve().ok_or(0.0)?;
         if sol.rank > 1 {
-            return None;
+            return Err(0.0);
         }
         let h = self.grid.h;
         let lo = self.grid.corner(o);
@@ -535,20 +569,24 @@ impl Builder<'_> {
             act,
             margin: self.margin,
         };
-        let v = project(&field, q as f64 * h, v0, nsum)?;
+        let v = project(&field, q as f64 * h, v0, nsum).ok_or(0.0)?;
         let reach = DVec3::splat(q as f64 * h);
         if !(v.cmpge(lo - reach).all() && v.cmple(hi + reach).all()) {
-            return None;
+            return Err(0.0);
         }
         let g = field.normal(v);
         let nv = if g.dot(nsum) < 0.0 { -g } else { g };
         if nv == DVec3::ZERO {
-            return None;
+            return Err(0.0);
         }
+        let mut dev: f64 = 0.0;
+        let mut bent = false;
         for &(p, pn) in &samples {
-            if nv.dot(p - v).abs() > 0.5 * self.tol || pn.dot(nv) < COS_MAX {
-                return None;
-            }
+            dev = dev.max(nv.dot(p - v).abs());
+            bent |= pn.dot(nv) < COS_MAX;
+        }
+        if bent || dev > 0.5 * self.tol {
+            return Err(2.0 * dev / self.tol);
         }
         for z in 0..n {
             for y in 0..n {
@@ -559,7 +597,7 @@ impl Builder<'_> {
                     let d = nv.dot(p - v);
                     let ins = inside[idx(x, y, z)];
                     if (ins && d > self.tol) || (!ins && d < -self.tol) {
-                        return None;
+                        return Err(0.0);
                     }
                 }
             }
@@ -567,7 +605,7 @@ impl Builder<'_> {
         self.stats.coarse_surface_leaves += 1;
         self.stats.largest_surface_leaf = self.stats.largest_surface_leaf.max(s as usize);
         let vi = self.push_vertex(v, nv);
-        Some(self.push_leaf(o, s, corners, vi))
+        Ok(self.push_leaf(o, s, corners, vi))
     }
 
     /// Node `id`'s child at corner bits `k`, or the node itself if it is a leaf.

@@ -26,6 +26,7 @@
 
 pub mod adaptive;
 pub mod connect;
+mod corner_cache;
 pub mod density;
 pub mod distribution;
 pub mod error;

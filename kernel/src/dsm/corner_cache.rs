@@ -1,0 +1,87 @@
+//! Φ samples at grid corners kept for one meshing run: a sparse grid of 8³-corner
+//! blocks, allocated where the mesher samples (near the surface), so a corner
+//! shared by several octree nodes or check lattices is sampled once.
+//!
+//! A sample is stored as Φ alone: its sign bit is the membership (Φ is +d
+//! inside and −d outside with d ≥ 0, so +0 and −0 on the boundary itself keep
+//! it, [`super::model::Sample`]); NaN marks a corner not sampled.
+
+use super::model::Sample;
+use glam::IVec3;
+use std::collections::HashMap;
+
+/// Corners per block axis.
+const B: i32 = 8;
+
+/// The sampled corners of one run.
+#[derive(Default)]
+pub(crate) struct CornerCache {
+    /// Block key → first index of the block in `pool`.
+    blocks: HashMap<u64, u32>,
+    /// The last block looked up (key, first index): most lookups are within it.
+    last: Option<(u64, u32)>,
+    pool: Vec<f64>,
+    count: usize,
+}
+
+impl CornerCache {
+    /// The block key and the index within the block of corner c (coordinates
+    /// non-negative, below 2²¹).
+    fn split(c: IVec3) -> (u64, usize) {
+        let b = c / B;
+        let l = c - b * B;
+        (
+            (b.x as u64) | ((b.y as u64) << 21) | ((b.z as u64) << 42),
+            ((l.z * B + l.y) * B + l.x) as usize,
+        )
+    }
+
+    fn block(&mut self, k: u64, create: bool) -> Option<u32> {
+        if let Some((lk, at)) = self.last {
+            if lk == k {
+                return Some(at);
+            }
+        }
+        let at = match self.blocks.get(&k) {
+            Some(&at) => at,
+            None if create => {
+                let at = self.pool.len() as u32;
+                self.pool
+                    .resize(self.pool.len() + (B * B * B) as usize, f64::NAN);
+                self.blocks.insert(k, at);
+                at
+            }
+            None => return None,
+        };
+        self.last = Some((k, at));
+        Some(at)
+    }
+
+    /// The sample at corner c, if taken.
+    pub(crate) fn get(&mut self, c: IVec3) -> Option<Sample> {
+        let (k, i) = Self::split(c);
+        let at = self.block(k, false)?;
+        let phi = self.pool[at as usize + i];
+        (!phi.is_nan()).then(|| Sample {
+            inside: phi.is_sign_positive(),
+            phi,
+        })
+    }
+
+    /// Keeps the sample at corner c.
+    pub(crate) fn set(&mut self, c: IVec3, s: Sample) {
+        let (k, i) = Self::split(c);
+        let at = self.block(k, true).expect("created") as usize;
+        // Φ's sign bit is the membership; a boundary sample keeps its side.
+        let phi = if s.inside { s.phi.abs() } else { -s.phi.abs() };
+        if self.pool[at + i].is_nan() {
+            self.count += 1;
+        }
+        self.pool[at + i] = phi;
+    }
+
+    /// Corners sampled.
+    pub(crate) fn len(&self) -> usize {
+        self.count
+    }
+}
