@@ -52,7 +52,13 @@ fn rounded_box_distance(p: DVec3, inner: DVec3, rho: f64) -> f64 {
 fn explore() {
     for (name, m) in dsm_support::twenty_primitive_shapes() {
         for cells in [64usize, 128, 256] {
-            let opts = AdaptiveOptions::new(cells);
+            let mut opts = AdaptiveOptions::new(cells);
+            if let Ok(t) = std::env::var("ADAPT_TOL") {
+                opts.tolerance = t.parse().unwrap();
+            }
+            if let Ok(t) = std::env::var("ADAPT_MAX") {
+                opts.max_leaf = t.parse().unwrap();
+            }
             let t = std::time::Instant::now();
             let (am, st) = mesh_adaptive(&m, opts).unwrap();
             let ta = t.elapsed();

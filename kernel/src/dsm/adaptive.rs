@@ -143,26 +143,25 @@ pub fn mesh_adaptive_on(
     tolerance: f64,
     max_leaf: i32,
 ) -> (Mesh, AdaptiveStats) {
-    let q_max = (max_leaf / 4).max(1);
+    let mut size = 1;
+    while size < grid.dims.max_element() {
+        size *= 2;
+    }
     let mut b = Builder {
         model,
         grid: *grid,
-        margin: 2.0 * q_max as f64 * grid.h,
+        margin: grid.reach_margin() + (max_leaf / 2) as f64 * grid.h,
         tol: tolerance * grid.h,
         max_leaf,
-        nodes: Vec::new(),
-        leaves: Vec::new(),
-        samples: CornerCache::default(),
-        edges: HashMap::default(),
+        nodes: Vec::with_capacity(1 << 14),
+        leaves: Vec::with_capacity(1 << 14),
+        samples: CornerCache::new(IVec3::splat(size)),
+        edges: HashMap::with_capacity_and_hasher(1 << 14, Fast::default()),
         positions: Vec::new(),
         normals: Vec::new(),
         scratch: Vec::new(),
         stats: AdaptiveStats::default(),
     };
-    let mut size = 1;
-    while size < grid.dims.max_element() {
-        size *= 2;
-    }
     let all = model.all_active();
     let root = b.build(IVec3::ZERO, size, &all, 0.0);
     let mut quads = Vec::new();
@@ -170,7 +169,9 @@ pub fn mesh_adaptive_on(
     b.finish(quads, &all)
 }
 
-/// A multiplicative hash for the integer keys of the sample caches.
+/// A hash for the integer keys of the Hermite cache: the keys are mixed
+/// with splitmix64's finaliser, so the low bits a hash table indexes by
+/// depend on every bit of the key.
 #[derive(Default)]
 struct KeyHasher(u64);
 
@@ -182,23 +183,23 @@ impl Hasher for KeyHasher {
     }
 
     fn write_u64(&mut self, n: u64) {
-        self.0 = (self.0.rotate_left(23) ^ n).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
-
-    fn write_u32(&mut self, n: u32) {
-        self.write_u64(n as u64);
+        let mut z = (self.0 ^ n).wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        self.0 = z ^ (z >> 31);
     }
 
     fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 29)
+        self.0
     }
 }
 
 type Fast = BuildHasherDefault<KeyHasher>;
 
-/// A grid corner (non-negative, below 2²¹) as one integer.
+/// A grid corner (non-negative, below 2¹³: grids of up to 4096 cells and
+/// their margins) as one integer below 2³⁹.
 fn key(c: IVec3) -> u64 {
-    (c.x as u64) | ((c.y as u64) << 21) | ((c.z as u64) << 42)
+    (c.x as u64) | ((c.y as u64) << 13) | ((c.z as u64) << 26)
 }
 
 /// A node of the octree: children (x fastest) or a leaf.
@@ -238,7 +239,7 @@ struct Builder<'a> {
     nodes: Vec<Node>,
     leaves: Vec<Leaf>,
     samples: CornerCache,
-    edges: HashMap<(u64, u32), (DVec3, DVec3), Fast>,
+    edges: HashMap<u64, (DVec3, DVec3), Fast>,
     positions: Vec<DVec3>,
     normals: Vec<DVec3>,
     scratch: Vec<bool>,
@@ -284,13 +285,24 @@ impl Builder<'_> {
     }
 
     /// The Hermite sample of the edge of `len` cells from corner `a` along
-    /// `axis` (its ends differ in membership), once per edge. A one-cell edge
-    /// is rooted to 1e-10 of a cell as in the uniform mesher (its crossings
-    /// place feature vertices); a longer (check lattice) edge to 1e-4 of a
-    /// cell: its crossing only tests the tolerance and seeds a vertex that is
-    /// then projected onto the level set.
-    fn edge(&mut self, a: IVec3, axis: usize, len: i32, act: &Active) -> (DVec3, DVec3) {
-        let k = (key(a), axis as u32 | ((len as u32) << 2));
+    /// `axis` (its ends differ in membership), once per edge and precision.
+    /// `exact` (a one-cell leaf's edges, whose crossings place feature
+    /// vertices, and the minimal edges of leaves without a vertex): rooted to
+    /// 1e-10 of the edge as in the uniform mesher; else (a check lattice
+    /// edge: its crossing only tests the tolerance, and seeds a vertex that
+    /// is then projected onto the level set) to 1e-3 of a cell.
+    fn edge(
+        &mut self,
+        a: IVec3,
+        axis: usize,
+        len: i32,
+        exact: bool,
+        act: &Active,
+    ) -> (DVec3, DVec3) {
+        let k = key(a)
+            | (axis as u64) << 39
+            | (len.trailing_zeros() as u64) << 41
+            | (exact as u64) << 45;
         if let Some(h) = self.edges.get(&k) {
             return *h;
         }
@@ -301,20 +313,12 @@ impl Builder<'_> {
             act,
             margin: self.margin,
         };
-        let h = if len == 1 {
+        let h = if exact {
             hermite(&field, &self.grid, a, e, s0.phi, s1.phi, s0.inside)
         } else {
             let p0 = self.grid.corner(a);
             let d = e.as_dvec3() * self.grid.h;
-            let t = root(
-                &field,
-                p0,
-                d,
-                (s0.phi, s1.phi),
-                s0.inside,
-                1e-4 / len as f64,
-            );
-            let p = p0 + d * t;
+            let p = p0 + d * self.lattice_root(&field, p0, d, (s0, s1));
             let g = field.normal(p);
             let out = if s0.inside { d } else { -d };
             let n = if g.dot(out) < 0.0 { -g } else { g };
@@ -322,6 +326,40 @@ impl Builder<'_> {
         };
         self.edges.insert(k, h);
         h
+    }
+
+    /// The crossing on a check lattice edge p0 + t d, t ∈ [0, 1], whose ends
+    /// `ends` differ in membership, to 1e-3 of a cell: secant steps on Φ (a
+    /// distance estimate, so a step whose |Φ| is below 1e-3 cell is on the
+    /// boundary to that), the bracket kept by membership; after two steps the
+    /// Illinois search of the uniform mesher ([`root`]) on what is left.
+    fn lattice_root(&mut self, field: &Field, p0: DVec3, d: DVec3, ends: (Sample, Sample)) -> f64 {
+        let eps = 1e-3 * self.grid.h;
+        let ina = ends.0.inside;
+        let (mut a, mut b) = (0.0, 1.0);
+        let (mut fa, mut fb) = (ends.0.phi, ends.1.phi);
+        for _ in 0..2 {
+            let mut t = if fa != fb {
+                (a * fb - b * fa) / (fb - fa)
+            } else {
+                0.5 * (a + b)
+            };
+            if !(t > a && t < b) {
+                t = 0.5 * (a + b);
+            }
+            let s = field.sample(p0 + d * t, &mut self.scratch);
+            if s.phi.abs() <= eps {
+                return t;
+            }
+            if s.inside == ina {
+                (a, fa) = (t, s.phi);
+            } else {
+                (b, fb) = (t, s.phi);
+            }
+        }
+        let cells = d.length() / self.grid.h * (b - a);
+        let t = root(field, p0 + d * a, d * (b - a), (fa, fb), ina, 1e-3 / cells);
+        a + (b - a) * t
     }
 
     fn push_leaf(&mut self, origin: IVec3, size: i32, corners: u8, vertex: u32) -> u32 {
@@ -355,9 +393,20 @@ impl Builder<'_> {
         let c = grid.corner(o) + DVec3::splat(0.5 * s as f64 * grid.h);
         // Samples at the node's corners and edges, projections of its vertex
         // (within a lattice step), each with the reach margin.
-        let act = self
-            .model
-            .cull(parent, c, r + s as f64 * grid.h + self.margin);
+        let reach = r + s as f64 * grid.h + self.margin;
+        let mut act = self.model.cull(parent, c, reach);
+        // A density primitive whose interval bound over the reach is exactly
+        // 0 (beyond its range, or on the clipped side of a sector shell)
+        // changes no membership there; dropping it saves its evaluation in
+        // every sample (Φ may lose a cut piece of it, which only steers the
+        // root finding).
+        for (k, list) in act.density.iter_mut().enumerate() {
+            let g = &self.model.groups()[k];
+            list.retain(|&i| {
+                let b = g.density[i as usize].bound(c, reach, self.model.range(k, i as usize));
+                b.lo != 0.0 || b.hi != 0.0
+            });
+        }
         match self.model.classify(c, r, &act) {
             Tri::Yes => return self.push_leaf(o, s, 255, NONE),
             Tri::No => return self.push_leaf(o, s, 0, NONE),
@@ -366,17 +415,16 @@ impl Builder<'_> {
         if s == 1 {
             return self.cell_leaf(o, &act);
         }
-        let mut next = 0.0;
-        if s <= self.max_leaf && predicted <= 2.0 {
+        // A smooth sheet's deviation from a tangent plane falls as the square
+        // of the leaf's size.
+        let next = if s <= self.max_leaf && predicted <= 2.0 {
             match self.coarse_leaf(o, s, &act) {
                 Ok(n) => return n,
-                // A smooth sheet's deviation from a tangent plane falls as the
-                // square of the leaf's size.
-                Err(dev) => next = 0.25 * dev,
+                Err(dev) => 0.25 * dev,
             }
         } else {
-            next = 0.25 * predicted;
-        }
+            0.25 * predicted
+        };
         let id = self.nodes.len();
         self.nodes.push(Node::Inner([NONE; 8]));
         let hs = s / 2;
@@ -412,7 +460,7 @@ impl Builder<'_> {
                 l[c] = j;
                 let (k0, k1) = (bit(l[0], l[1], l[2]), bit(l[0], l[1], l[2]) | (1 << axis));
                 if (corners >> k0) & 1 != (corners >> k1) & 1 {
-                    let (p, n) = self.edge(o + IVec3::from_array(l), axis, 1, act);
+                    let (p, n) = self.edge(o + IVec3::from_array(l), axis, 1, true, act);
                     qef.add(p, n);
                 }
             }
@@ -527,7 +575,7 @@ impl Builder<'_> {
                 }
             }
         }
-        // Hermite samples of the crossing lattice edges.
+        // Hermite samples of every crossing lattice edge.
         let mut qef = Qef::default();
         let mut samples = Vec::new();
         for axis in 0..3 {
@@ -542,7 +590,7 @@ impl Builder<'_> {
                         l1[axis] += 1;
                         if inside[idx(x, y, z)] != inside[idx(l1[0], l1[1], l1[2])] {
                             let a = o + IVec3::new(x as i32, y as i32, z as i32) * q;
-                            let h = self.edge(a, axis, q, act);
+                            let h = self.edge(a, axis, q, false, act);
                             qef.add(h.0, h.1);
                             samples.push(h);
                         }
@@ -569,7 +617,9 @@ impl Builder<'_> {
             act,
             margin: self.margin,
         };
-        let v = project(&field, q as f64 * h, v0, nsum).ok_or(0.0)?;
+        let v = self
+            .onto_level_set(&field, v0, nsum, q as f64 * h)
+            .ok_or(0.0)?;
         let reach = DVec3::splat(q as f64 * h);
         if !(v.cmpge(lo - reach).all() && v.cmple(hi + reach).all()) {
             return Err(0.0);
@@ -606,6 +656,28 @@ impl Builder<'_> {
         self.stats.largest_surface_leaf = self.stats.largest_surface_leaf.max(s as usize);
         let vi = self.push_vertex(v, nv);
         Ok(self.push_leaf(o, s, corners, vi))
+    }
+
+    /// Moves v along ±n onto the boundary: first within 1.5 |Φ(v)| (Φ is a
+    /// distance estimate, so the bracket is tight and short), else within
+    /// `reach` ([`project`]); rooted to 1e-9 of the bracket (the vertex is on
+    /// the level set to ~1e-9 of a cell).
+    fn onto_level_set(&mut self, field: &Field, v: DVec3, n: DVec3, reach: f64) -> Option<DVec3> {
+        if n == DVec3::ZERO {
+            return None;
+        }
+        let s0 = field.sample(v, &mut self.scratch);
+        let dir = if s0.inside { n } else { -n };
+        let step = 1.5 * s0.phi.abs() + 1e-6 * self.grid.h;
+        if step < reach {
+            let p1 = v + dir * step;
+            let s1 = field.sample(p1, &mut self.scratch);
+            if s1.inside != s0.inside {
+                let t = root(field, v, p1 - v, (s0.phi, s1.phi), s0.inside, 1e-9);
+                return Some(v + (p1 - v) * t);
+            }
+        }
+        project(field, reach, v, n)
     }
 
     /// Node `id`'s child at corner bits `k`, or the node itself if it is a leaf.
@@ -724,7 +796,7 @@ impl Builder<'_> {
             let a = small.origin + IVec3::from_array(l) * small.size;
             let len = small.size;
             let all = self.model.all_active();
-            let (p, nn) = self.edge(a, d, len, &all);
+            let (p, nn) = self.edge(a, d, len, true, &all);
             for &li in &ls {
                 let leaf = &mut self.leaves[li as usize];
                 if leaf.vertex == NONE {

@@ -1,6 +1,8 @@
-//! Φ samples at grid corners kept for one meshing run: a sparse grid of 8³-corner
+//! Φ samples at grid corners kept for one meshing run: a sparse grid of 4³-corner
 //! blocks, allocated where the mesher samples (near the surface), so a corner
-//! shared by several octree nodes or check lattices is sampled once.
+//! shared by several octree nodes or check lattices is sampled once. The
+//! blocks are found through a dense table over the grid when it has at most
+//! 2²⁴ blocks (grids up to 1024 cells a side), else through a hash map.
 //!
 //! A sample is stored as Φ alone: its sign bit is the membership (Φ is +d
 //! inside and −d outside with d ≥ 0, so +0 and −0 on the boundary itself keep
@@ -11,12 +13,16 @@ use glam::IVec3;
 use std::collections::HashMap;
 
 /// Corners per block axis.
-const B: i32 = 8;
+const B: i32 = 4;
 
 /// The sampled corners of one run.
-#[derive(Default)]
 pub(crate) struct CornerCache {
-    /// Block key → first index of the block in `pool`.
+    /// Blocks per axis of the dense table (0: the hash map is used).
+    nb: IVec3,
+    /// Dense block table: first index of the block in `pool`, or u32::MAX.
+    table: Vec<u32>,
+    /// Block key → first index of the block in `pool` (grids too large for
+    /// the table).
     blocks: HashMap<u64, u32>,
     /// The last block looked up (key, first index): most lookups are within it.
     last: Option<(u64, u32)>,
@@ -25,6 +31,25 @@ pub(crate) struct CornerCache {
 }
 
 impl CornerCache {
+    /// A cache for the corners 0 ..= `max` of a grid.
+    pub(crate) fn new(max: IVec3) -> Self {
+        let nb = max / B + IVec3::ONE;
+        let n = nb.x as u64 * nb.y as u64 * nb.z as u64;
+        let dense = n <= 1 << 24;
+        Self {
+            nb: if dense { nb } else { IVec3::ZERO },
+            table: if dense {
+                vec![u32::MAX; n as usize]
+            } else {
+                Vec::new()
+            },
+            blocks: HashMap::new(),
+            last: None,
+            pool: Vec::with_capacity(1 << 20),
+            count: 0,
+        }
+    }
+
     /// The block key and the index within the block of corner c (coordinates
     /// non-negative, below 2²¹).
     fn split(c: IVec3) -> (u64, usize) {
@@ -42,13 +67,32 @@ impl CornerCache {
                 return Some(at);
             }
         }
-        let at = match self.blocks.get(&k) {
-            Some(&at) => at,
+        let slot = if self.nb.x > 0 {
+            let (x, y, z) = (k & 0x1f_ffff, (k >> 21) & 0x1f_ffff, k >> 42);
+            let nb = self.nb.as_u64vec3();
+            if x >= nb.x || y >= nb.y || z >= nb.z {
+                return None;
+            }
+            Some(((z * nb.y + y) * nb.x + x) as usize)
+        } else {
+            None
+        };
+        let found = match slot {
+            Some(i) => Some(self.table[i]).filter(|&at| at != u32::MAX),
+            None => self.blocks.get(&k).copied(),
+        };
+        let at = match found {
+            Some(at) => at,
             None if create => {
                 let at = self.pool.len() as u32;
                 self.pool
                     .resize(self.pool.len() + (B * B * B) as usize, f64::NAN);
-                self.blocks.insert(k, at);
+                match slot {
+                    Some(i) => self.table[i] = at,
+                    None => {
+                        self.blocks.insert(k, at);
+                    }
+                }
                 at
             }
             None => return None,
