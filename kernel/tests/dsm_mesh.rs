@@ -5,17 +5,10 @@
 use glam::DVec3;
 use vsculpt_kernel::dsm::*;
 
-use dsm_support::mesh_checks::{assert_closed_manifold, min_triangle_quality};
-
-fn sphere_model(c: DVec3, d: f64, a: f64, de: f64) -> Model {
-    let mut m = Model::new(de, DEFAULT_TAU).unwrap();
-    m.add(Group {
-        density: vec![DensityPrimitive::sphere(c, d, a).unwrap()],
-        ..Default::default()
-    })
-    .unwrap();
-    m
-}
+use dsm_support::mesh_checks::{
+    assert_box_reproduced, assert_closed_manifold, min_triangle_quality,
+};
+use dsm_support::{ring_of_charges, sphere_model};
 
 #[test]
 fn sphere_primitive_mesh_is_a_closed_sphere_on_the_level_set() {
@@ -90,19 +83,7 @@ fn sphere_mesh_error_converges_quadratically() {
 #[test]
 fn torus_like_group_has_euler_characteristic_zero() {
     // A ring of 16 sphere-based primitives fuses into a torus-like solid.
-    let mut m = Model::new(1.0, DEFAULT_TAU).unwrap();
-    let ring: Vec<DensityPrimitive> = (0..16)
-        .map(|i| {
-            let t = i as f64 / 16.0 * std::f64::consts::TAU;
-            DensityPrimitive::sphere(DVec3::new(3.0 * t.cos(), 3.0 * t.sin(), 0.0), 2.0, 1.2)
-                .unwrap()
-        })
-        .collect();
-    m.add(Group {
-        density: ring,
-        ..Default::default()
-    })
-    .unwrap();
+    let m = ring_of_charges();
     assert!(!m.contains(DVec3::ZERO), "the hole is open");
     assert!(m.contains(DVec3::new(3.0, 0.0, 0.0)));
     let (mesh, _) = mesh(&m, MeshOptions { cells: 64 }).unwrap();
@@ -134,28 +115,7 @@ fn geometric_box_reproduces_itself_with_sharp_edges() {
     assert_closed_manifold(&mesh);
     assert!(stats.features > 0);
     // Every vertex lies on the box surface; the 8 corners are vertices.
-    for v in &mesh.positions {
-        assert!(
-            b.value(*v).abs() < 1e-9,
-            "vertex off the box: {}",
-            b.value(*v)
-        );
-    }
-    for s in 0..8 {
-        let corner = DVec3::new(0.05, 0.03, 0.01)
-            + half
-                * DVec3::new(
-                    if s & 1 == 0 { -1.0 } else { 1.0 },
-                    if s & 2 == 0 { -1.0 } else { 1.0 },
-                    if s & 4 == 0 { -1.0 } else { 1.0 },
-                );
-        let nearest = mesh
-            .positions
-            .iter()
-            .map(|v| (*v - corner).length())
-            .fold(f64::INFINITY, f64::min);
-        assert!(nearest < 1e-9, "corner {corner} missed by {nearest}");
-    }
+    assert_box_reproduced(&mesh, &b, DVec3::new(0.05, 0.03, 0.01), half);
 }
 
 #[test]

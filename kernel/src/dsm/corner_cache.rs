@@ -62,10 +62,10 @@ impl CornerCache {
     }
 
     fn block(&mut self, k: u64, create: bool) -> Option<u32> {
-        if let Some((lk, at)) = self.last {
-            if lk == k {
-                return Some(at);
-            }
+        if let Some((lk, at)) = self.last
+            && lk == k
+        {
+            return Some(at);
         }
         let slot = if self.nb.x > 0 {
             let (x, y, z) = (k & 0x1f_ffff, (k >> 21) & 0x1f_ffff, k >> 42);

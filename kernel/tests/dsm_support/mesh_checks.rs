@@ -1,7 +1,8 @@
 //! Checks of a mesh's topology and triangle shape shared by the mesh tests.
 
+use glam::DVec3;
 use std::collections::HashMap;
-use vsculpt_kernel::dsm::Mesh;
+use vsculpt_kernel::dsm::{GeometricPrimitive, Mesh};
 
 /// Every undirected edge is used by exactly two triangles, once in each direction
 /// (closed, oriented), and every vertex's triangles form one fan (vertex-manifold).
@@ -70,4 +71,26 @@ pub fn min_triangle_quality(m: &Mesh) -> f64 {
                 / ((b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared())
         })
         .fold(f64::INFINITY, f64::min)
+}
+
+/// Every vertex lies on the surface of box `b` (centre `at`, half extents
+/// `half`) to 1e-9, and its 8 corners are vertices (sharp features kept).
+pub fn assert_box_reproduced(mesh: &Mesh, b: &GeometricPrimitive, at: DVec3, half: DVec3) {
+    for v in &mesh.positions {
+        assert!(
+            b.value(*v).abs() < 1e-9,
+            "vertex off the box: {}",
+            b.value(*v)
+        );
+    }
+    for s in 0..8 {
+        let sign = |bit: i32| if s & bit == 0 { -1.0 } else { 1.0 };
+        let corner = at + half * DVec3::new(sign(1), sign(2), sign(4));
+        let nearest = mesh
+            .positions
+            .iter()
+            .map(|v| (*v - corner).length())
+            .fold(f64::INFINITY, f64::min);
+        assert!(nearest < 1e-9, "corner {corner} missed by {nearest}");
+    }
 }
