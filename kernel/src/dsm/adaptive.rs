@@ -147,16 +147,23 @@ pub fn mesh_adaptive_on(
     while size < grid.dims.max_element() {
         size *= 2;
     }
+    let mut store = STORE.with(|s| std::mem::take(&mut *s.borrow_mut()));
+    let mut samples = store
+        .samples
+        .take()
+        .unwrap_or_else(|| CornerCache::new(IVec3::ZERO));
+    samples.reset(IVec3::splat(size));
+    store.edges.clear();
     let mut b = Builder {
         model,
         grid: *grid,
-        margin: grid.reach_margin() + (max_leaf / 2) as f64 * grid.h,
+        margin: grid.reach_margin(),
         tol: tolerance * grid.h,
         max_leaf,
         nodes: Vec::with_capacity(1 << 14),
         leaves: Vec::with_capacity(1 << 14),
-        samples: CornerCache::new(IVec3::splat(size)),
-        edges: HashMap::with_capacity_and_hasher(1 << 14, Fast::default()),
+        samples,
+        edges: store.edges,
         positions: Vec::new(),
         normals: Vec::new(),
         scratch: Vec::new(),
@@ -166,7 +173,21 @@ pub fn mesh_adaptive_on(
     let root = b.build(IVec3::ZERO, size, &all, 0.0);
     let mut quads = Vec::new();
     b.cell_proc(root, &mut quads);
-    b.finish(quads, &all)
+    let (mesh, stats, store) = b.finish(quads, &all);
+    STORE.with(|s| *s.borrow_mut() = store);
+    (mesh, stats)
+}
+
+/// The sample caches of one thread's runs, kept between them (their memory
+/// stays mapped: a re-mesh at interactive rates takes no page faults).
+#[derive(Default)]
+struct Store {
+    samples: Option<CornerCache>,
+    edges: HashMap<u64, (DVec3, DVec3), Fast>,
+}
+
+thread_local! {
+    static STORE: std::cell::RefCell<Store> = std::cell::RefCell::new(Store::default());
 }
 
 /// A hash for the integer keys of the Hermite cache: the keys are mixed
@@ -809,7 +830,11 @@ impl Builder<'_> {
 
     /// Vertices for leaves named without one, then the triangles (only
     /// vertices a triangle uses are kept, in first-use order).
-    fn finish(mut self, quads: Vec<([u32; 4], bool)>, all: &Active) -> (Mesh, AdaptiveStats) {
+    fn finish(
+        mut self,
+        quads: Vec<([u32; 4], bool)>,
+        all: &Active,
+    ) -> (Mesh, AdaptiveStats, Store) {
         let field = Field {
             model: self.model,
             act: all,
@@ -871,6 +896,10 @@ impl Builder<'_> {
         self.stats.vertices = mesh.positions.len();
         self.stats.corner_samples = self.samples.len();
         self.stats.hermite_samples = self.edges.len();
-        (mesh, self.stats)
+        let store = Store {
+            samples: Some(self.samples),
+            edges: self.edges,
+        };
+        (mesh, self.stats, store)
     }
 }

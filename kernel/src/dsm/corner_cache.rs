@@ -21,6 +21,8 @@ pub(crate) struct CornerCache {
     nb: IVec3,
     /// Dense block table: first index of the block in `pool`, or u32::MAX.
     table: Vec<u32>,
+    /// The table entries set in this run (cleared by [`Self::reset`]).
+    touched: Vec<u32>,
     /// Block key → first index of the block in `pool` (grids too large for
     /// the table).
     blocks: HashMap<u64, u32>,
@@ -43,11 +45,32 @@ impl CornerCache {
             } else {
                 Vec::new()
             },
+            touched: Vec::new(),
             blocks: HashMap::new(),
             last: None,
-            pool: Vec::with_capacity(1 << 20),
+            pool: Vec::new(),
             count: 0,
         }
+    }
+
+    /// Empties the cache for a grid of corners 0 ..= `max`, keeping its
+    /// memory: a cache kept between runs (one per thread) takes no page
+    /// faults once warm.
+    pub(crate) fn reset(&mut self, max: IVec3) {
+        if self.nb.x > 0 && max / B + IVec3::ONE == self.nb {
+            for &i in &self.touched {
+                self.table[i as usize] = u32::MAX;
+            }
+            self.touched.clear();
+        } else {
+            let pool = std::mem::take(&mut self.pool);
+            *self = Self::new(max);
+            self.pool = pool;
+        }
+        self.blocks.clear();
+        self.pool.clear();
+        self.last = None;
+        self.count = 0;
     }
 
     /// The block key and the index within the block of corner c (coordinates
@@ -88,7 +111,10 @@ impl CornerCache {
                 self.pool
                     .resize(self.pool.len() + (B * B * B) as usize, f64::NAN);
                 match slot {
-                    Some(i) => self.table[i] = at,
+                    Some(i) => {
+                        self.table[i] = at;
+                        self.touched.push(i as u32);
+                    }
                     None => {
                         self.blocks.insert(k, at);
                     }
