@@ -5,12 +5,15 @@
 //! The finest leaf is one cell of the uniform mesher's grid ([`Grid::for_model`]
 //! at `cells`); a leaf is at most `max_leaf` cells. Top-down, from a
 //! power-of-two cube over the grid:
-//! 1. A node whose ball interval bounds prove wholly inside or outside S
+//! 1. A node's active set is culled to the primitives that may be non-zero
+//!    within reach of its samples (ball test, then each density primitive's
+//!    interval bound: one bounded by exactly 0 there is dropped). A node whose
+//!    ball interval bounds prove wholly inside or outside S
 //!    ([`Model::classify`]) is a leaf without surface; a node larger than
 //!    `max_leaf` is split.
 //! 2. Any other node of s ≥ 2 cells is sampled on its *check lattice* of
-//!    spacing q = max(1, s/4) cells ((s/q + 1)³ grid corners, membership and Φ)
-//!    and kept as one leaf only if all of these hold, else it is split:
+//!    spacing q = s/2 cells (its 3³ grid corners: membership and Φ) and kept
+//!    as one leaf only if all of these hold, else it is split:
 //!    * every lattice line (along x, y or z) changes membership at most once,
 //!      so each of the node's edges and faces is crossed at most as its corners
 //!      say: a face whose 4 corners agree holds no lattice crossing, and the
@@ -19,8 +22,9 @@
 //!      al.'s topology-safe simplification);
 //!    * the inside and the outside corners of the node are each connected along
 //!      its edges (a pattern one vertex represents as a manifold);
-//!    * the QEF of the Hermite samples of every crossing lattice edge has rank 1
-//!      (a smooth sheet; sharp edges and corners are left to finer leaves);
+//!    * the QEF of the Hermite samples of every crossing lattice edge (rooted
+//!      to 1e-3 cell) has rank 1 (a smooth sheet; sharp edges and corners are
+//!      left to finer leaves);
 //!    * its vertex — the QEF minimiser (the mass point if that leaves the node)
 //!      projected onto the level set along the mean normal — and the exact
 //!      unit normal n there fit the samples: every crossing p_i lies within
@@ -31,6 +35,10 @@
 //!    A node whose lattice has no crossing at all is a leaf without surface.
 //!    A one-cell node is always a leaf, meshed as the uniform mesher meshes a
 //!    cell (QEF vertex, sharp features kept, projected when smooth).
+//!    A node whose parent failed the tangent-plane test by a factor k is
+//!    predicted to fail it by k / 4 (a smooth sheet's deviation from a tangent
+//!    plane grows as the square of the size): it is split without sampling
+//!    while the prediction exceeds 2.
 //! 3. Quads: Ju et al.'s cell / face / edge procedures walk every edge shared by
 //!    four leaves; the *minimal* edge (the smallest leaf's) gives a quad of the
 //!    four leaves' vertices when its ends differ in membership, oriented
@@ -47,17 +55,29 @@
 //! point of a one-cell leaf as in the uniform mesher); within a coarse leaf the
 //! sampled surface is within tol / 2 of the vertex's tangent plane, so a
 //! triangle joining neighbouring vertices stays within about tol of the
-//! surface (`tests/dsm_adaptive.rs` measures it by Newton projection of
-//! points inside every triangle).
+//! surface: `tests/dsm_adaptive.rs` measures it by Newton projection of
+//! points inside every triangle (at tol ¼ cell, at most 0.19 cell on the
+//! rounded box and 0.12 on the blobby shape from 64 to 256 cells; with the
+//! test at tol itself instead of tol / 2 it reached 1.8 tol).
+//!
+//! Samples: every corner and Hermite sample is taken once per run (a sparse
+//! corner grid, [`super::corner_cache`], and a hash map of edges), and a
+//! corner's membership is a function of the point alone ([`Model::sample`]
+//! with any active set that holds the primitives reaching it), so leaves of
+//! different sizes agree on it. The caches are kept per thread between runs.
+//! With `max_leaf` = 1 every leaf is a cell and the quads are exactly the
+//! uniform mesher's (tested).
 //!
 //! Known limits, stated: the checks see the surface at the check lattice's
 //! spacing q only — a feature that crosses no lattice edge of a coarse leaf
-//! (thinner than q ≤ `max_leaf` / 4 cells, e.g. 4 cells of a 256-cell grid
+//! (thinner than q ≤ `max_leaf` / 2 cells, e.g. 8 cells of a 256-cell grid
 //! at the default `max_leaf` of 16) is not meshed, where the uniform mesher
 //! sees features down to one cell; and the interval bounds prove only
 //! empty and full nodes, not the absence of such thin features in a node
 //! that holds a sheet. One vertex per leaf, so a one-cell leaf cut by two
-//! sheets is non-manifold as in the uniform mesher.
+//! sheets is non-manifold as in the uniform mesher. Not incremental: an edit
+//! re-meshes everything (the uniform mesher's [`super::IncrementalMesh`] is
+//! what the server uses for drags).
 
 use super::corner_cache::CornerCache;
 use super::error::DsmError;
@@ -154,14 +174,16 @@ pub fn mesh_adaptive_on(
         .unwrap_or_else(|| CornerCache::new(IVec3::ZERO));
     samples.reset(IVec3::splat(size));
     store.edges.clear();
+    store.nodes.clear();
+    store.leaves.clear();
     let mut b = Builder {
         model,
         grid: *grid,
         margin: grid.reach_margin(),
         tol: tolerance * grid.h,
         max_leaf,
-        nodes: Vec::with_capacity(1 << 14),
-        leaves: Vec::with_capacity(1 << 14),
+        nodes: store.nodes,
+        leaves: store.leaves,
         samples,
         edges: store.edges,
         positions: Vec::new(),
@@ -178,12 +200,15 @@ pub fn mesh_adaptive_on(
     (mesh, stats)
 }
 
-/// The sample caches of one thread's runs, kept between them (their memory
-/// stays mapped: a re-mesh at interactive rates takes no page faults).
+/// The sample caches and the octree of one thread's runs, kept between
+/// them (their memory stays mapped: a re-mesh at interactive rates takes no
+/// page faults).
 #[derive(Default)]
 struct Store {
     samples: Option<CornerCache>,
     edges: HashMap<u64, (DVec3, DVec3), Fast>,
+    nodes: Vec<Node>,
+    leaves: Vec<Leaf>,
 }
 
 thread_local! {
@@ -899,6 +924,8 @@ impl Builder<'_> {
         let store = Store {
             samples: Some(self.samples),
             edges: self.edges,
+            nodes: self.nodes,
+            leaves: self.leaves,
         };
         (mesh, self.stats, store)
     }
