@@ -6,7 +6,9 @@
 //!   solved by updating the drag's first factorisation ([`NetDrag`]).
 //! * `dsm_shape_remesh`: a 20-density-primitive shape (a box rounded by 12 sector-shell
 //!   pipes and 8 octant ball shells) and a 20-primitive blobby shape, dual-contoured at
-//!   64, 128 and 256 cells along their size.
+//!   64, 128 and 256 cells along their size; `adaptive_*`: the same shapes by
+//!   [`mesh_adaptive`] (finest cell as the uniform grid's, tolerance ¼ and ½
+//!   cell, leaves up to 16 cells).
 //!
 //! * `dsm_compare`: the same fields meshed by `fast-surface-nets` (naive surface
 //!   nets, a well-kept implicit mesher) on the same grid, with Φ sampled densely at
@@ -156,6 +158,28 @@ fn shape_remesh(c: &mut Criterion) {
             g.bench_with_input(BenchmarkId::new(name, cells), &cells, |b, &cells| {
                 b.iter_custom(|iters| cpu_timed(iters, || mesh(&m, MeshOptions { cells }).unwrap()))
             });
+            let (um, _) = mesh(&m, MeshOptions { cells }).unwrap();
+            for tol in [0.25, 0.5] {
+                let opts = AdaptiveOptions {
+                    tolerance: tol,
+                    ..AdaptiveOptions::new(cells)
+                };
+                let (am, st) = mesh_adaptive(&m, opts).unwrap();
+                // What the adaptive mesh is made of (printed once).
+                eprintln!(
+                    "dsm_shape_remesh/adaptive_tol{tol}_{name}/{cells}: {} triangles \
+                     (uniform {}), {st:?}",
+                    am.triangles.len(),
+                    um.triangles.len()
+                );
+                g.bench_with_input(
+                    BenchmarkId::new(format!("adaptive_tol{tol}_{name}"), cells),
+                    &cells,
+                    |b, _| {
+                        b.iter_custom(|iters| cpu_timed(iters, || mesh_adaptive(&m, opts).unwrap()))
+                    },
+                );
+            }
         }
     }
     g.finish();

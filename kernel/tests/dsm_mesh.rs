@@ -3,86 +3,12 @@
 //! converges with the resolution, and sharp edges of geometric primitives kept.
 
 use glam::DVec3;
-use std::collections::HashMap;
 use vsculpt_kernel::dsm::*;
 
-/// Every undirected edge is used by exactly two triangles, once in each direction
-/// (closed, oriented), and every vertex's triangles form one fan (vertex-manifold).
-fn assert_closed_manifold(m: &Mesh) {
-    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &m.triangles {
-        assert!(
-            t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
-            "repeated vertex in {t:?}"
-        );
-        for i in 0..3 {
-            *directed.entry((t[i], t[(i + 1) % 3])).or_default() += 1;
-        }
-    }
-    for (&(a, b), &n) in &directed {
-        assert_eq!(n, 1, "directed edge {a}->{b} used {n} times");
-        assert_eq!(
-            directed.get(&(b, a)),
-            Some(&1),
-            "edge {a}-{b} is a border or non-manifold"
-        );
-    }
-    // Vertex fans: the link of each vertex is one cycle.
-    let mut next: HashMap<u32, HashMap<u32, u32>> = HashMap::new();
-    for t in &m.triangles {
-        for i in 0..3 {
-            next.entry(t[i])
-                .or_default()
-                .insert(t[(i + 1) % 3], t[(i + 2) % 3]);
-        }
-    }
-    for (v, link) in &next {
-        let start = *link.keys().next().unwrap();
-        let mut cur = start;
-        let mut steps = 0;
-        loop {
-            cur = link[&cur];
-            steps += 1;
-            if cur == start {
-                break;
-            }
-            assert!(steps <= link.len(), "vertex {v}: link is not a cycle");
-        }
-        assert_eq!(
-            steps,
-            link.len(),
-            "vertex {v}: link has {} edges in more than one cycle",
-            link.len()
-        );
-    }
-}
-
-fn min_triangle_quality(m: &Mesh) -> f64 {
-    // 4√3 · area / Σ edge² : 1 for equilateral, 0 for degenerate.
-    m.triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (
-                m.positions[t[0] as usize],
-                m.positions[t[1] as usize],
-                m.positions[t[2] as usize],
-            );
-            let area = 0.5 * (b - a).cross(c - a).length();
-            4.0 * 3f64.sqrt() * area
-                / ((b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared())
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
-fn sphere_model(c: DVec3, d: f64, a: f64, de: f64) -> Model {
-    let mut m = Model::new(de, DEFAULT_TAU).unwrap();
-    m.add(Group {
-        density: vec![DensityPrimitive::sphere(c, d, a).unwrap()],
-        ..Default::default()
-    })
-    .unwrap();
-    m
-}
+use dsm_support::mesh_checks::{
+    assert_box_reproduced, assert_closed_manifold, min_triangle_quality,
+};
+use dsm_support::{ring_of_charges, sphere_model};
 
 #[test]
 fn sphere_primitive_mesh_is_a_closed_sphere_on_the_level_set() {
@@ -157,19 +83,7 @@ fn sphere_mesh_error_converges_quadratically() {
 #[test]
 fn torus_like_group_has_euler_characteristic_zero() {
     // A ring of 16 sphere-based primitives fuses into a torus-like solid.
-    let mut m = Model::new(1.0, DEFAULT_TAU).unwrap();
-    let ring: Vec<DensityPrimitive> = (0..16)
-        .map(|i| {
-            let t = i as f64 / 16.0 * std::f64::consts::TAU;
-            DensityPrimitive::sphere(DVec3::new(3.0 * t.cos(), 3.0 * t.sin(), 0.0), 2.0, 1.2)
-                .unwrap()
-        })
-        .collect();
-    m.add(Group {
-        density: ring,
-        ..Default::default()
-    })
-    .unwrap();
+    let m = ring_of_charges();
     assert!(!m.contains(DVec3::ZERO), "the hole is open");
     assert!(m.contains(DVec3::new(3.0, 0.0, 0.0)));
     let (mesh, _) = mesh(&m, MeshOptions { cells: 64 }).unwrap();
@@ -201,28 +115,7 @@ fn geometric_box_reproduces_itself_with_sharp_edges() {
     assert_closed_manifold(&mesh);
     assert!(stats.features > 0);
     // Every vertex lies on the box surface; the 8 corners are vertices.
-    for v in &mesh.positions {
-        assert!(
-            b.value(*v).abs() < 1e-9,
-            "vertex off the box: {}",
-            b.value(*v)
-        );
-    }
-    for s in 0..8 {
-        let corner = DVec3::new(0.05, 0.03, 0.01)
-            + half
-                * DVec3::new(
-                    if s & 1 == 0 { -1.0 } else { 1.0 },
-                    if s & 2 == 0 { -1.0 } else { 1.0 },
-                    if s & 4 == 0 { -1.0 } else { 1.0 },
-                );
-        let nearest = mesh
-            .positions
-            .iter()
-            .map(|v| (*v - corner).length())
-            .fold(f64::INFINITY, f64::min);
-        assert!(nearest < 1e-9, "corner {corner} missed by {nearest}");
-    }
+    assert_box_reproduced(&mesh, &b, DVec3::new(0.05, 0.03, 0.01), half);
 }
 
 #[test]

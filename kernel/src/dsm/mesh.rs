@@ -212,18 +212,18 @@ impl Grid {
 /// The field the mesher samples: a model, the primitives active in a leaf and
 /// the grid's reach margin.
 #[derive(Clone, Copy)]
-struct Field<'a> {
-    model: &'a Model,
-    act: &'a Active,
-    margin: f64,
+pub(crate) struct Field<'a> {
+    pub(crate) model: &'a Model,
+    pub(crate) act: &'a Active,
+    pub(crate) margin: f64,
 }
 
 impl Field<'_> {
-    fn sample(&self, p: DVec3, scratch: &mut Vec<bool>) -> super::model::Sample {
+    pub(crate) fn sample(&self, p: DVec3, scratch: &mut Vec<bool>) -> super::model::Sample {
         self.model.sample(p, self.act, self.margin, scratch)
     }
 
-    fn normal(&self, p: DVec3) -> DVec3 {
+    pub(crate) fn normal(&self, p: DVec3) -> DVec3 {
         self.model.piece_gradient(p, self.act, self.margin)
     }
 }
@@ -526,7 +526,7 @@ fn contour(
                 let mut normal = nsum;
                 let projected = sol.rank <= 1;
                 if projected {
-                    if let Some(pv) = project(field, grid, v, nsum) {
+                    if let Some(pv) = project(field, grid.h, v, nsum) {
                         v = pv;
                     }
                     let g = field.normal(v);
@@ -645,7 +645,7 @@ pub(crate) fn assemble<'a>(
 
 /// The Hermite sample of the grid edge from corner `a` along `e`: the crossing and
 /// the outward unit normal there.
-fn hermite(
+pub(crate) fn hermite(
     field: &Field,
     grid: &Grid,
     a: IVec3,
@@ -678,7 +678,7 @@ fn hermite(
 /// it and closes the bracket, instead of bisecting the far side down to `tol`
 /// (about 33 samples a root). Bisection is kept for a step that follows two
 /// steps which together did not halve the bracket.
-fn root(field: &Field, p0: DVec3, d: DVec3, f: (f64, f64), ina: bool, tol: f64) -> f64 {
+pub(crate) fn root(field: &Field, p0: DVec3, d: DVec3, f: (f64, f64), ina: bool, tol: f64) -> f64 {
     let mut scratch = Vec::new();
     let (mut a, mut b) = (0.0, 1.0);
     let (mut fa, mut fb) = f;
@@ -722,9 +722,9 @@ fn root(field: &Field, p0: DVec3, d: DVec3, f: (f64, f64), ina: bool, tol: f64) 
     0.5 * (a + b)
 }
 
-/// Moves v along ±n onto the boundary (bracketed within one cell); None if no
-/// sign change is found.
-fn project(field: &Field, grid: &Grid, v: DVec3, n: DVec3) -> Option<DVec3> {
+/// Moves v along ±n onto the boundary (bracketed within `reach`: steps of
+/// ¼, ½ and 1 × `reach`); None if no sign change is found.
+pub(crate) fn project(field: &Field, reach: f64, v: DVec3, n: DVec3) -> Option<DVec3> {
     if n == DVec3::ZERO {
         return None;
     }
@@ -732,7 +732,7 @@ fn project(field: &Field, grid: &Grid, v: DVec3, n: DVec3) -> Option<DVec3> {
     let s0 = field.sample(v, &mut scratch);
     let dir = if s0.inside { n } else { -n };
     for step in [0.25, 0.5, 1.0] {
-        let p1 = v + dir * (step * grid.h);
+        let p1 = v + dir * (step * reach);
         let s1 = field.sample(p1, &mut scratch);
         if s1.inside != s0.inside {
             let t = root(field, v, p1 - v, (s0.phi, s1.phi), s0.inside, 1e-12);

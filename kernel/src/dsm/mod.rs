@@ -14,6 +14,8 @@
 //! * [`net_drag`] — a node drag re-solved from the drag's first factorisation.
 //! * [`surface`] — the explicit equal density surface h(u, v) (eqs. 12–13) and its curvature.
 //! * [`mesh`], [`qef`] — dual contouring of the object.
+//! * [`adaptive`] — dual contouring on an octree of leaves as coarse as a
+//!   stated tolerance allows (1 to `max_leaf` cells).
 //! * [`incremental`] — the mesher's leaves kept between edits, re-meshed only
 //!   within an edit's support.
 //! * [`shape_ops`] — round corners, shape mapping onto a box face or a cylinder (§4).
@@ -22,7 +24,9 @@
 //! Every choice the paper leaves open is stated in the module that makes it and
 //! collected in `kernel/README.md` ("Density Spatial Model").
 
+pub mod adaptive;
 pub mod connect;
+mod corner_cache;
 pub mod density;
 pub mod distribution;
 pub mod error;
@@ -39,6 +43,7 @@ pub mod qef;
 pub mod shape_ops;
 pub mod surface;
 
+pub use adaptive::{AdaptiveOptions, AdaptiveStats, mesh_adaptive, mesh_adaptive_on};
 pub use connect::{Connecting, Profile};
 pub use density::{DensityPrimitive, DensityShape, HalfSpace, Sheet};
 pub use distribution::{Charge, Distribution};

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod mesh_checks;
+
 use glam::DVec3;
 use vsculpt_kernel::dsm::*;
 
@@ -227,4 +229,35 @@ pub fn twenty_primitive_shapes() -> Vec<(&'static str, Model)> {
         ("blobby_20", blobby),
         ("handset", handset().model()),
     ]
+}
+
+/// One sphere-based density primitive (centre c, density d, reducing factor
+/// a) in a model of presentation density `de`: the sphere r = ln(d/de)/a.
+pub fn sphere_model(c: DVec3, d: f64, a: f64, de: f64) -> Model {
+    let mut m = Model::new(de, DEFAULT_TAU).unwrap();
+    m.add(Group {
+        density: vec![DensityPrimitive::sphere(c, d, a).unwrap()],
+        ..Default::default()
+    })
+    .unwrap();
+    m
+}
+
+/// A ring of 16 sphere-based primitives (radius 3 about the z axis, D = 2,
+/// a = 1.2) that fuses into a torus-like solid.
+pub fn ring_of_charges() -> Model {
+    let mut m = Model::new(1.0, DEFAULT_TAU).unwrap();
+    let ring: Vec<DensityPrimitive> = (0..16)
+        .map(|i| {
+            let t = i as f64 / 16.0 * std::f64::consts::TAU;
+            DensityPrimitive::sphere(DVec3::new(3.0 * t.cos(), 3.0 * t.sin(), 0.0), 2.0, 1.2)
+                .unwrap()
+        })
+        .collect();
+    m.add(Group {
+        density: ring,
+        ..Default::default()
+    })
+    .unwrap();
+    m
 }
