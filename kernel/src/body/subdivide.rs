@@ -281,23 +281,32 @@ fn find(
                 .filter_map(|&t| crossing(p, q, mesh.triangles[t].map(|v| mesh.positions[v])))
                 .map(|(t, _)| t)
                 .collect();
-            if ts.len() < 2 {
+            if ts.is_empty() {
                 continue;
             }
             ts.sort_by(f64::total_cmp);
-            // The widest stretch between crossings whose middle, on the
-            // exact boundary, lies on the other side.
+            // The stretches between crossings (and the ends: where the
+            // other mesh's chords and its exact boundary disagree about an
+            // end, the mesh shows one crossing of two), widest first; the
+            // first whose middle, on the exact boundary, lies on the other
+            // side.
+            let mut stops = vec![0.0];
+            stops.extend(ts);
+            stops.push(1.0);
+            let mut stretches: Vec<(f64, f64)> =
+                stops.windows(2).map(|w| (w[1] - w[0], 0.5 * (w[0] + w[1]))).collect();
+            stretches.sort_by(|x, y| y.0.total_cmp(&x.0));
             let mut best: Option<(f64, [f64; 3], DVec3)> = None;
-            for w in ts.windows(2) {
-                let gap = w[1] - w[0];
-                if best.is_some_and(|(g, _, _)| g >= gap) {
-                    continue;
+            for (gap, mid) in stretches {
+                // Stretches thinner than this are crossings counted twice.
+                if gap < 1e-9 {
+                    break;
                 }
-                let mid = 0.5 * (w[0] + w[1]);
                 let uvw = lerp3(skin.uvw[a], skin.uvw[b], mid);
                 let x = own.volume.eval(&mut s, uvw, 0).p;
                 if strict(other.side(x)?).is_some_and(|inside| Some(inside) != sa) {
                     best = Some((gap, uvw, x));
+                    break;
                 }
             }
             if let Some((_, uvw, x)) = best {
