@@ -35,7 +35,7 @@ use std::collections::{HashMap, HashSet};
 use glam::DVec3;
 
 use super::union::{Side, Skin, Solid};
-use super::{BodyError, VolumeScratch};
+use super::{BodyError, Dir, Face, VolumeScratch};
 
 /// Rounds of subdivision at most.
 pub const ROUNDS: usize = 12;
@@ -317,8 +317,9 @@ fn find(
             }
         }
     }
-    // Pockets: the other mesh's edges pierce a triangle whose corners all
-    // lie on one side.
+    // Pockets (the other mesh's edges pierce a triangle whose corners all
+    // lie on one side) and creases (an edge of the other body pierces a
+    // triangle inside).
     for (t, tri) in skin.triangles.iter().enumerate() {
         if claimed[t] {
             continue;
@@ -332,47 +333,126 @@ fn find(
             continue;
         }
         let s0 = strict(side_of(cache, other, skin, tri[0])?);
-        if s0.is_none()
-            || s0 != strict(side_of(cache, other, skin, tri[1])?)
-            || s0 != strict(side_of(cache, other, skin, tri[2])?)
-        {
-            continue;
-        }
+        let pocket = s0.is_some()
+            && s0 == strict(side_of(cache, other, skin, tri[1])?)
+            && s0 == strict(side_of(cache, other, skin, tri[2])?);
         grid.near(lo, hi, &mut near);
         let mut sum = [0.0; 3];
         let mut count = 0usize;
+        let mut crease: Option<[f64; 3]> = None;
         for &m in &near {
             let mt = mesh.triangles[m];
             for k in 0..3 {
-                let (p, q) = (mesh.positions[mt[k]], mesh.positions[mt[(k + 1) % 3]]);
+                let (i, j) = (mt[k], mt[(k + 1) % 3]);
+                let (p, q) = (mesh.positions[i], mesh.positions[j]);
                 if let Some((_, bary)) = crossing(p, q, corners) {
                     for (s, b) in sum.iter_mut().zip(bary) {
                         *s += b;
                     }
                     count += 1;
+                    if crease.is_none()
+                        && bary.iter().filter(|&&b| b > CREASE_INSIDE).count() >= 2
+                        && along_sharp_edge(other, &mut s, mesh.uvw[i], mesh.uvw[j])
+                    {
+                        crease = Some(bary);
+                    }
                 }
             }
         }
         if count == 0 {
             continue;
         }
-        let bary = sum.map(|s| s / count as f64);
-        let face = skin.face[tri[0]];
-        let mut uvw = [0.0; 3];
-        for (c, &v) in tri.iter().enumerate() {
-            for (u, x) in uvw.iter_mut().zip(skin.uvw[v]) {
-                *u += bary[c] * x;
+        let at = |bary: [f64; 3]| {
+            let face = skin.face[tri[0]];
+            let mut uvw = [0.0; 3];
+            for (c, &v) in tri.iter().enumerate() {
+                for (u, x) in uvw.iter_mut().zip(skin.uvw[v]) {
+                    *u += bary[c] * x;
+                }
+            }
+            // Exactly on the face, whatever the rounding of the combination.
+            uvw[face.dir.index()] = skin.uvw[tri[0]][face.dir.index()];
+            uvw
+        };
+        if pocket {
+            let uvw = at(sum.map(|s| s / count as f64));
+            let x = own.volume.eval(&mut s, uvw, 0).p;
+            if strict(other.side(x)?).is_some_and(|inside| Some(inside) != s0) {
+                claimed[t] = true;
+                plan.push(Split::Inside(t, uvw, x));
+                continue;
             }
         }
-        // Exactly on the face, whatever the rounding of the combination.
-        uvw[face.dir.index()] = skin.uvw[tri[0]][face.dir.index()];
-        let x = own.volume.eval(&mut s, uvw, 0).p;
-        if strict(other.side(x)?).is_some_and(|inside| Some(inside) != s0) {
-            claimed[t] = true;
-            plan.push(Split::Inside(t, uvw, x));
+        // The seam turns sharply where the other body's edge comes through:
+        // a vertex there, so that the cut runs through the corner instead of
+        // a chord across it.
+        let Some(bary) = crease else {
+            continue;
+        };
+        match (0..3).find(|&k| bary[k] <= CREASE_INSIDE) {
+            None => {
+                let uvw = at(bary);
+                let x = own.volume.eval(&mut s, uvw, 0).p;
+                claimed[t] = true;
+                plan.push(Split::Inside(t, uvw, x));
+            }
+            // Beside the edge opposite corner k: split that edge there.
+            Some(k) => {
+                let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
+                let (wa, wb) = (bary[(k + 1) % 3], bary[(k + 2) % 3]);
+                let ek = edge_key(skin.uvw[a], skin.uvw[b]);
+                let holders = &edges[&ek];
+                if holders.iter().any(|&(h, _)| claimed[h]) {
+                    continue;
+                }
+                let uvw = lerp3(skin.uvw[a], skin.uvw[b], wb / (wa + wb));
+                let x = own.volume.eval(&mut s, uvw, 0).p;
+                for &(h, _) in holders {
+                    claimed[h] = true;
+                }
+                plan.push(Split::Edge(ek, uvw, x));
+            }
         }
     }
     Ok(())
+}
+
+/// The angle between two faces' normals above which the body's edge where
+/// they meet is a crease (radians: 20°).
+const SHARP: f64 = 0.35;
+
+/// How far inside a triangle (every barycentric coordinate above this) the
+/// other body's edge must pierce it for a vertex to be put there (nearer
+/// an edge or corner, the cut passes within this of the crease).
+const CREASE_INSIDE: f64 = 0.05;
+
+/// Whether the segment between boundary parameters `a` and `b` of `body`
+/// runs along one of its edges (two parameters at the same end of the
+/// domain for both) where its faces meet at an angle: their normals at the
+/// segment's middle more than [`SHARP`] apart.
+fn along_sharp_edge(body: &Solid, s: &mut VolumeScratch, a: [f64; 3], b: [f64; 3]) -> bool {
+    let dom = body.volume.domain();
+    let fixed: Vec<Face> = (0..3)
+        .filter_map(|k| {
+            let (lo, hi) = dom[k];
+            let dir = Dir::ALL[k];
+            if a[k] == lo && b[k] == lo {
+                Some(Face { dir, end: false })
+            } else if a[k] == hi && b[k] == hi {
+                Some(Face { dir, end: true })
+            } else {
+                None
+            }
+        })
+        .collect();
+    if fixed.len() < 2 {
+        return false;
+    }
+    let mid = lerp3(a, b, 0.5);
+    let n = |f: Face, s: &mut VolumeScratch| {
+        super::union::face_outward(body.volume, s, f, mid).normalize_or_zero()
+    };
+    n(fixed[0], s).dot(n(fixed[1], s)) < SHARP.cos()
 }
 
 fn lerp3(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
@@ -389,7 +469,7 @@ fn apply(
     plan: Vec<Split>,
 ) {
     let mut s = VolumeScratch::default();
-    let mut made: HashMap<(Key, super::Face), usize> = HashMap::new();
+    let mut made: HashMap<(Key, Face), usize> = HashMap::new();
     let mut vertex = |skin: &mut Skin, from: usize, uvw: [f64; 3], x: DVec3| {
         let face = skin.face[from];
         if let Some(&v) = made.get(&(key(uvw), face)) {
