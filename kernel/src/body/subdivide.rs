@@ -293,8 +293,10 @@ fn find(
             let mut stops = vec![0.0];
             stops.extend(ts);
             stops.push(1.0);
-            let mut stretches: Vec<(f64, f64)> =
-                stops.windows(2).map(|w| (w[1] - w[0], 0.5 * (w[0] + w[1]))).collect();
+            let mut stretches: Vec<(f64, f64)> = stops
+                .windows(2)
+                .map(|w| (w[1] - w[0], 0.5 * (w[0] + w[1])))
+                .collect();
             stretches.sort_by(|x, y| y.0.total_cmp(&x.0));
             let mut best: Option<(f64, [f64; 3], DVec3)> = None;
             for (gap, mid) in stretches {

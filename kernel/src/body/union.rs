@@ -235,7 +235,12 @@ impl<'a> Solid<'a> {
 }
 
 /// The outward normal (unnormalised) of `face` of `vol` at `uvw`.
-pub(super) fn face_outward(vol: &BSplineVolume, s: &mut VolumeScratch, face: Face, uvw: [f64; 3]) -> DVec3 {
+pub(super) fn face_outward(
+    vol: &BSplineVolume,
+    s: &mut VolumeScratch,
+    face: Face,
+    uvw: [f64; 3],
+) -> DVec3 {
     let d = vol.eval(s, uvw, 1);
     let (a, b) = face.dir.others();
     let n = d.d[a.index()].cross(d.d[b.index()]);
