@@ -43,6 +43,8 @@ pub const ROUNDS: usize = 12;
 type Key = [u64; 3];
 type EdgeKey = (Key, Key);
 type Cell = (i64, i64, i64);
+/// Sides of each skin's vertices against each body, where classified.
+pub(super) type Sides = Vec<Vec<Vec<Option<Side>>>>;
 
 /// The identity of a boundary point by its parameters (`+ 0.0` makes −0
 /// and 0 one): the copies of a vertex on two faces of a body share it.
@@ -166,11 +168,12 @@ fn strict(s: Side) -> Option<bool> {
 
 /// Subdivides every skin where another body's boundary crosses it unseen
 /// by its vertices (see the module doc); `skins[i]` is the boundary of
-/// `solids[i]`. Returns the vertices inserted.
-pub(super) fn resolve(skins: &mut [Skin], solids: &[Solid]) -> Result<usize, BodyError> {
+/// `solids[i]`. Returns the vertices inserted, and the sides found on the
+/// way: `[i][j][v]`, vertex v of skin i against body j, where classified.
+pub(super) fn resolve(skins: &mut [Skin], solids: &[Solid]) -> Result<(usize, Sides), BodyError> {
     let n = skins.len();
     // sides[i][j][v]: vertex v of skin i against body j.
-    let mut sides: Vec<Vec<Vec<Option<Side>>>> = vec![vec![Vec::new(); n]; n];
+    let mut sides: Sides = vec![vec![Vec::new(); n]; n];
     let mut inserted = 0;
     for _ in 0..ROUNDS {
         let mut any = false;
@@ -201,7 +204,7 @@ pub(super) fn resolve(skins: &mut [Skin], solids: &[Solid]) -> Result<usize, Bod
             break;
         }
     }
-    Ok(inserted)
+    Ok((inserted, sides))
 }
 
 /// The triangles holding each edge of `skin` (by the edge's parameters, so

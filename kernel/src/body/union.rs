@@ -217,7 +217,13 @@ impl<'a> Solid<'a> {
     /// The fate of point `x` of another body's boundary with unit outward
     /// normal `n` (see [`Fate`]).
     fn fate(&self, x: DVec3, n: DVec3, keep_shared: bool) -> Result<Fate, BodyError> {
-        Ok(match self.side(x)? {
+        Ok(self.fate_of(self.side(x)?, n, keep_shared))
+    }
+
+    /// The fate of a point on `side` of the body with unit outward normal
+    /// `n`.
+    fn fate_of(&self, side: Side, n: DVec3, keep_shared: bool) -> Fate {
+        match side {
             Side::Out => Fate::Keep,
             Side::In => Fate::Drop,
             Side::On(uvw) => {
@@ -230,7 +236,7 @@ impl<'a> Solid<'a> {
                     Fate::Touch
                 }
             }
-        })
+        }
     }
 }
 
@@ -341,8 +347,14 @@ fn boundary(vol: &BSplineVolume, per_span: usize) -> Skin {
 
 /// Clips `skin` against `other`: keeps what lies outside it, cutting the
 /// triangles that cross its boundary; of faces both share with the same
-/// orientation, keeps them when `keep_shared`.
-fn clip(skin: &mut Skin, other: &Solid, keep_shared: bool) -> Result<(), BodyError> {
+/// orientation, keeps them when `keep_shared`. `known` holds the sides of
+/// the skin's vertices already classified (by the subdivision).
+fn clip(
+    skin: &mut Skin,
+    other: &Solid,
+    keep_shared: bool,
+    known: &[Option<Side>],
+) -> Result<(), BodyError> {
     let mut fates: Vec<Option<Fate>> = vec![None; skin.positions.len()];
     let mut cuts = std::collections::HashMap::<(usize, usize), usize>::new();
     let mut out = Vec::with_capacity(skin.triangles.len());
@@ -353,7 +365,10 @@ fn clip(skin: &mut Skin, other: &Solid, keep_shared: bool) -> Result<(), BodyErr
             f[k] = match fates[i] {
                 Some(x) => x,
                 None => {
-                    let x = other.fate(skin.positions[i], skin.normals[i], keep_shared)?;
+                    let x = match known.get(i).copied().flatten() {
+                        Some(side) => other.fate_of(side, skin.normals[i], keep_shared),
+                        None => other.fate(skin.positions[i], skin.normals[i], keep_shared)?,
+                    };
                     fates[i] = Some(x);
                     x
                 }
@@ -543,12 +558,12 @@ pub fn union(bodies: &[BSplineVolume], per_span: usize) -> Result<UnionMesh, Bod
     let solids: Vec<Solid> = bodies.iter().map(Solid::new).collect();
     let mut mesh = UnionMesh::default();
     let mut skins: Vec<Skin> = bodies.iter().map(|b| boundary(b, per_span)).collect();
-    let refined = resolve(&mut skins, &solids)?;
+    let (refined, known) = resolve(&mut skins, &solids)?;
     for (i, mut skin) in skins.into_iter().enumerate() {
         let samples = skin.positions.len();
         for (j, other) in solids.iter().enumerate() {
             if j != i {
-                clip(&mut skin, other, i < j)?;
+                clip(&mut skin, other, i < j, &known[i][j])?;
             }
         }
         for (j, other) in solids.iter().enumerate() {
