@@ -38,10 +38,14 @@
 //! each side's seam vertices inserted into the other side's seam edges,
 //! what is left open — where three bodies meet — fanned shut; checked,
 //! and where that leaves it broken, each seam's two border loops zipped
-//! by a strip). A body poking deep through the inside of a sampled
-//! triangle without containing any of its vertices is refused, as is a
-//! mesh that cannot be welded: [`BodyError::TooCoarse`] — sample finer
-//! than the features that meet.
+//! by a strip). Before clipping, each body's samples are refined locally
+//! where another body crosses a triangle without any of its corners
+//! changing side (`subdivide`: an edge crossed twice, a pocket, a sharp
+//! edge of the other body piercing it), new vertices on the exact faces.
+//! What that leaves — a body still poking deep through the inside of a
+//! sampled triangle without containing any of its vertices, or a mesh
+//! that cannot be welded — is refused: [`BodyError::TooCoarse`] — sample
+//! finer than the features that meet.
 
 use glam::DVec3;
 
