@@ -20,7 +20,10 @@
 //! distance, mesh → exact); **spool + bar** — the paper's spool and a bar
 //! through its waist (curved seams), its volume against the spool's
 //! (quadrature) plus the bar's less their overlap by Monte Carlo (200 000
-//! seeded points, σ printed).
+//! seeded points, σ printed); **spool + turned bar** — a bar turned and
+//! tilted so that its edge pokes through spool triangles at 7 and 10
+//! samples per span (refused before local subdivision, issue 13 session
+//! 10), its volume likewise.
 //!
 //! Accuracy is printed once per method and resolution (before the timing);
 //! criterion times each. Run:
@@ -292,6 +295,39 @@ fn spool_bar() -> (Vec<BSplineVolume>, f64, f64) {
     (vec![s, bar], volume, sigma)
 }
 
+/// A turned bar through the spool's waist whose edge pokes through spool
+/// triangles at 7 and 10 samples per span (the sweep's first seeded bar in
+/// `tests/body_union.rs`: refused before local subdivision); the union's
+/// volume as in [`spool_bar`].
+fn spool_turned_bar() -> (Vec<BSplineVolume>, f64, f64) {
+    let s = spool().unwrap();
+    let (centre, sides) = (
+        DVec3::new(
+            -0.08156764929497817,
+            0.07535978342807813,
+            0.06689757967541334,
+        ),
+        [0.39866003186865, 4.0, 0.5395271794439412],
+    );
+    let (angle, tilt) = (0.31281404519106487, 0.09733979950158274);
+    let turn = glam::DMat3::from_rotation_x(tilt) * glam::DMat3::from_rotation_z(angle);
+    let axes = [DVec3::X, DVec3::Y, DVec3::Z].map(|a| turn * a);
+    let axes = [0, 1, 2].map(|k| axes[k] * sides[k]);
+    let origin = centre - (axes[0] + axes[1] + axes[2]) / 2.0;
+    let bar = BSplineVolume::affine(origin, axes, [1, 1, 1], [2, 2, 2]).unwrap();
+    let bar_volume = sides[0] * sides[1] * sides[2];
+    let m = Members::new(std::slice::from_ref(&s));
+    let mut rng = Rng(0x0b0d_1e55);
+    let n = 200_000;
+    let hits = (0..n)
+        .filter(|_| m.inside(bar.point(rng.next(), rng.next(), rng.next())))
+        .count();
+    let f = hits as f64 / n as f64;
+    let volume = interior::volume(&s) + bar_volume * (1.0 - f);
+    let sigma = bar_volume * (f * (1.0 - f) / n as f64).sqrt();
+    (vec![s, bar], volume, sigma)
+}
+
 fn compare(c: &mut Criterion) {
     let boxes = vec![cuboid(A.0, A.1), cuboid(B.0, B.1)];
     let (curved, curved_volume, sigma) = spool_bar();
@@ -324,6 +360,26 @@ fn compare(c: &mut Criterion) {
         g.bench_function(format!("boundary/spool_bar/{per_span}"), |b| {
             b.iter(|| black_box(union(&curved, per_span).unwrap().triangles.len()))
         });
+    }
+    let (turned, turned_volume, turned_sigma) = spool_turned_bar();
+    println!("spool + turned bar: volume {turned_volume:.6} ± {turned_sigma:.6} (Monte Carlo σ)");
+    for per_span in [7, 10] {
+        let t = Instant::now();
+        match union(&turned, per_span) {
+            Ok(m) => {
+                let dt = t.elapsed();
+                println!(
+                    "boundary spool+turned bar per_span {per_span}: {} triangles, volume error {:.2e}, {dt:?}, weld {:?}",
+                    m.triangles.len(),
+                    (m.enclosed_volume() - turned_volume).abs(),
+                    m.weld
+                );
+                g.bench_function(format!("boundary/spool_turned_bar/{per_span}"), |b| {
+                    b.iter(|| black_box(union(&turned, per_span).map(|m| m.triangles.len())))
+                });
+            }
+            Err(e) => println!("boundary spool+turned bar per_span {per_span}: {e}"),
+        }
     }
     for n in [16, 32, 64] {
         let t = Instant::now();

@@ -14,6 +14,8 @@
 //! * [`lattice`] — several bodies sharing faces; continuity across them.
 //! * [`morph`] — metamorphosis: grid correspondence, paths, the body at t.
 //! * [`union`] — union of bodies as a set operation on their boundaries.
+//! * `subdivide` — local subdivision where another body crosses a
+//!   sampled triangle unseen by its corners.
 //! * [`weld`] — the union's pieces welded into one closed, manifold mesh.
 //! * [`display`] — boundary and isoparametric surface meshes for viewers.
 //! * [`demo`] — the paper's cube, spool, cube-to-spool morph and chair.
@@ -31,6 +33,7 @@ pub mod lattice;
 pub mod morph;
 pub mod refine;
 pub mod space;
+mod subdivide;
 pub mod union;
 pub mod volume;
 pub mod weld;

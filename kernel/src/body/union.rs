@@ -38,13 +38,18 @@
 //! each side's seam vertices inserted into the other side's seam edges,
 //! what is left open — where three bodies meet — fanned shut; checked,
 //! and where that leaves it broken, each seam's two border loops zipped
-//! by a strip). A body poking deep through the inside of a sampled
-//! triangle without containing any of its vertices is refused, as is a
-//! mesh that cannot be welded: [`BodyError::TooCoarse`] — sample finer
-//! than the features that meet.
+//! by a strip). Before clipping, each body's samples are refined locally
+//! where another body crosses a triangle without any of its corners
+//! changing side (`subdivide`: an edge crossed twice, a pocket, a sharp
+//! edge of the other body piercing it), new vertices on the exact faces.
+//! What that leaves — a body still poking deep through the inside of a
+//! sampled triangle without containing any of its vertices, or a mesh
+//! that cannot be welded — is refused: [`BodyError::TooCoarse`] — sample
+//! finer than the features that meet.
 
 use glam::DVec3;
 
+use super::subdivide::resolve;
 use super::weld::{Pieces, WeldReport, weld};
 use super::{BSplineVolume, BodyError, Dir, Face, Inverter, VolumeScratch};
 
@@ -73,6 +78,9 @@ pub struct UnionMesh {
     pub body: Vec<usize>,
     /// What welding the bodies' pieces into one closed mesh did.
     pub weld: WeldReport,
+    /// Vertices inserted by local subdivision where another body crossed a
+    /// sampled triangle unseen by its corners (`subdivide`).
+    pub subdivided: usize,
 }
 
 impl UnionMesh {
@@ -105,7 +113,7 @@ impl UnionMesh {
 
 /// Where a point lies with respect to one body.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Side {
+pub(super) enum Side {
     In,
     Out,
     /// On the boundary, at parameters `uvw`.
@@ -131,14 +139,14 @@ enum Fate {
 const PARALLEL: f64 = 1.0 - 1e-6;
 
 /// One body ready for classification.
-struct Solid<'a> {
-    volume: &'a BSplineVolume,
+pub(super) struct Solid<'a> {
+    pub(super) volume: &'a BSplineVolume,
     inverter: Inverter<'a>,
     /// Distance below which an inversion has converged (model units).
     tolerance: f64,
     /// The box around the control points (the body lies in their hull).
-    lo: DVec3,
-    hi: DVec3,
+    pub(super) lo: DVec3,
+    pub(super) hi: DVec3,
 }
 
 impl<'a> Solid<'a> {
@@ -168,7 +176,8 @@ impl<'a> Solid<'a> {
         (if end { b - t } else { t - a }) / (b - a)
     }
 
-    fn side(&self, x: DVec3) -> Result<Side, BodyError> {
+    /// Where `x` lies with respect to the body (exactly: point inversion).
+    pub(super) fn side(&self, x: DVec3) -> Result<Side, BodyError> {
         if !x.is_finite() {
             return Err(BodyError::NonFinite("a point to classify".into()));
         }
@@ -212,7 +221,13 @@ impl<'a> Solid<'a> {
     /// The fate of point `x` of another body's boundary with unit outward
     /// normal `n` (see [`Fate`]).
     fn fate(&self, x: DVec3, n: DVec3, keep_shared: bool) -> Result<Fate, BodyError> {
-        Ok(match self.side(x)? {
+        Ok(self.fate_of(self.side(x)?, n, keep_shared))
+    }
+
+    /// The fate of a point on `side` of the body with unit outward normal
+    /// `n`.
+    fn fate_of(&self, side: Side, n: DVec3, keep_shared: bool) -> Fate {
+        match side {
             Side::Out => Fate::Keep,
             Side::In => Fate::Drop,
             Side::On(uvw) => {
@@ -225,12 +240,17 @@ impl<'a> Solid<'a> {
                     Fate::Touch
                 }
             }
-        })
+        }
     }
 }
 
 /// The outward normal (unnormalised) of `face` of `vol` at `uvw`.
-fn face_outward(vol: &BSplineVolume, s: &mut VolumeScratch, face: Face, uvw: [f64; 3]) -> DVec3 {
+pub(super) fn face_outward(
+    vol: &BSplineVolume,
+    s: &mut VolumeScratch,
+    face: Face,
+    uvw: [f64; 3],
+) -> DVec3 {
     let d = vol.eval(s, uvw, 1);
     let (a, b) = face.dir.others();
     let n = d.d[a.index()].cross(d.d[b.index()]);
@@ -257,12 +277,17 @@ fn samples(vol: &BSplineVolume, dir: Dir, per_span: usize) -> Vec<f64> {
 }
 
 /// One body's part of the union while it is being clipped: vertices with
-/// their unit outward normals, and triangles oriented outward.
+/// their unit outward normals, boundary parameters and faces, and
+/// triangles oriented outward.
 #[derive(Default)]
-struct Skin {
-    positions: Vec<DVec3>,
-    normals: Vec<DVec3>,
-    triangles: Vec<[usize; 3]>,
+pub(super) struct Skin {
+    pub(super) positions: Vec<DVec3>,
+    pub(super) normals: Vec<DVec3>,
+    /// Each vertex's parameters (a cut's: interpolated along its edge).
+    pub(super) uvw: Vec<[f64; 3]>,
+    /// Each vertex's face (a vertex on a body edge has a copy per face).
+    pub(super) face: Vec<Face>,
+    pub(super) triangles: Vec<[usize; 3]>,
 }
 
 /// The six faces of `vol` sampled `per_span` times per knot span, as
@@ -295,6 +320,8 @@ fn boundary(vol: &BSplineVolume, per_span: usize) -> Skin {
                 skin.positions.push(vol.eval(&mut s, t, 0).p);
                 skin.normals
                     .push(face_outward(vol, &mut s, face, t).normalize_or_zero());
+                skin.uvw.push(t);
+                skin.face.push(face);
             }
         }
         let at = |i: usize, j: usize| base + i * tb.len() + j;
@@ -324,8 +351,14 @@ fn boundary(vol: &BSplineVolume, per_span: usize) -> Skin {
 
 /// Clips `skin` against `other`: keeps what lies outside it, cutting the
 /// triangles that cross its boundary; of faces both share with the same
-/// orientation, keeps them when `keep_shared`.
-fn clip(skin: &mut Skin, other: &Solid, keep_shared: bool) -> Result<(), BodyError> {
+/// orientation, keeps them when `keep_shared`. `known` holds the sides of
+/// the skin's vertices already classified (by the subdivision).
+fn clip(
+    skin: &mut Skin,
+    other: &Solid,
+    keep_shared: bool,
+    known: &[Option<Side>],
+) -> Result<(), BodyError> {
     let mut fates: Vec<Option<Fate>> = vec![None; skin.positions.len()];
     let mut cuts = std::collections::HashMap::<(usize, usize), usize>::new();
     let mut out = Vec::with_capacity(skin.triangles.len());
@@ -336,7 +369,10 @@ fn clip(skin: &mut Skin, other: &Solid, keep_shared: bool) -> Result<(), BodyErr
             f[k] = match fates[i] {
                 Some(x) => x,
                 None => {
-                    let x = other.fate(skin.positions[i], skin.normals[i], keep_shared)?;
+                    let x = match known.get(i).copied().flatten() {
+                        Some(side) => other.fate_of(side, skin.normals[i], keep_shared),
+                        None => other.fate(skin.positions[i], skin.normals[i], keep_shared)?,
+                    };
                     fates[i] = Some(x);
                     x
                 }
@@ -378,9 +414,11 @@ fn clip(skin: &mut Skin, other: &Solid, keep_shared: bool) -> Result<(), BodyErr
                     Some(&c) => c,
                     None => {
                         let (keep, drop) = if fi == Fate::Keep { (i, j) } else { (j, i) };
-                        let (p, n) = crossing(other, skin, keep, drop, keep_shared)?;
+                        let (p, n, s) = crossing(other, skin, keep, drop, keep_shared)?;
                         skin.positions.push(p);
                         skin.normals.push(n);
+                        skin.uvw.push(lerp_uvw(skin.uvw[keep], skin.uvw[drop], s));
+                        skin.face.push(skin.face[keep]);
                         fates.push(None);
                         cuts.insert(key, skin.positions.len() - 1);
                         skin.positions.len() - 1
@@ -401,16 +439,21 @@ fn clip(skin: &mut Skin, other: &Solid, keep_shared: bool) -> Result<(), BodyErr
     Ok(())
 }
 
+fn lerp_uvw(a: [f64; 3], b: [f64; 3], s: f64) -> [f64; 3] {
+    [0, 1, 2].map(|k| a[k] + (b[k] - a[k]) * s)
+}
+
 /// Where the edge from vertex `keep` to vertex `drop` of `skin` leaves
 /// what is kept: bisection of the fate, the last point kept (strictly
-/// outside, or on a face kept); its normal interpolated.
+/// outside, or on a face kept); its normal interpolated; and its
+/// parameter along the edge.
 fn crossing(
     body: &Solid,
     skin: &Skin,
     keep: usize,
     drop: usize,
     keep_shared: bool,
-) -> Result<(DVec3, DVec3), BodyError> {
+) -> Result<(DVec3, DVec3, f64), BodyError> {
     let (p, q) = (skin.positions[keep], skin.positions[drop]);
     let (m, n) = (skin.normals[keep], skin.normals[drop]);
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
@@ -425,7 +468,7 @@ fn crossing(
             lo = mid;
         }
     }
-    Ok((p.lerp(q, lo), m.lerp(n, lo).normalize_or_zero()))
+    Ok((p.lerp(q, lo), m.lerp(n, lo).normalize_or_zero(), lo))
 }
 
 /// How deep inside another body, relative to its longest edge, the centre
@@ -518,12 +561,13 @@ pub fn union(bodies: &[BSplineVolume], per_span: usize) -> Result<UnionMesh, Bod
     }
     let solids: Vec<Solid> = bodies.iter().map(Solid::new).collect();
     let mut mesh = UnionMesh::default();
-    for (i, body) in bodies.iter().enumerate() {
-        let mut skin = boundary(body, per_span);
+    let mut skins: Vec<Skin> = bodies.iter().map(|b| boundary(b, per_span)).collect();
+    let (refined, known) = resolve(&mut skins, &solids)?;
+    for (i, mut skin) in skins.into_iter().enumerate() {
         let samples = skin.positions.len();
         for (j, other) in solids.iter().enumerate() {
             if j != i {
-                clip(&mut skin, other, i < j)?;
+                clip(&mut skin, other, i < j, &known[i][j])?;
             }
         }
         for (j, other) in solids.iter().enumerate() {
@@ -566,5 +610,6 @@ pub fn union(bodies: &[BSplineVolume], per_span: usize) -> Result<UnionMesh, Bod
         triangles: pieces.triangles,
         body: pieces.body,
         weld: report,
+        subdivided: refined,
     })
 }
