@@ -273,6 +273,22 @@ impl Design {
         self.adaptive = on;
     }
 
+    /// Sets the size S the spring's stiffness κS scales with (the
+    /// surface's area when the design was made, [`Self::new`]): a host that
+    /// rebuilds a design from a stored shape sets the size the design had,
+    /// so its loads pull as they did (the area of the shape as it is now
+    /// would differ after a pull). Finite and > 0.
+    pub fn set_spring_size(&mut self, size: f64) -> Result<(), DesignError> {
+        if !(size.is_finite() && size > 0.0) {
+            return Err(DesignError::NotFinite("spring size"));
+        }
+        if size != self.spring.size() {
+            self.spring.set_size(size);
+            self.problem_dirty = true;
+        }
+        Ok(())
+    }
+
     /// Sets κ directly.
     pub fn set_kappa(&mut self, kappa: f64) -> Result<(), DesignError> {
         self.spring =
@@ -659,14 +675,9 @@ impl Design {
         }
     }
 
-    /// The current shape becomes the reference shape (loads lose their
-    /// pull), and the spring's size its area, as for a design built from
-    /// that shape ([`Self::new`]): a host that rebuilds the design from its
-    /// control points gets the same spring.
+    /// The current shape becomes the reference shape (loads lose their pull).
     fn bake(&mut self) {
         self.reference = self.surface.points().to_vec();
-        let area = self.surface.area();
-        self.spring.set_size(if area > 0.0 { area } else { 1.0 });
         self.problem_dirty = true;
     }
 

@@ -841,6 +841,7 @@ fn bound_parts_follow_the_body_s_metamorphosis_exactly_and_the_document_stays() 
         material: MaterialDoc::default(),
         icons: Vec::new(),
         kappa: None,
+        spring_size: None,
     });
     for (name, b) in [("blob", dsm), ("patch", surface)] {
         m.apply(Edit::CreatePart {

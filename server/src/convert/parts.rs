@@ -157,6 +157,7 @@ pub fn create_part(spec: &wire::PartSpec) -> Edit {
             },
             icons: Vec::new(),
             kappa: None,
+            spring_size: None,
         }),
         wire::PartShape::Curve { curve } => PartBody::Curve(CurvePart {
             curve: CurveDoc {

@@ -77,6 +77,7 @@ pub fn plate_part(nu: usize, nv: usize) -> Result<SurfacePart, CommandError> {
         material: MaterialDoc::default(),
         icons: Vec::new(),
         kappa: None,
+        spring_size: None,
     })
 }
 
@@ -120,6 +121,7 @@ pub fn shell_part() -> Result<SurfacePart, CommandError> {
         material: MaterialDoc::default(),
         icons: Vec::new(),
         kappa: None,
+        spring_size: None,
     };
     let engine = Engine::build_unsolved(&part)?;
     let icons = [
@@ -173,6 +175,7 @@ fn side_part(shell: &SurfaceDoc, v_min: bool) -> SurfacePart {
         material: MaterialDoc::default(),
         icons: Vec::new(),
         kappa: None,
+        spring_size: None,
     }
 }
 

@@ -191,6 +191,9 @@ impl Engine {
         if let Some(kappa) = doc.kappa {
             design.set_kappa(kappa).map_err(kernel_error)?;
         }
+        if let Some(size) = doc.spring_size {
+            design.set_spring_size(size).map_err(kernel_error)?;
+        }
         let mut ids = BTreeMap::new();
         for icon in &doc.icons {
             // A drag does not survive a rebuild: the icon is passive

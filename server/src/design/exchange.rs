@@ -131,6 +131,7 @@ pub fn with_iges_parts(
                     material: Default::default(),
                     icons: Vec::new(),
                     kappa: None,
+                    spring_size: None,
                 }),
             ),
             IgesEntity::Curve(c) => (

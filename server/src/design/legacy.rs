@@ -45,6 +45,7 @@ pub fn upgrade(old: DesignDocV1) -> DesignDoc {
                 material: old.material,
                 icons: old.icons,
                 kappa: old.kappa,
+                spring_size: None,
             }),
         }],
         relations: Vec::new(),

@@ -174,6 +174,7 @@ impl DesignModel {
                 PartBody::Surface(s) => {
                     s.surface.points = points;
                     s.kappa = kappa;
+                    s.spring_size = engine.spring_size(p.id).filter(|x| x.is_finite());
                 }
                 PartBody::Curve(c) => {
                     c.curve.points = points;

@@ -111,6 +111,11 @@ pub struct SurfacePart {
     /// The spring coefficient κ the drags calibrated (kernel default when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kappa: Option<f64>,
+    /// The size S the spring's stiffness κS scales with: the surface's
+    /// area when its kernel design was first made (absent: the area of the
+    /// stored shape). Kept so a reload pulls as the live design did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spring_size: Option<f64>,
 }
 
 /// A curve part: the curve, its material and icons (anchored `param` or

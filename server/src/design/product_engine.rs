@@ -394,6 +394,15 @@ impl ProductEngine {
         }
     }
 
+    /// The size a surface part's spring stiffness scales with
+    /// (`Design::set_spring_size`); `None` for other parts.
+    pub fn spring_size(&self, part: u64) -> Option<f64> {
+        match self.product.part(PartId(part))? {
+            Part::Surface(d) => Some(d.spring().size()),
+            Part::Curve(_) => None,
+        }
+    }
+
     /// A part's calibrated spring coefficient.
     pub fn kappa(&self, part: u64) -> Option<f64> {
         Some(match self.product.part(PartId(part))? {
