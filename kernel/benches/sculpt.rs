@@ -139,6 +139,18 @@ fn time_add(sc: &mut Scene, iters: u64, spec: &mut impl FnMut() -> IconSpec) -> 
     spent
 }
 
+/// The first frame of a grab of the load, `lift` above where it is (timed:
+/// drag start and one frame); the load is released after, untimed.
+fn timed_grab(sc: &mut Scene, lift: DVec3) -> Duration {
+    let at = sc.design.icon(sc.load).unwrap().xyz;
+    let start = std::time::Instant::now();
+    sc.design.drag_start(sc.load).unwrap();
+    black_box(sc.design.drag(sc.load, at + lift).unwrap());
+    let spent = start.elapsed();
+    sc.design.release(sc.load).unwrap();
+    spent
+}
+
 /// `iters` times: an icon `spec()` added and solved, then the first frame
 /// of a grab of the load (timed: drag start and one frame), then the load
 /// released and the icon removed.
@@ -151,12 +163,7 @@ fn time_first_frame_after_add(
     for _ in 0..iters {
         let icon = sc.design.add_icon(spec()).unwrap();
         sc.design.solve().unwrap();
-        let at = sc.design.icon(sc.load).unwrap().xyz;
-        let start = std::time::Instant::now();
-        sc.design.drag_start(sc.load).unwrap();
-        black_box(sc.design.drag(sc.load, at + DVec3::Z * 0.001).unwrap());
-        spent += start.elapsed();
-        sc.design.release(sc.load).unwrap();
+        spent += timed_grab(sc, DVec3::Z * 0.001);
         sc.design.remove_icon(icon).unwrap();
         sc.design.solve().unwrap();
     }
@@ -217,13 +224,7 @@ fn benches(c: &mut Criterion) {
                 let mut spent = Duration::ZERO;
                 for _ in 0..iters {
                     k += 1;
-                    let at = sc.design.icon(sc.load).unwrap().xyz;
-                    let lift = DVec3::Z * 0.001 * (1 + k % 3) as f64;
-                    let start = std::time::Instant::now();
-                    sc.design.drag_start(sc.load).unwrap();
-                    black_box(sc.design.drag(sc.load, at + lift).unwrap());
-                    spent += start.elapsed();
-                    sc.design.release(sc.load).unwrap();
+                    spent += timed_grab(&mut sc, DVec3::Z * 0.001 * (1 + k % 3) as f64);
                 }
                 spent
             })
@@ -316,12 +317,7 @@ fn benches(c: &mut Criterion) {
                 for _ in 0..iters {
                     sc.design.set_state(region, IconState::Passive).unwrap();
                     sc.design.solve().unwrap();
-                    let at = sc.design.icon(sc.load).unwrap().xyz;
-                    let start = std::time::Instant::now();
-                    sc.design.drag_start(sc.load).unwrap();
-                    black_box(sc.design.drag(sc.load, at + DVec3::Z * 0.001).unwrap());
-                    spent += start.elapsed();
-                    sc.design.release(sc.load).unwrap();
+                    spent += timed_grab(&mut sc, DVec3::Z * 0.001);
                     sc.design.set_state(region, IconState::Sleeping).unwrap();
                     sc.design.solve().unwrap();
                     // Back to a factor without the region's pins.

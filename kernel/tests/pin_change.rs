@@ -14,7 +14,7 @@ use vsculpt_kernel::icon::surface_row;
 use vsculpt_kernel::solve::{Equation, Group, Load, Problem, ScalarRow, Solver};
 
 mod kkt_support;
-use kkt_support::dense_kkt;
+use kkt_support::{dense_answer, max_gap};
 
 /// Large enough for a supernodal factor (the update needs one).
 const N: usize = 30;
@@ -93,62 +93,6 @@ fn load(s: &BSplineSurface, key: u64, u: f64, v: f64) -> Group {
             drag_gain: 2.0,
         }],
     }
-}
-
-/// The exact answer of `problem` from the reference `p` (group `dragged`'s
-/// targets shifted by t, its loads' forces by t · gain), by a dense KKT
-/// solve per coordinate.
-fn dense_answer(
-    k: &Stiffness,
-    p: &[DVec3],
-    problem: &Problem,
-    dragged: Option<(u64, DVec3)>,
-) -> Vec<DVec3> {
-    let mut out = p.to_vec();
-    for c in 0..3 {
-        let rows: Vec<(Vec<usize>, Vec<f64>, f64)> = problem
-            .groups
-            .iter()
-            .flat_map(|g| {
-                let shift = match dragged {
-                    Some((key, t)) if key == g.key => t,
-                    _ => DVec3::ZERO,
-                };
-                g.equations.iter().map(move |eq| (eq, shift))
-            })
-            .map(|(eq, shift)| match eq {
-                Equation::Vector { row, target } => (
-                    row.indices.clone(),
-                    row.weights.clone(),
-                    target[c] + shift[c] - row.apply(p)[c],
-                ),
-                Equation::Projected { .. } => unreachable!(),
-            })
-            .collect();
-        let mut b = vec![0.0; p.len()];
-        for g in &problem.groups {
-            for l in &g.loads {
-                let force = match dragged {
-                    Some((key, t)) if key == g.key => l.force + t * l.drag_gain,
-                    _ => l.force,
-                };
-                for (&i, &w) in l.row.indices.iter().zip(&l.row.weights) {
-                    b[i] += w * force[c];
-                }
-            }
-        }
-        for (o, d) in out.iter_mut().zip(dense_kkt(k, &rows, &b)) {
-            o[c] += d;
-        }
-    }
-    out
-}
-
-fn max_gap(a: &[DVec3], b: &[DVec3]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (*p - *q).abs().max_element())
-        .fold(0.0, f64::max)
 }
 
 /// The answers of `solver` to `problem` (a full solve and two drag frames

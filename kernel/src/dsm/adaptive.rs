@@ -82,7 +82,7 @@
 use super::corner_cache::CornerCache;
 use super::error::DsmError;
 use super::interval::Tri;
-use super::mesh::{Field, Grid, Mesh, hermite, project, root};
+use super::mesh::{Field, Grid, Mesh, cell_vertex, hermite, project, root};
 use super::model::{Active, Model, Sample};
 use super::qef::Qef;
 use glam::{DVec3, IVec3};
@@ -512,31 +512,12 @@ impl Builder<'_> {
             }
         }
         let sol = qef.solve().expect("a mixed cell has a crossing");
-        let h = self.grid.h;
-        let lo = self.grid.corner(o);
-        let eps = 1e-9 * h;
-        let in_cell = |p: DVec3| {
-            p.cmpge(lo - DVec3::splat(eps)).all() && p.cmple(lo + DVec3::splat(h + eps)).all()
-        };
-        let mut v = if in_cell(sol.point) {
-            sol.point
-        } else {
-            sol.mass_point
-        };
-        let nsum = sol.normal_sum.normalize_or_zero();
-        let mut normal = nsum;
         let field = Field {
             model: self.model,
             act,
             margin: self.margin,
         };
-        if sol.rank <= 1 {
-            if let Some(pv) = project(&field, h, v, nsum) {
-                v = pv;
-            }
-            let g = field.normal(v);
-            normal = if g.dot(nsum) < 0.0 { -g } else { g };
-        }
+        let (v, normal, _) = cell_vertex(&field, self.grid.h, self.grid.corner(o), &sol);
         self.stats.fine_surface_leaves += 1;
         let vi = self.push_vertex(v, normal);
         self.push_leaf(o, 1, corners, vi)

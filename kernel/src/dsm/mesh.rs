@@ -36,7 +36,7 @@
 use super::error::DsmError;
 use super::interval::Tri;
 use super::model::{Active, Model};
-use super::qef::Qef;
+use super::qef::{Qef, QefSolution};
 use glam::{DVec3, IVec3};
 
 /// Leaf size in cells.
@@ -513,25 +513,8 @@ fn contour(
                     }
                 }
                 let sol = qef.solve().expect("a mixed cell has a crossing");
-                let cmin = grid.corner(origin + lc);
-                let cmax = cmin + DVec3::splat(grid.h);
-                let tol = 1e-9 * grid.h;
-                let in_cell = |p: DVec3| p.cmpge(cmin - tol).all() && p.cmple(cmax + tol).all();
-                let mut v = if in_cell(sol.point) {
-                    sol.point
-                } else {
-                    sol.mass_point
-                };
-                let nsum = sol.normal_sum.normalize_or_zero();
-                let mut normal = nsum;
-                let projected = sol.rank <= 1;
-                if projected {
-                    if let Some(pv) = project(field, grid.h, v, nsum) {
-                        v = pv;
-                    }
-                    let g = field.normal(v);
-                    normal = if g.dot(nsum) < 0.0 { -g } else { g };
-                }
+                let (v, normal, projected) =
+                    cell_vertex(field, grid.h, grid.corner(origin + lc), &sol);
                 leaf.cell_vert[cell_index(lc)] = verts.len() as u32;
                 verts.push(CellVertex {
                     position: v,
@@ -720,6 +703,39 @@ pub(crate) fn root(field: &Field, p0: DVec3, d: DVec3, f: (f64, f64), ina: bool,
         }
     }
     0.5 * (a + b)
+}
+
+/// The vertex of one cell of side `h` whose low corner is `cmin`, from its
+/// QEF solution `sol`: the minimiser if it stays in the cell (to 1e-9 h),
+/// else the mass point; on a smooth patch (rank ≤ 1) projected onto the
+/// level set along the summed Hermite normal, with the field's normal there
+/// oriented like them. Returns the position, the unit normal and whether it
+/// was projected (a smooth vertex, not a feature).
+pub(crate) fn cell_vertex(
+    field: &Field,
+    h: f64,
+    cmin: DVec3,
+    sol: &QefSolution,
+) -> (DVec3, DVec3, bool) {
+    let tol = 1e-9 * h;
+    let cmax = cmin + DVec3::splat(h);
+    let in_cell = |p: DVec3| p.cmpge(cmin - tol).all() && p.cmple(cmax + tol).all();
+    let mut v = if in_cell(sol.point) {
+        sol.point
+    } else {
+        sol.mass_point
+    };
+    let nsum = sol.normal_sum.normalize_or_zero();
+    let mut normal = nsum;
+    let projected = sol.rank <= 1;
+    if projected {
+        if let Some(pv) = project(field, h, v, nsum) {
+            v = pv;
+        }
+        let g = field.normal(v);
+        normal = if g.dot(nsum) < 0.0 { -g } else { g };
+    }
+    (v, normal, projected)
 }
 
 /// Moves v along ±n onto the boundary (bracketed within `reach`: steps of

@@ -493,12 +493,19 @@ impl Solver {
 
     /// Drops every cached column of Z (they belong to the old factor).
     fn forget_columns(&mut self) {
+        self.clear_rows();
+        self.retired.clear();
+    }
+
+    /// Drops the rows of the current problem and what was computed from
+    /// them (columns of Z, pending rows and their forward halves, the drag
+    /// response); the retired columns stay.
+    fn clear_rows(&mut self) {
         self.rows.clear();
         self.free_rows.clear();
         self.z.clear();
         self.pending.clear();
         self.pending_forward.clear();
-        self.retired.clear();
         self.response = None;
     }
 
@@ -527,13 +534,8 @@ impl Solver {
             let all: Vec<Column> = Vec::new();
             self.retire(&all);
         }
-        self.rows.clear();
-        self.free_rows.clear();
-        self.z.clear();
+        self.clear_rows();
         self.g.clear();
-        self.pending.clear();
-        self.pending_forward.clear();
-        self.response = None;
         self.s_exact = false;
         self.update = update;
         self.pinned = pinned.to_vec();
